@@ -1,0 +1,44 @@
+#include "lsdem/geometry/Grid.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace lsdem::geometry {
+
+template <int D>
+Grid<D>::Grid(const Index<D>& dims, const Vec<D>& origin, double spacing, float fill)
+    : dims_(dims), origin_(origin), spacing_(spacing) {
+  if (!(spacing > 0.0) || !std::isfinite(spacing)) {
+    throw std::invalid_argument("grid spacing must be positive and finite, got " + std::to_string(spacing));
+  }
+  if ((dims < 2).any()) {
+    throw std::invalid_argument("a grid needs at least 2 nodes per axis");
+  }
+  std::size_t n = 1;
+  for (int a = 0; a < D; ++a) n *= std::size_t(dims[a]);
+  values_.assign(n, fill);
+}
+
+template <int D>
+Grid<D> Grid<D>::covering(const Box<D>& box, double spacing, int paddingCells, float fill) {
+  if (!(spacing > 0.0) || !std::isfinite(spacing)) {
+    throw std::invalid_argument("grid spacing must be positive and finite, got " + std::to_string(spacing));
+  }
+  // Nodes are placed symmetrically about the box centre so a symmetric shape
+  // gets a symmetric grid.
+  const Vec<D> centre = 0.5 * (box.lower + box.upper);
+  Index<D> dims;
+  Vec<D> origin;
+  for (int a = 0; a < D; ++a) {
+    const double half = 0.5 * (box.upper[a] - box.lower[a]);
+    const int halfCells = int(std::ceil(half / spacing - 1e-9)) + paddingCells;
+    dims[a] = 2 * halfCells + 1;
+    origin[a] = centre[a] - halfCells * spacing;
+  }
+  return Grid<D>(dims.max(2), origin, spacing, fill);
+}
+
+template class Grid<2>;
+template class Grid<3>;
+
+}  // namespace lsdem::geometry
