@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Configures and builds lsdem (Release) in ./build. Extra arguments go to cmake.
+# LSDEM_WERROR=ON turns warnings into errors (CI does).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc 2>/dev/null || echo 2)
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DLSDEM_WERROR="${LSDEM_WERROR:-OFF}" "$@" >/dev/null
+cmake --build build -j "$jobs"
