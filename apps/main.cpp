@@ -1,7 +1,10 @@
 /// @file main.cpp
 /// @brief The `lsdem` command: parses the command line (CLI11) and dispatches
-/// to the subcommands. Errors in user input end in one line on stderr and exit
-/// code 2; unexpected failures in exit code 1.
+/// to the subcommands. Bad user input ends in one line on stderr
+/// ("lsdem: FILE:LINE: KEY: problem") and exit code 2; any other failure in one
+/// line and exit code 1.
+
+#include "Commands.h"
 
 #include "lsdem/io/InputError.h"
 
@@ -14,11 +17,18 @@ int main(int argc, char** argv) {
   CLI::App app{"lsdem: Level Set DEM with brittle breakage by level-set splitting (2D and 3D)", "lsdem"};
   app.set_version_flag("--version", std::string("lsdem ") + LSDEM_VERSION);
   app.require_subcommand(1);
+  lsdem::apps::addShapeCommand(app);
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  } catch (const lsdem::io::InputError& e) {
+    std::cerr << "lsdem: " << e.what() << '\n';
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "lsdem: error: " << e.what() << '\n';
+    return 1;
   }
   return 0;
 }

@@ -1,0 +1,90 @@
+#pragma once
+/// @file Shape.h
+/// @brief An immutable particle shape: level-set grid, surface nodes, mass
+/// properties per unit density and descriptors, shared by every particle of
+/// that shape (`std::shared_ptr<const Shape<D>>`). Breakage makes new shapes
+/// and never edits one.
+///
+/// Frames. The *body frame* has its origin at the centroid and its axes along
+/// the principal axes (x = longest, by descending second moment), so the inertia
+/// is diagonal there. The *grid frame* is the frame the level set was built in.
+/// Rather than resampling the grid into the body frame (which would blur it by
+/// one interpolation), the shape keeps the grid as built plus the fixed rigid
+/// map `bodyToGrid`. A contact look-up composes that map with the particle's
+/// pose once per pair, so it costs nothing per node.
+
+#include "lsdem/geometry/Descriptors.h"
+#include "lsdem/geometry/Grid.h"
+#include "lsdem/geometry/MassProperties.h"
+#include "lsdem/geometry/NodeSet.h"
+#include "lsdem/geometry/Types.h"
+
+#include <cstddef>
+#include <memory>
+
+namespace lsdem::geometry {
+
+/// How a shape is made from its grid.
+struct ShapeOptions {
+  /// Surface nodes per grid-cell length (the paper's "pts/pix"), > 0.
+  double nodesPerCell = 2.0;
+  /// Mass-property estimator (eq. 24-30 or its eps-extrapolated form).
+  MassMethod massMethod = MassMethod::Extrapolated;
+};
+
+template <int D>
+class Shape {
+ public:
+  /// @brief Makes a shape from a signed-distance grid in any frame: mass
+  /// properties, principal frame, surface nodes at `options.nodesPerCell`,
+  /// descriptors.
+  /// @note Throws std::invalid_argument when the grid has no interior or the
+  /// options are out of range.
+  static std::shared_ptr<const Shape> fromGrid(Grid<D> grid, const ShapeOptions& options = {});
+
+  /// The level set, in the grid frame (world units).
+  const Grid<D>& grid() const { return grid_; }
+  /// Map from body-frame points to grid-frame points: x_grid = bodyToGrid().apply(x_body).
+  const Rigid<D>& bodyToGrid() const { return bodyToGrid_; }
+  /// Surface nodes in the body frame with their length/area weights.
+  const NodeSet<D>& nodes() const { return nodes_; }
+  /// Mass properties per unit density in the body frame: centroid 0, diagonal second moment.
+  const MassProperties<D>& mass() const { return mass_; }
+  /// Shape descriptors (frame-independent).
+  const Descriptors<D>& descriptors() const { return descriptors_; }
+  /// Volume (area in 2D) in world units^D: the mass per unit density.
+  double volume() const { return mass_.volume; }
+  /// Radius of a body-frame sphere about the centroid holding every node and
+  /// every interior grid node (world units): the broad phase's bounding sphere.
+  double boundingRadius() const { return boundingRadius_; }
+  /// Options the shape was made with.
+  const ShapeOptions& options() const { return options_; }
+  /// Bytes held by the shape (grid values and nodes).
+  std::size_t bytes() const;
+
+  /// @brief Level-set value at a body-frame point (world units).
+  double value(const Vec<D>& xBody) const { return grid_.value(bodyToGrid_.apply(xBody)); }
+  /// @brief Value and body-frame gradient at a body-frame point.
+  double valueAndGradient(const Vec<D>& xBody, Vec<D>& gradBody) const {
+    Vec<D> g;
+    const double v = grid_.valueAndGradient(bodyToGrid_.apply(xBody), g);
+    gradBody = bodyToGrid_.rotation.transpose() * g;
+    return v;
+  }
+
+ private:
+  Shape() = default;
+
+  Grid<D> grid_;
+  Rigid<D> bodyToGrid_;
+  NodeSet<D> nodes_;
+  MassProperties<D> mass_;
+  Descriptors<D> descriptors_;
+  double boundingRadius_ = 0.0;
+  ShapeOptions options_;
+};
+
+extern template class Shape<2>;
+extern template class Shape<3>;
+
+}  // namespace lsdem::geometry

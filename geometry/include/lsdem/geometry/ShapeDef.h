@@ -1,0 +1,71 @@
+#pragma once
+/// @file ShapeDef.h
+/// @brief A definition struct for a shape (STYLE: create things from small
+/// definition structs with defaults): which primitive, its dimensions, the grid
+/// resolution and the node density. Scene and shape files fill one in; tests
+/// build them in code. `buildShape` turns it into a shared immutable Shape.
+
+#include "lsdem/geometry/RandomGrain.h"
+#include "lsdem/geometry/Shape.h"
+#include "lsdem/geometry/Types.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace lsdem::geometry {
+
+/// The kinds of shape lsdem builds. Sphere is the circle in 2D, Ellipsoid the
+/// ellipse, Box the rectangle, Superellipsoid the superellipse.
+enum class ShapeKind { Sphere, Box, Ellipsoid, Superellipsoid, Polygon, RandomGrain, Mesh };
+
+/// @brief The scene-file name of a kind in dimension D ("circle" / "sphere", ...).
+template <int D>
+const char* shapeKindName(ShapeKind kind);
+
+template <int D>
+struct ShapeDef {
+  ShapeKind kind = ShapeKind::Sphere;
+
+  // --- dimensions, world units (metres); only those of `kind` are read ---
+  double radius = 0.0;                        ///< Sphere
+  Vec<D> semiAxes = Vec<D>::Zero();           ///< Ellipsoid, Superellipsoid
+  Vec<D> halfExtents = Vec<D>::Zero();        ///< Box
+  double rounding = 0.0;                      ///< Box: edge/corner radius, 0 = sharp
+  std::vector<double> exponents;              ///< Superellipsoid: {n} in 2D, {n1, n2} in 3D
+  std::vector<Vec<2>> vertices;               ///< Polygon (2D only)
+  RandomGrainDef grain;                       ///< RandomGrain
+  std::string meshFile;                       ///< Mesh (3D only): STL/OBJ/PLY path
+  double meshScale = 1.0;                     ///< Mesh: factor from file units to metres
+
+  // --- resolution: exactly one of spacing / cellsAcross is > 0 ---
+  double spacing = 0.0;       ///< grid spacing, world units
+  double cellsAcross = 0.0;   ///< grid cells across the smallest dimension of the shape
+
+  ShapeOptions options;       ///< node density and mass estimator
+};
+
+/// @brief The smallest dimension of the shape (world units), used to turn
+/// `cellsAcross` into a spacing: the diameter of a sphere, twice the smallest
+/// semi-axis or half extent, the smallest extent of a polygon or mesh, and the
+/// short axis of a random grain (equivalent diameter / sqrt(elongation) in 2D,
+/// x elongation^(-1/3) in 3D).
+template <int D>
+double smallestDimension(const ShapeDef<D>& def);
+
+/// @brief The grid spacing the definition asks for (world units).
+/// @note Throws std::invalid_argument unless exactly one of spacing and
+/// cellsAcross is positive.
+template <int D>
+double resolvedSpacing(const ShapeDef<D>& def);
+
+/// @brief The level-set grid of the definition, centred on the origin (meshes
+/// keep their file coordinates, scaled).
+template <int D>
+Grid<D> buildGrid(const ShapeDef<D>& def);
+
+/// @brief The shape of the definition: grid, mass properties, nodes, descriptors.
+template <int D>
+std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def);
+
+}  // namespace lsdem::geometry

@@ -1,0 +1,66 @@
+#include "lsdem/geometry/Shape.h"
+
+#include "lsdem/geometry/SurfaceNodes.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace lsdem::geometry {
+
+template <int D>
+std::shared_ptr<const Shape<D>> Shape<D>::fromGrid(Grid<D> grid, const ShapeOptions& options) {
+  if (!(options.nodesPerCell > 0.0) || !std::isfinite(options.nodesPerCell)) {
+    throw std::invalid_argument("node density must be positive, got " + std::to_string(options.nodesPerCell));
+  }
+  std::shared_ptr<Shape> shape(new Shape());
+  shape->options_ = options;
+
+  // Mass properties in the grid frame; the body frame is the principal frame at the centroid.
+  const MassProperties<D> massGrid = massProperties(grid, options.massMethod);
+  if (!(massGrid.volume > 0.0)) {
+    throw std::invalid_argument("the level set has no interior (volume " + std::to_string(massGrid.volume) + ")");
+  }
+  shape->bodyToGrid_.rotation = massGrid.principalAxes();
+  shape->bodyToGrid_.translation = massGrid.centroid;
+
+  // Surface nodes in the grid frame give the descriptors; then move them to the body frame.
+  NodeSet<D> nodesGrid = surfaceNodes(grid, options.nodesPerCell);
+  if (nodesGrid.empty()) {
+    throw std::invalid_argument("the level set has no surface to place nodes on");
+  }
+  shape->descriptors_ = computeDescriptors(grid, massGrid, nodesGrid);
+  shape->nodes_.weights = std::move(nodesGrid.weights);
+  shape->nodes_.positions.reserve(nodesGrid.positions.size());
+  double radius = 0.0;
+  for (const Vec<D>& p : nodesGrid.positions) {
+    shape->nodes_.positions.push_back(shape->bodyToGrid_.applyInverse(p));
+    radius = std::max(radius, shape->nodes_.positions.back().norm());
+  }
+
+  // Body-frame mass properties: centroid at the origin, diagonal second moment.
+  shape->mass_ = massGrid;
+  shape->mass_.centroid.setZero();
+  shape->mass_.secondMoment = massGrid.principalSecondMoments().asDiagonal();
+
+  // Bounding radius: nodes and interior grid nodes (a concave surface can bulge
+  // between nodes by less than a cell; interior nodes bound that).
+  for (std::size_t n = 0; n < grid.size(); ++n) {
+    if (grid[n] < 0.0f) {
+      radius = std::max(radius, (grid.nodePosition(grid.unlinear(n)) - massGrid.centroid).norm());
+    }
+  }
+  shape->boundingRadius_ = radius;
+  shape->grid_ = std::move(grid);
+  return shape;
+}
+
+template <int D>
+std::size_t Shape<D>::bytes() const {
+  return sizeof(Shape) + grid_.bytes() + nodes_.positions.size() * sizeof(Vec<D>) + nodes_.weights.size() * sizeof(double);
+}
+
+template class Shape<2>;
+template class Shape<3>;
+
+}  // namespace lsdem::geometry

@@ -1,0 +1,129 @@
+#include "lsdem/geometry/ShapeDef.h"
+
+#include "lsdem/geometry/MeshIO.h"
+#include "lsdem/geometry/MeshToLevelSet.h"
+#include "lsdem/geometry/Primitives.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace lsdem::geometry {
+
+template <int D>
+const char* shapeKindName(ShapeKind kind) {
+  switch (kind) {
+    case ShapeKind::Sphere: return D == 2 ? "circle" : "sphere";
+    case ShapeKind::Box: return D == 2 ? "rectangle" : "box";
+    case ShapeKind::Ellipsoid: return D == 2 ? "ellipse" : "ellipsoid";
+    case ShapeKind::Superellipsoid: return D == 2 ? "superellipse" : "superellipsoid";
+    case ShapeKind::Polygon: return "polygon";
+    case ShapeKind::RandomGrain: return "random_grain";
+    case ShapeKind::Mesh: return "mesh";
+  }
+  return "unknown";
+}
+
+template <int D>
+double smallestDimension(const ShapeDef<D>& def) {
+  switch (def.kind) {
+    case ShapeKind::Sphere: return 2.0 * def.radius;
+    case ShapeKind::Box: return 2.0 * def.halfExtents.minCoeff();
+    case ShapeKind::Ellipsoid:
+    case ShapeKind::Superellipsoid: return 2.0 * def.semiAxes.minCoeff();
+    case ShapeKind::Polygon: {
+      if (def.vertices.empty()) return 0.0;
+      Vec<2> lo = def.vertices.front(), hi = def.vertices.front();
+      for (const Vec<2>& v : def.vertices) {
+        lo = lo.cwiseMin(v);
+        hi = hi.cwiseMax(v);
+      }
+      return (hi - lo).minCoeff();
+    }
+    case ShapeKind::RandomGrain: {
+      const double e = std::max(def.grain.elongation, 1.0);
+      return D == 2 ? def.grain.equivalentDiameter / std::sqrt(e) : def.grain.equivalentDiameter * std::pow(e, -1.0 / 3.0);
+    }
+    case ShapeKind::Mesh: {
+      if constexpr (D == 3) {
+        return readMesh(def.meshFile, def.meshScale).bounds().size().minCoeff();
+      } else {
+        return 0.0;
+      }
+    }
+  }
+  return 0.0;
+}
+
+namespace {
+
+// The spacing of `def`, given the shape's smallest dimension (world units).
+template <int D>
+double spacingFor(const ShapeDef<D>& def, double smallest) {
+  const bool hasSpacing = def.spacing > 0.0;
+  const bool hasCells = def.cellsAcross > 0.0;
+  if (hasSpacing == hasCells) {
+    throw std::invalid_argument("give exactly one of spacing (world units) and cells_across (cells across the smallest dimension)");
+  }
+  if (hasSpacing) {
+    if (!std::isfinite(def.spacing)) throw std::invalid_argument("spacing must be finite");
+    return def.spacing;
+  }
+  if (!(smallest > 0.0) || !std::isfinite(smallest)) {
+    throw std::invalid_argument("cannot derive a spacing: the shape's smallest dimension is " + std::to_string(smallest));
+  }
+  return smallest / def.cellsAcross;
+}
+
+}  // namespace
+
+template <int D>
+double resolvedSpacing(const ShapeDef<D>& def) {
+  return spacingFor(def, def.cellsAcross > 0.0 ? smallestDimension(def) : 0.0);
+}
+
+template <int D>
+Grid<D> buildGrid(const ShapeDef<D>& def) {
+  const int pad = kDefaultPaddingCells;
+  // A mesh is read once, and its extent gives the spacing.
+  if constexpr (D == 3) {
+    if (def.kind == ShapeKind::Mesh) {
+      const TriangleMesh mesh = readMesh(def.meshFile, def.meshScale);
+      return meshToLevelSet(mesh, spacingFor(def, mesh.bounds().size().minCoeff()), pad, def.meshFile);
+    }
+  }
+  const double h = resolvedSpacing(def);
+  switch (def.kind) {
+    case ShapeKind::Sphere: return sphereGrid<D>(def.radius, h, pad);
+    case ShapeKind::Box: return boxGrid<D>(def.halfExtents, def.rounding, h, pad);
+    case ShapeKind::Ellipsoid: return ellipsoidGrid<D>(def.semiAxes, h, pad);
+    case ShapeKind::Superellipsoid: return superellipsoidGrid<D>(def.semiAxes, def.exponents, h, pad);
+    case ShapeKind::RandomGrain: return randomGrainGrid<D>(def.grain, h, pad);
+    case ShapeKind::Polygon:
+      if constexpr (D == 2) {
+        return polygonGrid(def.vertices, h, pad);
+      } else {
+        throw std::invalid_argument("a polygon shape is 2D only (use a mesh in 3D)");
+      }
+    case ShapeKind::Mesh: throw std::invalid_argument("a mesh shape is 3D only (use a polygon in 2D)");
+  }
+  throw std::invalid_argument("unknown shape kind");
+}
+
+template <int D>
+std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def) {
+  return Shape<D>::fromGrid(buildGrid(def), def.options);
+}
+
+template const char* shapeKindName<2>(ShapeKind);
+template const char* shapeKindName<3>(ShapeKind);
+template double smallestDimension<2>(const ShapeDef<2>&);
+template double smallestDimension<3>(const ShapeDef<3>&);
+template double resolvedSpacing<2>(const ShapeDef<2>&);
+template double resolvedSpacing<3>(const ShapeDef<3>&);
+template Grid<2> buildGrid<2>(const ShapeDef<2>&);
+template Grid<3> buildGrid<3>(const ShapeDef<3>&);
+template std::shared_ptr<const Shape<2>> buildShape<2>(const ShapeDef<2>&);
+template std::shared_ptr<const Shape<3>> buildShape<3>(const ShapeDef<3>&);
+
+}  // namespace lsdem::geometry

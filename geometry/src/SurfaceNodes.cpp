@@ -1,0 +1,153 @@
+#include "lsdem/geometry/SurfaceNodes.h"
+
+#include "CgalMesh.h"
+#include "lsdem/geometry/Contours.h"
+
+#include <CGAL/Polygon_mesh_processing/remesh.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace lsdem::geometry {
+
+namespace {
+
+/// Remeshing passes (split / collapse / flip / relax) in 3D.
+constexpr unsigned kRemeshIterations = 3;
+/// Most nodes one call may create: a guard against absurd densities.
+constexpr double kMaxNodes = 1e8;
+
+void checkDensity(double nodesPerCell) {
+  if (!std::isfinite(nodesPerCell) || !(nodesPerCell > 0.0)) {
+    throw std::invalid_argument("surface node density (nodes per cell) must be positive and finite, got " +
+                                std::to_string(nodesPerCell));
+  }
+}
+
+// Moves x onto phi = 0 of the grid's interpolant by damped Newton steps along
+// the gradient (x -= t phi grad / |grad|^2, step at most half a cell): a step is
+// halved until |phi| decreases, so |phi| never grows, even where the gradient
+// is small or jumps between cells. Where the interpolant has no zero nearby the
+// node stops at its closest approach.
+template <int D>
+Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x) {
+  const double h = grid.spacing();
+  Vec<D> grad;
+  double phi = grid.valueAndGradient(x, grad);
+  for (int iteration = 0; iteration < 8 && std::abs(phi) > 1e-9 * h; ++iteration) {
+    // Full Newton step, capped.
+    const double gradSquared = grad.squaredNorm();
+    if (gradSquared < 1e-12) break;
+    Vec<D> step = (phi / gradSquared) * grad;
+    const double length = step.norm();
+    if (length > 0.5 * h) step *= 0.5 * h / length;
+    // Backtracking: accept the first of 1, 1/2, 1/4, ... of it that lowers |phi|.
+    bool accepted = false;
+    for (double t = 1.0; t > 1.0 / 64.0 && !accepted; t *= 0.5) {
+      Vec<D> trialGrad;
+      const Vec<D> trial = x - t * step;
+      const double trialPhi = grid.valueAndGradient(trial, trialGrad);
+      if (std::abs(trialPhi) < std::abs(phi)) {
+        x = trial;
+        phi = trialPhi;
+        grad = trialGrad;
+        accepted = true;
+      }
+    }
+    if (!accepted) break;
+  }
+  return x;
+}
+
+}  // namespace
+
+NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell) {
+  checkDensity(nodesPerCell);
+  const double target = grid.spacing() / nodesPerCell;
+  NodeSet<2> nodes;
+  for (const std::vector<Vec<2>>& loop : marchingSquares(grid)) {
+    // Length of the closed polyline and the node count for it.
+    const std::size_t m = loop.size();
+    double length = 0.0;
+    for (std::size_t q = 0; q < m; ++q) length += (loop[(q + 1) % m] - loop[q]).norm();
+    if (length / target > kMaxNodes) {
+      throw std::invalid_argument("surface node density " + std::to_string(nodesPerCell) + " would give " +
+                                  std::to_string(length / target) + " nodes on one contour");
+    }
+    const int n = std::max(3, int(std::lround(length / target)));
+
+    // Nodes at equal arc-length steps along the polyline, projected onto phi = 0.
+    const std::size_t first = nodes.positions.size();
+    std::size_t segment = 0;
+    double segmentStart = 0.0;
+    double segmentLength = (loop[1 % m] - loop[0]).norm();
+    for (int k = 0; k < n; ++k) {
+      const double s = length * double(k) / double(n);
+      while (segment + 1 < m && segmentStart + segmentLength < s) {
+        segmentStart += segmentLength;
+        ++segment;
+        segmentLength = (loop[(segment + 1) % m] - loop[segment]).norm();
+      }
+      const double u = segmentLength > 0.0 ? std::clamp((s - segmentStart) / segmentLength, 0.0, 1.0) : 0.0;
+      const Vec<2> x = loop[segment] + u * (loop[(segment + 1) % m] - loop[segment]);
+      nodes.positions.push_back(projectOntoZero(grid, x));
+    }
+
+    // Weights: half the distance to each neighbour along the contour.
+    for (int k = 0; k < n; ++k) {
+      const Vec<2>& x = nodes.positions[first + std::size_t(k)];
+      const Vec<2>& previous = nodes.positions[first + std::size_t((k + n - 1) % n)];
+      const Vec<2>& following = nodes.positions[first + std::size_t((k + 1) % n)];
+      nodes.weights.push_back(0.5 * ((x - previous).norm() + (following - x).norm()));
+    }
+  }
+  return nodes;
+}
+
+NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* meshOut) {
+  checkDensity(nodesPerCell);
+  const double target = grid.spacing() / nodesPerCell;
+  NodeSet<3> nodes;
+  if (meshOut) *meshOut = TriangleMesh{};
+
+  // Zero level set as a closed mesh; nothing to do when it is empty.
+  const TriangleMesh contour = marchingCubes(grid);
+  if (contour.empty()) return nodes;
+  const double estimatedNodes = contour.area() / (0.433 * target * target);
+  if (estimatedNodes > kMaxNodes) {
+    throw std::invalid_argument("surface node density " + std::to_string(nodesPerCell) + " would give about " +
+                                std::to_string(estimatedNodes) + " nodes");
+  }
+
+  // Isotropic remeshing to the target edge length.
+  cgal::SurfaceMesh surface = cgal::toSurfaceMesh(contour);
+  CGAL::Polygon_mesh_processing::isotropic_remeshing(faces(surface), target, surface,
+                                                     CGAL::parameters::number_of_iterations(kRemeshIterations));
+  surface.collect_garbage();
+  TriangleMesh mesh = cgal::toTriangleMesh(surface);
+
+  // Vertices onto phi = 0 (independent per vertex).
+  const int vertexCount = int(mesh.vertices.size());
+#pragma omp parallel for schedule(static)
+  for (int v = 0; v < vertexCount; ++v) {
+    mesh.vertices[std::size_t(v)] = projectOntoZero(grid, mesh.vertices[std::size_t(v)]);
+  }
+
+  // Nodes are the vertices; each face gives a third of its area to each corner
+  // (serial, in face order, so sums do not depend on the thread count).
+  nodes.positions = mesh.vertices;
+  nodes.weights.assign(mesh.vertices.size(), 0.0);
+  for (const std::array<int, 3>& f : mesh.faces) {
+    const Vec<3>& a = mesh.vertices[std::size_t(f[0])];
+    const Vec<3>& b = mesh.vertices[std::size_t(f[1])];
+    const Vec<3>& c = mesh.vertices[std::size_t(f[2])];
+    const double third = (b - a).cross(c - a).norm() / 6.0;
+    for (const int v : f) nodes.weights[std::size_t(v)] += third;
+  }
+  if (meshOut) *meshOut = std::move(mesh);
+  return nodes;
+}
+
+}  // namespace lsdem::geometry

@@ -1,0 +1,38 @@
+#pragma once
+/// @file ShapeFile.h
+/// @brief Reading a `[shape]` table (shape files, and the shapes of scene
+/// files). Every key is documented in docs/shapes.md.
+
+#include "lsdem/geometry/ShapeDef.h"
+
+#include <memory>
+#include <string>
+#include <variant>
+
+namespace lsdem::io {
+
+/// A shape definition of either dimension, as a file declares it.
+using AnyShapeDef = std::variant<geometry::ShapeDef<2>, geometry::ShapeDef<3>>;
+
+/// A shape definition and where it was declared (for messages).
+struct ShapeDecl {
+  AnyShapeDef def;
+  std::string file;  ///< the file it came from
+  int line = 0;      ///< line of its table
+  std::string key;   ///< dotted path of its table ("shape")
+  int dimension() const { return def.index() == 0 ? 2 : 3; }
+};
+
+/// @brief Reads the `[shape]` table of the TOML file at `path`.
+/// Relative mesh paths are resolved against the file's folder.
+/// @note Throws InputError (file:line: key: problem) for syntax errors, missing,
+/// unknown or mistyped keys and out-of-range values.
+ShapeDecl readShapeFile(const std::string& path);
+
+/// @brief Builds the declared shape. Problems only geometry can see (a
+/// self-intersecting polygon, a broken mesh, a shape with no interior) become
+/// InputError at the declaration's table.
+template <int D>
+std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& decl);
+
+}  // namespace lsdem::io

@@ -1,0 +1,123 @@
+#include "ShapeTable.h"
+
+#include "TomlReader.h"
+
+#include <filesystem>
+
+namespace lsdem::io::detail {
+namespace {
+
+using geometry::ShapeDef;
+using geometry::ShapeKind;
+using geometry::Vec;
+
+// The kinds a file may name, per dimension.
+std::optional<ShapeKind> kindFromName(const std::string& name, int dimension) {
+  const bool two = dimension == 2;
+  if (name == (two ? "circle" : "sphere")) return ShapeKind::Sphere;
+  if (name == (two ? "rectangle" : "box") || (two && name == "box")) return ShapeKind::Box;
+  if (name == (two ? "ellipse" : "ellipsoid")) return ShapeKind::Ellipsoid;
+  if (name == (two ? "superellipse" : "superellipsoid")) return ShapeKind::Superellipsoid;
+  if (name == "random_grain") return ShapeKind::RandomGrain;
+  if (two && name == "polygon") return ShapeKind::Polygon;
+  if (!two && name == "mesh") return ShapeKind::Mesh;
+  return std::nullopt;
+}
+
+template <int D>
+Vec<D> positiveVector(TomlReader& r, const std::string& key) {
+  const std::vector<double> v = r.numbers(key, D);
+  Vec<D> out;
+  for (int a = 0; a < D; ++a) {
+    if (!(v[a] > 0.0)) r.fail(key, "every component must be positive");
+    out[a] = v[a];
+  }
+  return out;
+}
+
+template <int D>
+ShapeDecl readOfDimension(TomlReader& r, const std::string& file, int line, const std::string& path) {
+  ShapeDef<D> def;
+  const std::string kindName = r.string("kind");
+  const std::optional<ShapeKind> kind = kindFromName(kindName, D);
+  if (!kind) {
+    r.fail("kind", "unknown " + std::to_string(D) + "D kind '" + kindName + "' (" +
+                       (D == 2 ? "circle, ellipse, rectangle, superellipse, polygon, random_grain"
+                               : "sphere, ellipsoid, box, superellipsoid, random_grain, mesh") +
+                       ")");
+  }
+  def.kind = *kind;
+
+  // Dimensions of the kind.
+  switch (def.kind) {
+    case ShapeKind::Sphere: def.radius = r.positive("radius"); break;
+    case ShapeKind::Ellipsoid: def.semiAxes = positiveVector<D>(r, "semi_axes"); break;
+    case ShapeKind::Box:
+      def.halfExtents = positiveVector<D>(r, "half_extents");
+      def.rounding = r.inRange("rounding", 0.0, def.halfExtents.minCoeff(), 0.0);
+      break;
+    case ShapeKind::Superellipsoid: {
+      def.semiAxes = positiveVector<D>(r, "semi_axes");
+      def.exponents = r.numbers("exponents", D == 2 ? 1 : 2);
+      for (double e : def.exponents) {
+        if (!(e > 0.0)) r.fail("exponents", "exponents must be positive");
+      }
+      break;
+    }
+    case ShapeKind::Polygon: {
+      if constexpr (D == 2) {
+        for (const std::vector<double>& row : r.numberRows("vertices", 2)) def.vertices.emplace_back(row[0], row[1]);
+        if (def.vertices.size() < 3) r.fail("vertices", "a polygon needs at least 3 vertices");
+      }
+      break;
+    }
+    case ShapeKind::RandomGrain:
+      def.grain.equivalentDiameter = r.positive("equivalent_diameter");
+      def.grain.elongation = r.inRange("elongation", 1.0, 10.0, 1.0);
+      def.grain.roughness = r.inRange("roughness", 0.0, 0.5, 0.1);
+      {
+        const std::int64_t seed = r.integer("seed", 1);
+        if (seed < 0) r.fail("seed", "must be >= 0");
+        def.grain.seed = std::uint64_t(seed);
+      }
+      break;
+    case ShapeKind::Mesh: {
+      std::filesystem::path mesh = r.string("file");
+      if (mesh.is_relative()) mesh = std::filesystem::path(file).parent_path() / mesh;
+      def.meshFile = mesh.string();
+      def.meshScale = r.positive("scale", 1.0);
+      break;
+    }
+  }
+
+  // Resolution and nodes.
+  if (r.has("spacing") == r.has("cells_across")) {
+    r.fail(r.has("spacing") ? "cells_across" : "", "give exactly one of 'spacing' (metres) and 'cells_across'");
+  }
+  def.spacing = r.has("spacing") ? r.positive("spacing") : 0.0;
+  def.cellsAcross = r.has("cells_across") ? r.inRange("cells_across", 2.0, 1e4, 0.0) : 0.0;
+  def.options.nodesPerCell = r.positive("node_density", 2.0);
+  const std::string method = r.string("mass_method", "extrapolated");
+  if (method == "extrapolated") {
+    def.options.massMethod = geometry::MassMethod::Extrapolated;
+  } else if (method == "paper") {
+    def.options.massMethod = geometry::MassMethod::Paper;
+  } else {
+    r.fail("mass_method", "must be \"extrapolated\" or \"paper\", got \"" + method + "\"");
+  }
+  r.finish();
+  return ShapeDecl{def, file, line, path};
+}
+
+}  // namespace
+
+ShapeDecl readShapeTable(const toml::table& table, const std::string& file, const std::string& path) {
+  TomlReader r(table, file, path);
+  const int line = int(table.source().begin.line);
+  const std::int64_t dimension = r.integer("dimension");
+  if (dimension == 2) return readOfDimension<2>(r, file, line, path);
+  if (dimension == 3) return readOfDimension<3>(r, file, line, path);
+  r.fail("dimension", "must be 2 or 3, got " + std::to_string(dimension));
+}
+
+}  // namespace lsdem::io::detail

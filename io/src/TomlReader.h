@@ -1,0 +1,191 @@
+#pragma once
+/// @file TomlReader.h
+/// @brief Private to io: typed, validated access to one TOML table, with
+/// errors that name the file, the line and the dotted key. Every key read is
+/// remembered, so `finish()` can reject the keys nobody asked for (typos).
+
+#include "lsdem/io/InputError.h"
+
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace lsdem::io::detail {
+
+class TomlReader {
+ public:
+  /// @param table  the table to read
+  /// @param file   file name for messages
+  /// @param path   dotted path of the table ("shape"), prefixed to keys in messages
+  TomlReader(const toml::table& table, std::string file, std::string path)
+      : table_(table), file_(std::move(file)), path_(std::move(path)) {}
+
+  const std::string& file() const { return file_; }
+  bool has(const std::string& key) const { return table_.contains(key); }
+
+  /// @brief An InputError at `key` (its line when present, the table's otherwise).
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    const toml::node* n = table_.get(key);
+    const int line = n ? int(n->source().begin.line) : int(table_.source().begin.line);
+    throw InputError(file_, line, key.empty() ? path_ : dotted(key), what);
+  }
+
+  /// @brief A number (integers accepted), finite; `nullopt` when absent.
+  std::optional<double> optionalNumber(const std::string& key) {
+    const toml::node* n = take(key);
+    if (!n) return std::nullopt;
+    const std::optional<double> v = n->is_number() ? n->value<double>() : std::nullopt;
+    if (!v) fail(key, "expected a number, got " + typeName(*n));
+    if (!std::isfinite(*v)) fail(key, "must be finite, got " + toString(*v));
+    return v;
+  }
+  double number(const std::string& key) {
+    const auto v = optionalNumber(key);
+    if (!v) fail("", "missing key '" + key + "'");
+    return *v;
+  }
+  double number(const std::string& key, double fallback) { return optionalNumber(key).value_or(fallback); }
+
+  /// @brief A number > 0 (required, or with a default).
+  double positive(const std::string& key) { return checkPositive(key, number(key)); }
+  double positive(const std::string& key, double fallback) {
+    return has(key) ? checkPositive(key, number(key)) : fallback;
+  }
+  /// @brief A number in [lo, hi].
+  double inRange(const std::string& key, double lo, double hi, double fallback) {
+    const double v = number(key, fallback);
+    if (v < lo || v > hi) fail(key, "must be in [" + toString(lo) + ", " + toString(hi) + "], got " + toString(v));
+    return v;
+  }
+
+  /// @brief An integer; `nullopt` when absent.
+  std::optional<std::int64_t> optionalInteger(const std::string& key) {
+    const toml::node* n = take(key);
+    if (!n) return std::nullopt;
+    if (!n->is_integer()) fail(key, "expected an integer, got " + typeName(*n));
+    return n->value<std::int64_t>();
+  }
+  std::int64_t integer(const std::string& key) {
+    const auto v = optionalInteger(key);
+    if (!v) fail("", "missing key '" + key + "'");
+    return *v;
+  }
+  std::int64_t integer(const std::string& key, std::int64_t fallback) { return optionalInteger(key).value_or(fallback); }
+
+  /// @brief A string; `nullopt` when absent.
+  std::optional<std::string> optionalString(const std::string& key) {
+    const toml::node* n = take(key);
+    if (!n) return std::nullopt;
+    if (!n->is_string()) fail(key, "expected a string, got " + typeName(*n));
+    return n->value<std::string>();
+  }
+  std::string string(const std::string& key) {
+    const auto v = optionalString(key);
+    if (!v) fail("", "missing key '" + key + "'");
+    return *v;
+  }
+  std::string string(const std::string& key, const std::string& fallback) { return optionalString(key).value_or(fallback); }
+
+  /// @brief An array of exactly `count` finite numbers (count < 0: any length >= 1).
+  std::vector<double> numbers(const std::string& key, int count) {
+    const toml::node* n = take(key);
+    if (!n) fail("", "missing key '" + key + "'");
+    return numbersOf(key, *n, count);
+  }
+
+  /// @brief An array of arrays of `count` numbers each (polygon vertices).
+  std::vector<std::vector<double>> numberRows(const std::string& key, int count) {
+    const toml::node* n = take(key);
+    if (!n) fail("", "missing key '" + key + "'");
+    const toml::array* a = n->as_array();
+    if (!a || a->empty()) fail(key, "expected an array of [" + std::to_string(count) + " numbers] rows");
+    std::vector<std::vector<double>> rows;
+    for (std::size_t i = 0; i < a->size(); ++i) {
+      rows.push_back(numbersOf(key + "[" + std::to_string(i) + "]", *a->get(i), count));
+    }
+    return rows;
+  }
+
+  /// @brief Rejects any key of the table that was not read: catches typos.
+  void finish() const {
+    for (const auto& [k, v] : table_) {
+      const std::string key(k.str());
+      if (!used_.count(key)) {
+        throw InputError(file_, int(k.source().begin.line), dotted(key), "unknown key");
+      }
+    }
+  }
+  /// @brief Marks a key as read without reading it (it belongs to another reader).
+  void skip(const std::string& key) { used_.insert(key); }
+
+ private:
+  const toml::node* take(const std::string& key) {
+    used_.insert(key);
+    return table_.get(key);
+  }
+  std::string dotted(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  double checkPositive(const std::string& key, double v) const {
+    if (!(v > 0.0)) fail(key, "must be positive, got " + toString(v));
+    return v;
+  }
+  std::vector<double> numbersOf(const std::string& key, const toml::node& n, int count) const {
+    const toml::array* a = n.as_array();
+    if (!a) {
+      throw InputError(file_, int(n.source().begin.line), dotted(key), "expected an array of numbers, got " + typeName(n));
+    }
+    if ((count >= 0 && int(a->size()) != count) || a->empty()) {
+      throw InputError(file_, int(n.source().begin.line), dotted(key),
+                       "expected " + (count >= 0 ? std::to_string(count) : std::string("at least 1")) + " numbers, got " +
+                           std::to_string(a->size()));
+    }
+    std::vector<double> out;
+    for (const toml::node& e : *a) {
+      const std::optional<double> v = e.is_number() ? e.value<double>() : std::nullopt;
+      if (!v) throw InputError(file_, int(e.source().begin.line), dotted(key), "expected numbers, got " + typeName(e));
+      if (!std::isfinite(*v)) throw InputError(file_, int(e.source().begin.line), dotted(key), "must be finite");
+      out.push_back(*v);
+    }
+    return out;
+  }
+  static std::string typeName(const toml::node& n) {
+    switch (n.type()) {
+      case toml::node_type::string: return "a string";
+      case toml::node_type::integer: return "an integer";
+      case toml::node_type::floating_point: return "a number";
+      case toml::node_type::boolean: return "a boolean";
+      case toml::node_type::array: return "an array";
+      case toml::node_type::table: return "a table";
+      default: return "a date/time";
+    }
+  }
+  static std::string toString(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+  }
+
+  const toml::table& table_;
+  std::string file_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+/// @brief Parses a TOML file, turning syntax errors and unreadable files into InputError.
+inline toml::table parseTomlFile(const std::string& path) {
+  try {
+    return toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    const std::string what(e.description());
+    if (e.source().begin.line == 0) throw InputError(path, 0, "", "cannot read the file (" + what + ")");
+    throw InputError(path, int(e.source().begin.line), "", "TOML syntax error: " + what);
+  }
+}
+
+}  // namespace lsdem::io::detail

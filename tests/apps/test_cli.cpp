@@ -1,0 +1,119 @@
+// End-to-end checks of the `lsdem` command as a user runs it: exit codes,
+// one-line errors, and the JSON of `lsdem shape`.
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <sys/wait.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out;  // stdout and stderr together
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(LSDEM_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  Result r{-1, ""};
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), int(buf.size()), pipe)) r.out += buf.data();
+  const int status = pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string example(const std::string& name) { return std::string(LSDEM_SOURCE_DIR) + "/examples/shapes/" + name; }
+
+std::string writeFile(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_cli";
+  fs::create_directories(dir);
+  std::ofstream(dir / name) << text;
+  return (dir / name).string();
+}
+
+// The number after "key": in a JSON text (first occurrence).
+double jsonNumber(const std::string& json, const std::string& key) {
+  std::smatch m;
+  const std::regex re("\"" + key + "\": ([-0-9.eE+]+)");
+  if (!std::regex_search(json, m, re)) {
+    ADD_FAILURE() << "no key " << key << " in\n" << json;
+    return 0.0;
+  }
+  return std::stod(m[1]);
+}
+
+}  // namespace
+
+TEST(Cli, VersionAndHelp) {
+  const Result v = run("--version");
+  EXPECT_EQ(v.code, 0);
+  EXPECT_NE(v.out.find("lsdem 0."), std::string::npos);
+  const Result h = run("--help");
+  EXPECT_EQ(h.code, 0);
+  EXPECT_NE(h.out.find("shape"), std::string::npos);
+  EXPECT_NE(run("").code, 0);  // a subcommand is required
+}
+
+TEST(Cli, ShapeJsonOfTheSphere) {
+  const Result r = run("shape " + example("sphere.toml") + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const double pi = 3.14159265358979323846;
+  EXPECT_NEAR(jsonNumber(r.out, "volume"), 4.0 / 3.0 * pi * 0.125, 0.005 * 4.0 / 3.0 * pi * 0.125);
+  EXPECT_NEAR(jsonNumber(r.out, "surface_area"), 4 * pi * 0.25, 0.01 * 4 * pi * 0.25);
+  EXPECT_NEAR(jsonNumber(r.out, "sphericity"), 1.0, 0.01);
+  EXPECT_NEAR(jsonNumber(r.out, "equivalent_diameter"), 1.0, 0.005);
+  EXPECT_NEAR(jsonNumber(r.out, "sieve_size"), 1.0, 0.01);
+  EXPECT_NEAR(jsonNumber(r.out, "aspect_ratio"), 1.0, 0.01);
+  EXPECT_GT(jsonNumber(r.out, "nodes"), 100);
+  EXPECT_GT(jsonNumber(r.out, "bytes"), 1000);
+  for (const char* key : {"\"dimension\": 3", "\"centroid\"", "\"inertia_principal\"", "\"grid_cells\""}) {
+    EXPECT_NE(r.out.find(key), std::string::npos) << key;
+  }
+}
+
+TEST(Cli, ShapeJsonOfTheEllipse) {
+  const Result r = run("shape " + example("ellipse.toml") + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const double pi = 3.14159265358979323846;
+  EXPECT_NEAR(jsonNumber(r.out, "volume"), pi * 0.18, 0.005 * pi * 0.18);
+  EXPECT_NEAR(jsonNumber(r.out, "aspect_ratio"), 0.5, 0.01);
+  EXPECT_NEAR(jsonNumber(r.out, "sieve_size"), 0.6, 0.01);
+  // Polar moment of an ellipse: pi a b (a^2 + b^2) / 4.
+  EXPECT_NEAR(jsonNumber(r.out, "inertia_principal"), pi * 0.18 * 0.45 / 4, 0.005 * pi * 0.18 * 0.45 / 4);
+  EXPECT_NE(r.out.find("\"circularity\""), std::string::npos);
+}
+
+TEST(Cli, EveryShippedExampleBuilds) {
+  for (const auto& entry : fs::directory_iterator(std::string(LSDEM_SOURCE_DIR) + "/examples/shapes")) {
+    if (entry.path().extension() != ".toml") continue;
+    const Result r = run("shape " + entry.path().string());
+    EXPECT_EQ(r.code, 0) << entry.path() << "\n" << r.out;
+  }
+}
+
+TEST(Cli, BadInputIsOneLineWithFileLineKeyAndExitCode2) {
+  const std::string path = writeFile("neg.toml", "[shape]\ndimension = 3\nkind = \"sphere\"\nradius = -1\nspacing = 0.1\n");
+  const Result r = run("shape " + path);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.out, "lsdem: " + path + ":4: shape.radius: must be positive, got -1\n");
+
+  const Result missing = run("shape /nonexistent/shape.toml");
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_NE(missing.out.find("/nonexistent/shape.toml"), std::string::npos);
+  EXPECT_EQ(std::count(missing.out.begin(), missing.out.end(), '\n'), 1);
+
+  const std::string mesh = writeFile("mesh.toml", "[shape]\ndimension = 3\nkind = \"mesh\"\nfile = \"nothere.stl\"\nspacing = 0.1\n");
+  const Result m = run("shape " + mesh);
+  EXPECT_EQ(m.code, 2) << m.out;
+  EXPECT_NE(m.out.find("nothere.stl"), std::string::npos);
+}

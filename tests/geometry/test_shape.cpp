@@ -1,0 +1,94 @@
+#include "lsdem/geometry/Primitives.h"
+#include "lsdem/geometry/Shape.h"
+#include "lsdem/geometry/ShapeDef.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace lsdem::geometry;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// An ellipsoid with semi-axes (0.6, 0.4, 0.3) rotated by R and centred at c, sampled at 20 cells across its smallest axis.
+Grid<3> rotatedEllipsoid(const Mat<3>& R, const Vec<3>& c) {
+  const Vec<3> semi(0.6, 0.4, 0.3);
+  const Box<3> box{c - Vec<3>::Constant(0.6), c + Vec<3>::Constant(0.6)};
+  return sampleGrid<3>(box, 0.03, kDefaultPaddingCells,
+                       [&](const Vec<3>& x) { return sdfEllipsoid<3>(Vec<3>(R.transpose() * (x - c)), semi); });
+}
+
+}  // namespace
+
+TEST(Shape, BodyFrameIsThePrincipalFrameOfARotatedEllipsoid) {
+  const Mat<3> R = Eigen::AngleAxisd(0.7, Vec<3>(1, 2, 3).normalized()).toRotationMatrix();
+  const Vec<3> c(0.11, -0.07, 0.05);
+  const auto shape = Shape<3>::fromGrid(rotatedEllipsoid(R, c), ShapeOptions{1.0, MassMethod::Extrapolated});
+
+  // Centroid and axes: the body x, y, z axes are the ellipsoid's long, middle, short axes.
+  EXPECT_LT((shape->bodyToGrid().translation - c).norm(), 0.002);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_GT(std::abs(shape->bodyToGrid().rotation.col(a).dot(R.col(a))), 0.999) << "axis " << a;
+  }
+  EXPECT_NEAR(shape->bodyToGrid().rotation.determinant(), 1.0, 1e-12);
+
+  // Principal moments per unit density: V (b^2 + c^2) / 5 and permutations, within 0.5 %.
+  const double V = 4.0 / 3.0 * kPi * 0.6 * 0.4 * 0.3;
+  const Vec<3> expected(V * (0.16 + 0.09) / 5, V * (0.36 + 0.09) / 5, V * (0.36 + 0.16) / 5);
+  const Vec<3> inertia = shape->mass().principalInertia();
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(inertia[a], expected[a], 0.005 * expected[a]);
+  EXPECT_NEAR(shape->volume(), V, 0.005 * V);
+  EXPECT_LT(shape->mass().centroid.norm(), 1e-12);
+
+  // Nodes sit on the surface, seen through the body frame.
+  for (const Vec<3>& p : shape->nodes().positions) EXPECT_LT(std::abs(shape->value(p)), 0.05 * 0.03);
+  // The bounding sphere holds the whole ellipsoid and is tight.
+  EXPECT_GE(shape->boundingRadius(), 0.6 - 0.01);
+  EXPECT_LT(shape->boundingRadius(), 0.6 + 0.03);
+}
+
+TEST(Shape, BodyLookupsEqualGridLookups) {
+  const Mat<3> R = Eigen::AngleAxisd(-0.4, Vec<3>(0, 1, 1).normalized()).toRotationMatrix();
+  const auto shape = Shape<3>::fromGrid(rotatedEllipsoid(R, Vec<3>(0.02, 0.0, -0.03)));
+  for (const Vec<3>& xBody : {Vec<3>(0.1, 0.2, 0.05), Vec<3>(0.55, 0.0, 0.0), Vec<3>(-0.2, 0.3, 0.25)}) {
+    const Vec<3> xGrid = shape->bodyToGrid().apply(xBody);
+    Vec<3> gBody, gGrid;
+    EXPECT_DOUBLE_EQ(shape->valueAndGradient(xBody, gBody), shape->grid().valueAndGradient(xGrid, gGrid));
+    EXPECT_LT((shape->bodyToGrid().rotation * gBody - gGrid).norm(), 1e-12);
+  }
+}
+
+TEST(Shape, TwoDimensionalEllipse) {
+  ShapeDef<2> def;
+  def.kind = ShapeKind::Ellipsoid;
+  def.semiAxes = Vec<2>(0.6, 0.3);
+  def.cellsAcross = 20;
+  def.options.nodesPerCell = 2.0;
+  const auto shape = buildShape(def);
+  EXPECT_NEAR(resolvedSpacing(def), 0.03, 1e-15);
+  const double A = kPi * 0.18;
+  EXPECT_NEAR(shape->volume(), A, 0.005 * A);
+  EXPECT_NEAR(shape->mass().polarMoment(), A * (0.36 + 0.09) / 4, 0.005 * A * 0.45 / 4);
+  // Body x is the long axis.
+  EXPECT_GT(std::abs(shape->bodyToGrid().rotation(0, 0)), 0.999);
+  EXPECT_NEAR(shape->descriptors().aspectRatio, 0.5, 0.01);
+}
+
+TEST(Shape, RefusesAnEmptyLevelSetAndBadDensity) {
+  Grid<2> empty(Index<2>(10, 10), Vec<2>::Zero(), 0.1, 1.0f);
+  EXPECT_THROW(Shape<2>::fromGrid(empty), std::invalid_argument);
+  EXPECT_THROW(Shape<2>::fromGrid(sphereGrid<2>(1.0, 0.1), ShapeOptions{0.0, MassMethod::Paper}), std::invalid_argument);
+}
+
+TEST(ShapeDef, ResolutionMustBeGivenOnce) {
+  ShapeDef<3> def;
+  def.radius = 0.5;
+  EXPECT_THROW(resolvedSpacing(def), std::invalid_argument);
+  def.spacing = 0.05;
+  def.cellsAcross = 20;
+  EXPECT_THROW(resolvedSpacing(def), std::invalid_argument);
+  def.spacing = 0.0;
+  EXPECT_DOUBLE_EQ(resolvedSpacing(def), 0.05);
+}

@@ -1,0 +1,128 @@
+#include "lsdem/io/InputError.h"
+#include "lsdem/io/ShapeFile.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+using namespace lsdem;
+namespace fs = std::filesystem;
+
+namespace {
+
+// Writes `text` to a fresh file in the test's temporary folder and returns its path.
+std::string writeFile(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_shape_file";
+  fs::create_directories(dir);
+  const fs::path p = dir / name;
+  std::ofstream(p) << text;
+  return p.string();
+}
+
+// The InputError raised by reading `text`, checked to name the file, line and key.
+io::InputError errorOf(const std::string& text, int line, const std::string& key) {
+  const std::string path = writeFile("bad.toml", text);
+  try {
+    io::readShapeFile(path);
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.file(), path);
+    EXPECT_EQ(e.line(), line) << e.what();
+    EXPECT_EQ(e.key(), key) << e.what();
+    return e;
+  }
+  ADD_FAILURE() << "no error for:\n" << text;
+  return io::InputError("", 0, "", "");
+}
+
+}  // namespace
+
+TEST(ShapeFile, ReadsTheSphereOfTheDocs) {
+  const auto decl = io::readShapeFile(writeFile("sphere.toml",
+                                                "[shape]\ndimension = 3\nkind = \"sphere\"\nradius = 0.5\n"
+                                                "spacing = 0.05\nnode_density = 2\n"));
+  ASSERT_EQ(decl.dimension(), 3);
+  const auto& def = std::get<geometry::ShapeDef<3>>(decl.def);
+  EXPECT_EQ(def.kind, geometry::ShapeKind::Sphere);
+  EXPECT_DOUBLE_EQ(def.radius, 0.5);
+  EXPECT_DOUBLE_EQ(def.spacing, 0.05);
+  EXPECT_DOUBLE_EQ(def.options.nodesPerCell, 2.0);
+  EXPECT_EQ(def.options.massMethod, geometry::MassMethod::Extrapolated);
+}
+
+TEST(ShapeFile, ReadsEveryKind) {
+  const auto ellipse = io::readShapeFile(writeFile("e.toml",
+      "[shape]\ndimension = 2\nkind = \"ellipse\"\nsemi_axes = [0.6, 0.3]\nspacing = 0.02\n"));
+  EXPECT_TRUE((std::get<geometry::ShapeDef<2>>(ellipse.def).semiAxes - geometry::Vec<2>(0.6, 0.3)).norm() == 0.0);
+
+  const auto poly = io::readShapeFile(writeFile("p.toml",
+      "[shape]\ndimension = 2\nkind = \"polygon\"\nvertices = [[0,0],[1,0],[0,1]]\ncells_across = 20\n"));
+  EXPECT_EQ(std::get<geometry::ShapeDef<2>>(poly.def).vertices.size(), 3u);
+  EXPECT_DOUBLE_EQ(std::get<geometry::ShapeDef<2>>(poly.def).cellsAcross, 20.0);
+
+  const auto grain = io::readShapeFile(writeFile("g.toml",
+      "[shape]\ndimension = 3\nkind = \"random_grain\"\nequivalent_diameter = 2e-3\nelongation = 1.5\n"
+      "roughness = 0.2\nseed = 9\ncells_across = 20\nmass_method = \"paper\"\n"));
+  const auto& g = std::get<geometry::ShapeDef<3>>(grain.def);
+  EXPECT_DOUBLE_EQ(g.grain.equivalentDiameter, 2e-3);
+  EXPECT_DOUBLE_EQ(g.grain.elongation, 1.5);
+  EXPECT_EQ(g.grain.seed, 9u);
+  EXPECT_EQ(g.options.massMethod, geometry::MassMethod::Paper);
+
+  const auto box = io::readShapeFile(writeFile("b.toml",
+      "[shape]\ndimension = 3\nkind = \"box\"\nhalf_extents = [1, 2, 3]\nrounding = 0.5\nspacing = 0.1\n"));
+  EXPECT_DOUBLE_EQ(std::get<geometry::ShapeDef<3>>(box.def).rounding, 0.5);
+
+  const auto se = io::readShapeFile(writeFile("s.toml",
+      "[shape]\ndimension = 3\nkind = \"superellipsoid\"\nsemi_axes = [1, 2, 3]\nexponents = [4, 6]\nspacing = 0.1\n"));
+  EXPECT_EQ(std::get<geometry::ShapeDef<3>>(se.def).exponents, (std::vector<double>{4, 6}));
+
+  // A relative mesh path is resolved against the shape file's folder.
+  const std::string meshToml = writeFile("m.toml", "[shape]\ndimension = 3\nkind = \"mesh\"\nfile = \"part.stl\"\nscale = 0.001\nspacing = 0.01\n");
+  const auto mesh = io::readShapeFile(meshToml);
+  EXPECT_EQ(fs::path(std::get<geometry::ShapeDef<3>>(mesh.def).meshFile), fs::path(meshToml).parent_path() / "part.stl");
+}
+
+TEST(ShapeFile, BadInputNamesFileLineAndKey) {
+  const std::string head = "[shape]\ndimension = 3\nkind = \"sphere\"\n";
+  EXPECT_NE(std::string(errorOf(head + "radius = -0.5\nspacing = 0.05\n", 4, "shape.radius").what()).find("must be positive"),
+            std::string::npos);
+  errorOf(head + "radius = 0.5\nspacing = 0.05\nradus = 1\n", 6, "shape.radus");            // unknown key (typo)
+  errorOf(head + "radius = \"big\"\nspacing = 0.05\n", 4, "shape.radius");                  // wrong type
+  errorOf(head + "radius = nan\nspacing = 0.05\n", 4, "shape.radius");                      // NaN
+  errorOf(head + "radius = 0.5\n", 1, "shape");                                             // no resolution
+  errorOf(head + "radius = 0.5\nspacing = 0.05\ncells_across = 20\n", 6, "shape.cells_across");  // both
+  errorOf(head + "radius = 0.5\nspacing = 0\n", 5, "shape.spacing");
+  errorOf(head + "radius = 0.5\nspacing = 0.05\nnode_density = -2\n", 6, "shape.node_density");
+  errorOf("[shape]\ndimension = 4\nkind = \"sphere\"\n", 2, "shape.dimension");
+  errorOf("[shape]\ndimension = 2\nkind = \"sphere\"\nradius = 1\nspacing = 0.1\n", 3, "shape.kind");   // 3D kind in 2D
+  errorOf("[shape]\ndimension = 3\nkind = \"ellipsoid\"\nsemi_axes = [1, 2]\nspacing = 0.1\n", 4, "shape.semi_axes");
+  errorOf("[shape]\ndimension = 2\nkind = \"polygon\"\nvertices = [[0,0],[1,0]]\nspacing = 0.1\n", 4, "shape.vertices");
+  errorOf("[shape]\ndimension = 3\nkind = \"random_grain\"\nequivalent_diameter = 1\nroughness = 0.9\nspacing = 0.1\n", 5,
+          "shape.roughness");
+  errorOf("[shape]\ndimension = 3\nkind = \"sphere\"\nradius = 0.5\nspacing = 0.05\nmass_method = \"exact\"\n", 6,
+          "shape.mass_method");
+  errorOf("[shape]\ndimension = 3\nkind = \"sphere\"\nradius = 0.5\nspacing = 0.05\n[other]\n", 6, "other");
+  errorOf("[shape]\ndimension = 3\nkind = sphere\n", 3, "");                                // TOML syntax
+}
+
+TEST(ShapeFile, MissingFileAndTable) {
+  EXPECT_THROW(io::readShapeFile("/nonexistent/lsdem/shape.toml"), io::InputError);
+  EXPECT_THROW(io::readShapeFile(writeFile("empty.toml", "[grain]\nradius = 1\n")), io::InputError);
+}
+
+TEST(ShapeFile, GeometryProblemsBecomeInputErrors) {
+  // A self-intersecting (bow-tie) polygon is only seen by geometry; it is still reported at the table.
+  const auto decl = io::readShapeFile(writeFile("bowtie.toml",
+      "[shape]\ndimension = 2\nkind = \"polygon\"\nvertices = [[0,0],[1,1],[1,0],[0,1]]\nspacing = 0.05\n"));
+  try {
+    io::buildDeclaredShape<2>(decl);
+    ADD_FAILURE() << "a bow-tie polygon was accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.line(), 1);
+    EXPECT_EQ(e.key(), "shape");
+  }
+  // A 2D declaration asked for as 3D.
+  EXPECT_THROW(io::buildDeclaredShape<3>(decl), io::InputError);
+}
