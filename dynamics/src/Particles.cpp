@@ -1,0 +1,93 @@
+#include "lsdem/dynamics/Particles.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace lsdem::dynamics {
+
+template <int D>
+std::size_t Particles<D>::add(const ParticleDef<D>& def) {
+  if (!def.shape) throw std::invalid_argument("a particle needs a shape");
+  if (!(def.density > 0.0) || !std::isfinite(def.density)) {
+    throw std::invalid_argument("particle density must be positive, got " + std::to_string(def.density));
+  }
+  const auto& mp = def.shape->mass();
+  const double m = def.density * mp.volume;
+  Spin<D> I;
+  if constexpr (D == 2) {
+    I = def.density * mp.polarMoment();
+  } else {
+    I = def.density * mp.principalInertia();
+  }
+
+  position.push_back(def.position);
+  orientation.push_back(def.orientation);
+  velocity.push_back(def.velocity);
+  angularVelocity.push_back(def.angularVelocity);
+  force.push_back(Vec<D>::Zero());
+  torque.push_back(Rotation<D>::zeroSpin());
+
+  mass.push_back(m);
+  invMass.push_back(1.0 / m);
+  inertia.push_back(I);
+  if constexpr (D == 2) {
+    invInertia.push_back(1.0 / I);
+  } else {
+    invInertia.push_back(I.cwiseInverse());
+  }
+  shape.push_back(def.shape);
+  material.push_back(def.material);
+  strength.push_back(def.strength);
+
+  id.push_back(nextId_++);
+  parentId.push_back(def.parent);
+  generation.push_back(def.generation);
+  birthTime.push_back(def.birthTime);
+  return size() - 1;
+}
+
+namespace {
+template <class T>
+void swapRemove(std::vector<T>& v, std::size_t i) {
+  if (i + 1 != v.size()) v[i] = std::move(v.back());
+  v.pop_back();
+}
+}  // namespace
+
+template <int D>
+void Particles<D>::remove(std::size_t i) {
+  if (i >= size()) throw std::out_of_range("particle index " + std::to_string(i) + " out of range");
+  swapRemove(position, i);
+  swapRemove(orientation, i);
+  swapRemove(velocity, i);
+  swapRemove(angularVelocity, i);
+  swapRemove(force, i);
+  swapRemove(torque, i);
+  swapRemove(mass, i);
+  swapRemove(invMass, i);
+  swapRemove(inertia, i);
+  swapRemove(invInertia, i);
+  swapRemove(shape, i);
+  swapRemove(material, i);
+  swapRemove(strength, i);
+  swapRemove(id, i);
+  swapRemove(parentId, i);
+  swapRemove(generation, i);
+  swapRemove(birthTime, i);
+}
+
+template <int D>
+double Particles<D>::kineticEnergy(std::size_t i) const {
+  const double translational = 0.5 * mass[i] * velocity[i].squaredNorm();
+  if constexpr (D == 2) {
+    return translational + 0.5 * inertia[i] * angularVelocity[i] * angularVelocity[i];
+  } else {
+    const Vec<3> wBody = orientation[i].conjugate() * angularVelocity[i];
+    return translational + 0.5 * (inertia[i].array() * wBody.array().square()).sum();
+  }
+}
+
+template class Particles<2>;
+template class Particles<3>;
+
+}  // namespace lsdem::dynamics
