@@ -82,8 +82,8 @@ void checkPolygonBasics(const std::vector<Vec<2>>& v, const char* what) {
   Vec<2> lo = v[0], hi = v[0];
   for (std::size_t k = 0; k < v.size(); ++k) {
     if (!v[k].allFinite()) {
-      throw std::invalid_argument(std::string(what) + ": vertex " + std::to_string(k) + " is not finite: " +
-                                  str<2>(v[k]));
+      throw std::invalid_argument(std::string(what) + ": vertex " + std::to_string(k) +
+                                  " is not finite: " + str<2>(v[k]));
     }
     lo = lo.cwiseMin(v[k]);
     hi = hi.cwiseMax(v[k]);
@@ -247,8 +247,8 @@ void validatePolygon(const std::vector<Vec<2>>& v) {
     const Vec<2>& here = v[k];
     const Vec<2>& next = v[(k + 1) % n];
     if (orient(prev, here, next) == 0.0 && (prev - here).dot(next - here) > 0.0) {
-      throw std::invalid_argument("validatePolygon: the edges at vertex " + std::to_string(k) + " " +
-                                  str<2>(here) + " fold back onto each other");
+      throw std::invalid_argument("validatePolygon: the edges at vertex " + std::to_string(k) + " " + str<2>(here) +
+                                  " fold back onto each other");
     }
   }
   // Non-adjacent edges must not touch.
@@ -266,9 +266,7 @@ void validatePolygon(const std::vector<Vec<2>>& v) {
 // ---- half-spaces (eq. 18-20) ------------------------------------------------
 
 template <int D>
-HalfSpace<D> HalfSpace<D>::throughPoints(const Vec<2>& p1, const Vec<2>& p2)
-  requires(D == 2)
-{
+HalfSpace<D> HalfSpace<D>::throughPoints(const Vec<2>& p1, const Vec<2>& p2) requires(D == 2) {
   if (!p1.allFinite() || !p2.allFinite()) {
     throw std::invalid_argument("HalfSpace::throughPoints: points must be finite, got " + str<2>(p1) + " and " +
                                 str<2>(p2));
@@ -287,9 +285,7 @@ HalfSpace<D> HalfSpace<D>::throughPoints(const Vec<2>& p1, const Vec<2>& p2)
 }
 
 template <int D>
-HalfSpace<D> HalfSpace<D>::throughPoints(const Vec<3>& p1, const Vec<3>& p2, const Vec<3>& p3)
-  requires(D == 3)
-{
+HalfSpace<D> HalfSpace<D>::throughPoints(const Vec<3>& p1, const Vec<3>& p2, const Vec<3>& p3) requires(D == 3) {
   if (!p1.allFinite() || !p2.allFinite() || !p3.allFinite()) {
     throw std::invalid_argument("HalfSpace::throughPoints: points must be finite, got " + str<3>(p1) + ", " +
                                 str<3>(p2) + ", " + str<3>(p3));
@@ -320,18 +316,26 @@ namespace detail {
 template <int D>
 void checkSampling(const Box<D>& box, double spacing, int paddingCells) {
   if (!box.lower.allFinite() || !box.upper.allFinite() || !(box.lower.array() <= box.upper.array()).all()) {
-    throw std::invalid_argument("sampleGrid: box must be finite with lower <= upper, got lower " +
-                                str<D>(box.lower) + ", upper " + str<D>(box.upper));
+    throw std::invalid_argument("sampleGrid: box must be finite with lower <= upper, got lower " + str<D>(box.lower) +
+                                ", upper " + str<D>(box.upper));
   }
   requirePositive(spacing, "sampleGrid", "spacing");
   if (paddingCells < 0) {
     throw std::invalid_argument("sampleGrid: paddingCells must be >= 0, got " + std::to_string(paddingCells));
   }
-  // Guard the int arithmetic of Grid::covering against absurd sizes.
-  const double cellsPerAxis = box.size().maxCoeff() / spacing + 2.0 * paddingCells + 3.0;
-  if (!(cellsPerAxis < double(1 << 24))) {
-    throw std::invalid_argument("sampleGrid: spacing " + str(spacing) + " gives " + str(cellsPerAxis) +
-                                " nodes per axis (limit 2^24)");
+  // Guard the int arithmetic of Grid::covering, and memory, against absurd sizes.
+  double total = 1.0;
+  for (int a = 0; a < D; ++a) {
+    const double nodes = (box.upper[a] - box.lower[a]) / spacing + 2.0 * paddingCells + 3.0;
+    if (!(nodes < double(1 << 24))) {
+      throw std::invalid_argument("sampleGrid: spacing " + str(spacing) + " gives " + str(nodes) +
+                                  " nodes along axis " + std::to_string(a) + " (limit 2^24)");
+    }
+    total *= nodes;
+  }
+  if (!(total < 0x1.0p31)) {
+    throw std::invalid_argument("sampleGrid: spacing " + str(spacing) + " gives " + str(total) +
+                                " nodes (limit 2^31)");
   }
 }
 }  // namespace detail

@@ -18,11 +18,11 @@ namespace lsdem::geometry {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr int kFirstMode = 2;        ///< lowest Fourier mode / SH degree (1 would only shift the grain)
-constexpr int kLastFourierMode = 16; ///< highest Fourier mode in 2D
-constexpr int kLastDegree = 8;       ///< highest spherical-harmonic degree in 3D
-constexpr double kFloor = 0.3;       ///< r / r0 never goes below this
-constexpr double kFloorBlend = 0.1;  ///< half-width of the C1 blend into the floor
+constexpr int kFirstMode = 2;         ///< lowest Fourier mode / SH degree (1 would only shift the grain)
+constexpr int kLastFourierMode = 16;  ///< highest Fourier mode in 2D
+constexpr int kLastDegree = 8;        ///< highest spherical-harmonic degree in 3D
+constexpr double kFloor = 0.3;        ///< r / r0 never goes below this
+constexpr double kFloorBlend = 0.1;   ///< half-width of the C1 blend into the floor
 
 std::string str(double v) {
   std::ostringstream os;
@@ -77,7 +77,8 @@ class Profile<2> {
       const double sigma = 1.0 / double(n * n);
       cosine_[std::size_t(n)] = sigma * random.normal();
       sine_[std::size_t(n)] = sigma * random.normal();
-      variance += 0.5 * (cosine_[std::size_t(n)] * cosine_[std::size_t(n)] + sine_[std::size_t(n)] * sine_[std::size_t(n)]);
+      variance +=
+          0.5 * (cosine_[std::size_t(n)] * cosine_[std::size_t(n)] + sine_[std::size_t(n)] * sine_[std::size_t(n)]);
     }
     // ... scaled so the standard deviation over the circle, sqrt(sum (alpha^2 + beta^2) / 2), is the roughness.
     const double scale = (variance > 0.0) ? roughness / std::sqrt(variance) : 0.0;
@@ -188,7 +189,8 @@ class Profile<3> {
         if (m == 0) {
           sum += coeff_[std::size_t(shIndex(l, 0))] * p;
         } else {
-          sum += std::numbers::sqrt2 * p * (coeff_[std::size_t(shIndex(l, m))] * cm + coeff_[std::size_t(shIndex(l, -m))] * sm);
+          sum += std::numbers::sqrt2 * p *
+                 (coeff_[std::size_t(shIndex(l, m))] * cm + coeff_[std::size_t(shIndex(l, -m))] * sm);
         }
       }
     }
@@ -231,9 +233,9 @@ class Profile<3> {
   }
 
  private:
-  std::array<double, kCount> coeff_{};        ///< c_lm at shIndex(l, m)
-  std::array<double, kCount> recurrenceA_{};  ///< sqrt((4l^2 - 1) / (l^2 - m^2)) at shIndex(l, m)
-  std::array<double, kCount> recurrenceB_{};  ///< sqrt(((l-1)^2 - m^2) / (4(l-1)^2 - 1)) at shIndex(l, m)
+  std::array<double, kCount> coeff_{};              ///< c_lm at shIndex(l, m)
+  std::array<double, kCount> recurrenceA_{};        ///< sqrt((4l^2 - 1) / (l^2 - m^2)) at shIndex(l, m)
+  std::array<double, kCount> recurrenceB_{};        ///< sqrt(((l-1)^2 - m^2) / (4(l-1)^2 - 1)) at shIndex(l, m)
   std::array<double, kLastDegree + 1> diagonal_{};  ///< P_0^0 = 1/sqrt(4 pi), then sqrt((2m+1) / 2m)
 };
 

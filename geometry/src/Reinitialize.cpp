@@ -287,10 +287,10 @@ double weightedGodunov(std::array<AxisTerm, D> terms, int count) {
 }
 
 /// One Gauss-Seidel sweep with second-order upwind differences
-/// (3u - 4u1 + u2) / (2h) where the two upwind values decrease away from the
-/// node (u2 <= u1, with u2 taken negative across the interface, where the
-/// signed distance continues), first-order ones elsewhere. Returns the largest
-/// change of a value.
+/// (3u - 4u1 + u2) / (2h) along each axis (u1, u2 the next two nodes on the
+/// upwind side; u2 taken negative across the interface, where the signed
+/// distance continues), blended into the first-order (u - u1) / h where the
+/// second difference shows a kink. Returns the largest change of a value.
 template <int D>
 double sweepSecondOrder(std::vector<double>& dist, const std::vector<unsigned char>& fixed,
                         const std::vector<unsigned char>& inside, const Index<D>& dims,
@@ -326,7 +326,8 @@ double sweepSecondOrder(std::vector<double>& dist, const std::vector<unsigned ch
         const std::size_t n2 = std::size_t(std::ptrdiff_t(n) + 2 * side * s);
         const double v2 = (inside[n2] == inside[n]) ? dist[n2] : -dist[n2];
         const double kink = std::abs(dist[n] - 2.0 * v1 + v2) / h;
-        const double w = std::clamp((kKinkSecondDifference - kink) / (kKinkSecondDifference - kSmoothSecondDifference), 0.0, 1.0);
+        const double w =
+            std::clamp((kKinkSecondDifference - kink) / (kKinkSecondDifference - kSmoothSecondDifference), 0.0, 1.0);
         // w * (3u - 4 v1 + v2) / 2h + (1 - w) (u - v1) / h = alpha (u - base).
         const double alpha = (1.0 + 0.5 * w) / h;
         const double base = (w * 0.5 * (4.0 * v1 - v2) + (1.0 - w) * v1) / (1.0 + 0.5 * w);
@@ -359,7 +360,7 @@ struct PdeOperator {
   const std::array<std::ptrdiff_t, D>& strides;
   double h;
 
-  /// Writes L(phi) for every node to `rate`.
+  /// Writes L(phi) for every node to `out`.
   void rate(const std::vector<double>& phi, std::vector<double>& out) const {
     const Index<D> dims = grid.dims();
     const std::ptrdiff_t count = std::ptrdiff_t(grid.size());
@@ -431,9 +432,8 @@ void reinitializeFastSweeping(Grid<D>& grid) {
   // rounds are typical). Faces of one sign only ever meet nodes of that sign or
   // fixed nodes, so unsigned values can be swept together.
   const double tolerance = 1e-6 * h;
-  sweepRounds<D>(kMaxFirstOrderRounds, tolerance, [&](const std::array<bool, D>& forward) {
-    return sweep<D>(dist, fixed, dims, strides, h, forward);
-  });
+  sweepRounds<D>(kMaxFirstOrderRounds, tolerance,
+                 [&](const std::array<bool, D>& forward) { return sweep<D>(dist, fixed, dims, strides, h, forward); });
 
   // Second-order upwind sweeps from the first-order solution.
   std::vector<unsigned char> inside(grid.size());

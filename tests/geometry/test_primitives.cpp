@@ -138,11 +138,11 @@ TEST(Primitives, SphereKnownValues) {
 
 TEST(Primitives, BoxKnownValues) {
   const Vec<2> h2(2.0, 1.0);
-  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(0, 0), h2), -1.0);            // centre: nearest faces y = +-1
-  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(1.8, 0.0), h2), -0.2);         // inside near the x face
-  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(2.0, 1.0), h2), 0.0);          // on the corner
-  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(5.0, 5.0), h2), 5.0);          // outside the corner: |(3, 4)|
-  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(-2.5, 0.3), h2), 0.5);         // outside a face
+  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(0, 0), h2), -1.0);      // centre: nearest faces y = +-1
+  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(1.8, 0.0), h2), -0.2);  // inside near the x face
+  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(2.0, 1.0), h2), 0.0);   // on the corner
+  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(5.0, 5.0), h2), 5.0);   // outside the corner: |(3, 4)|
+  EXPECT_DOUBLE_EQ(sdfBox<2>(Vec<2>(-2.5, 0.3), h2), 0.5);  // outside a face
   const Vec<3> h3(1.0, 2.0, 3.0);
   EXPECT_DOUBLE_EQ(sdfBox<3>(Vec<3>(0, 0, 0), h3), -1.0);
   EXPECT_DOUBLE_EQ(sdfBox<3>(Vec<3>(3, 4, 3), h3), std::sqrt(8.0));  // outside the edge at x = 1, y = 2
@@ -199,8 +199,8 @@ TEST(Primitives, EllipseMatchesBruteForce) {
   const double a = 1.0, b = 0.6;
   std::mt19937_64 rng(3);
   double worst = 0.0;
-  std::vector<Vec<2>> points{Vec<2>(0.3, 0.0), Vec<2>(0.0, 0.2), Vec<2>(-0.5, 0.0), Vec<2>(0.999, 0.01),
-                             Vec<2>(2.0, 0.0), Vec<2>(0.0, -1.0)};
+  std::vector<Vec<2>> points{Vec<2>(0.3, 0.0),    Vec<2>(0.0, 0.2), Vec<2>(-0.5, 0.0),
+                             Vec<2>(0.999, 0.01), Vec<2>(2.0, 0.0), Vec<2>(0.0, -1.0)};
   for (int k = 0; k < 60; ++k) points.push_back(randomPoint<2>(rng, 1.6));
   for (const Vec<2>& x : points) {
     const double exact = sdfEllipsoid<2>(x, Vec<2>(a, b));
@@ -231,15 +231,15 @@ TEST(Primitives, GradientNormIsOne) {
     const Vec<2> x2 = randomPoint<2>(rng, 2.0);
     const Vec<3> x3 = randomPoint<3>(rng, 2.0);
     const std::vector<Vec<2>> l{{0, 0}, {1.5, 0}, {1.5, 0.7}, {0.6, 0.7}, {0.6, 1.4}, {0, 1.4}};
-    EXPECT_NEAR(numericGradient<2>([](const Vec<2>& y) { return sdfBox<2>(y, Vec<2>(1.0, 0.7), 0.2); }, x2).norm(),
-                1.0, 1e-6);
+    EXPECT_NEAR(numericGradient<2>([](const Vec<2>& y) { return sdfBox<2>(y, Vec<2>(1.0, 0.7), 0.2); }, x2).norm(), 1.0,
+                1e-6);
     EXPECT_NEAR(numericGradient<3>([](const Vec<3>& y) { return sdfBox<3>(y, Vec<3>(1.0, 0.7, 0.4), 0.1); }, x3).norm(),
                 1.0, 1e-6);
     EXPECT_NEAR(numericGradient<2>([](const Vec<2>& y) { return sdfEllipsoid<2>(y, Vec<2>(1.0, 0.6)); }, x2).norm(),
                 1.0, 1e-6);
     EXPECT_NEAR(
-        numericGradient<3>([](const Vec<3>& y) { return sdfEllipsoid<3>(y, Vec<3>(0.6, 0.45, 0.35)); }, x3).norm(),
-        1.0, 1e-6);
+        numericGradient<3>([](const Vec<3>& y) { return sdfEllipsoid<3>(y, Vec<3>(0.6, 0.45, 0.35)); }, x3).norm(), 1.0,
+        1e-6);
     EXPECT_NEAR(numericGradient<2>([&](const Vec<2>& y) { return sdfPolygon(y, l); }, x2).norm(), 1.0, 1e-6);
   }
 }
@@ -262,11 +262,11 @@ TEST(Primitives, ConcavePolygonKnownPoints) {
   const std::vector<Vec<2>> reversed{l.rbegin(), l.rend()};
   for (const auto* poly : {&l, &reversed}) {
     EXPECT_NEAR(sdfPolygon(Vec<2>(0.5, 0.5), *poly), -0.5, 1e-15);
-    EXPECT_NEAR(sdfPolygon(Vec<2>(1.5, 0.75), *poly), -0.25, 1e-15);  // under the notch
-    EXPECT_NEAR(sdfPolygon(Vec<2>(0.75, 1.5), *poly), -0.25, 1e-15);  // beside the notch
-    EXPECT_NEAR(sdfPolygon(Vec<2>(1.5, 1.5), *poly), 0.5, 1e-15);             // in the notch
+    EXPECT_NEAR(sdfPolygon(Vec<2>(1.5, 0.75), *poly), -0.25, 1e-15);            // under the notch
+    EXPECT_NEAR(sdfPolygon(Vec<2>(0.75, 1.5), *poly), -0.25, 1e-15);            // beside the notch
+    EXPECT_NEAR(sdfPolygon(Vec<2>(1.5, 1.5), *poly), 0.5, 1e-15);               // in the notch
     EXPECT_NEAR(sdfPolygon(Vec<2>(0.8, 0.8), *poly), -std::sqrt(0.08), 1e-15);  // nearest: the reflex vertex
-    EXPECT_NEAR(sdfPolygon(Vec<2>(1.9, 1.2), *poly), 0.2, 1e-15);  // in the notch near its floor
+    EXPECT_NEAR(sdfPolygon(Vec<2>(1.9, 1.2), *poly), 0.2, 1e-15);               // in the notch near its floor
     EXPECT_NEAR(sdfPolygon(Vec<2>(3.0, 0.5), *poly), 1.0, 1e-15);
     EXPECT_NEAR(sdfPolygon(Vec<2>(-3.0, -4.0), *poly), 5.0, 1e-15);
     EXPECT_EQ(sdfPolygon(Vec<2>(1.0, 1.0), *poly), 0.0);  // on the boundary: 0, outside
@@ -276,10 +276,10 @@ TEST(Primitives, ConcavePolygonKnownPoints) {
 
 TEST(Primitives, PolygonValidation) {
   EXPECT_THROW(sdfPolygon(Vec<2>::Zero(), {{0, 0}, {1, 0}}), std::invalid_argument);
-  EXPECT_THROW(sdfPolygon(Vec<2>::Zero(), {{0, 0}, {1, 1}, {2, 2}}), std::invalid_argument);  // zero area
-  EXPECT_THROW(validatePolygon({{0, 0}, {2, 2}, {2, 0}, {0, 1}}), std::invalid_argument);       // bow tie
-  EXPECT_THROW(validatePolygon({{0, 0}, {1, 0}, {1, 0}, {0, 1}}), std::invalid_argument);       // repeated vertex
-  EXPECT_THROW(validatePolygon({{0, 0}, {2, 0}, {1, 0}, {1, 1}}), std::invalid_argument);       // folds back
+  EXPECT_THROW(sdfPolygon(Vec<2>::Zero(), {{0, 0}, {1, 1}, {2, 2}}), std::invalid_argument);       // zero area
+  EXPECT_THROW(validatePolygon({{0, 0}, {2, 2}, {2, 0}, {0, 1}}), std::invalid_argument);          // bow tie
+  EXPECT_THROW(validatePolygon({{0, 0}, {1, 0}, {1, 0}, {0, 1}}), std::invalid_argument);          // repeated vertex
+  EXPECT_THROW(validatePolygon({{0, 0}, {2, 0}, {1, 0}, {1, 1}}), std::invalid_argument);          // folds back
   EXPECT_THROW(validatePolygon({{0, 0}, {2, 0}, {2, 2}, {1, 0}, {0, 2}}), std::invalid_argument);  // vertex on an edge
   EXPECT_THROW(polygonGrid({{0, 0}, {2, 2}, {2, 0}, {0, 1}}, 0.1), std::invalid_argument);
   EXPECT_THROW(validatePolygon({{0, 0}, {1, 0}, {std::numeric_limits<double>::infinity(), 1}}), std::invalid_argument);
@@ -298,7 +298,8 @@ TEST(Primitives, HalfSpaceThroughTwoPoints) {
   for (int k = 0; k < 100; ++k) {
     const Vec<2> p1 = randomPoint<2>(rng, 3), p2 = randomPoint<2>(rng, 3), x = randomPoint<2>(rng, 3);
     const HalfSpace<2> line = HalfSpace<2>::throughPoints(p1, p2);
-    const double eq18 = ((p2[1] - p1[1]) * x[0] - (p2[0] - p1[0]) * x[1] + p2[0] * p1[1] - p2[1] * p1[0]) / (p2 - p1).norm();
+    const double eq18 =
+        ((p2[1] - p1[1]) * x[0] - (p2[0] - p1[0]) * x[1] + p2[0] * p1[1] - p2[1] * p1[0]) / (p2 - p1).norm();
     EXPECT_NEAR(line.distance(x), eq18, 1e-12);
     EXPECT_NEAR(line.distance(p1), 0.0, 1e-12);
     EXPECT_NEAR(line.distance(p2), 0.0, 1e-12);
@@ -351,7 +352,8 @@ TEST(Primitives, GridsHoldTheDistancesAndVolumes) {
   expectVolume("rounded rectangle", smoothVolume(boxGrid<2>(he2, r, h)), A * B + 2 * r * (A + B) + kPi * r * r, 0.01);
   const Vec<3> he3(0.5, 0.3, 0.2);
   const double a = 2 * (he3[0] - r), b = 2 * (he3[1] - r), c = 2 * (he3[2] - r);
-  const double boxVolume = a * b * c + 2 * r * (a * b + b * c + c * a) + kPi * r * r * (a + b + c) + 4.0 / 3.0 * kPi * r * r * r;
+  const double boxVolume =
+      a * b * c + 2 * r * (a * b + b * c + c * a) + kPi * r * r * (a + b + c) + 4.0 / 3.0 * kPi * r * r * r;
   expectVolume("rounded box", smoothVolume(boxGrid<3>(he3, r, h)), boxVolume, 0.01);
   // Ellipse / ellipsoid.
   expectVolume("ellipse", smoothVolume(ellipsoidGrid<2>(Vec<2>(1.0, 0.6), h)), kPi * 0.6, 0.01);

@@ -34,12 +34,12 @@ Grid<D> centredGrid(int cells, double h) {
 
 // Error measures of a reinitialised grid against the exact signed distance, in cells.
 struct Errors {
-  double interface = 0.0;   // nodes with a face neighbour of the other sign
-  double nearSurface = 0.0; // |exact| < 2h
-  double gradient = 0.0;    // max ||grad phi| - 1| by central differences, |exact| < 3h
-  double outside = 0.0;     // every node with exact > 0 (smooth there for convex shapes)
-  double all = 0.0;         // every node
-  bool signsKept = true;    // sign(phi) == sign(input) at every node
+  double interface = 0.0;    // nodes with a face neighbour of the other sign
+  double nearSurface = 0.0;  // |exact| < 2h
+  double gradient = 0.0;     // max ||grad phi| - 1| by central differences, |exact| < 3h
+  double outside = 0.0;      // every node with exact > 0 (smooth there for convex shapes)
+  double all = 0.0;          // every node
+  bool signsKept = true;     // sign(phi) == sign(input) at every node
 };
 
 template <int D>
@@ -104,7 +104,8 @@ Errors ellipseCase(ReinitMethod method, double h) {
 // Sphere distance times 1 + 0.5 sin(..): right zero set, gradient off by up to 50%.
 Grid<3> modulatedSphere(double radius, int cells, double h) {
   return filled(centredGrid<3>(cells, h), [&](const Vec<3>& x) {
-    return (x.norm() - radius) * (1.0 + 0.5 * std::sin(3.0 * x[0] + 1.0) * std::sin(2.0 * x[1] - 0.5) * std::cos(4.0 * x[2]));
+    return (x.norm() - radius) *
+           (1.0 + 0.5 * std::sin(3.0 * x[0] + 1.0) * std::sin(2.0 * x[1] - 0.5) * std::cos(4.0 * x[2]));
   });
 }
 

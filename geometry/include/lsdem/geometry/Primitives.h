@@ -87,8 +87,7 @@ struct HalfSpace {
   /// ((y2-y1)x - (x2-x1)y + x2 y1 - y2 x1) / |p2 - p1|.
   /// @note Throws std::invalid_argument when the points coincide (|p2 - p1| <=
   /// 1e-12 max(|p1|, |p2|)) or are not finite.
-  static HalfSpace throughPoints(const Vec<2>& p1, const Vec<2>& p2)
-    requires(D == 2);
+  static HalfSpace throughPoints(const Vec<2>& p1, const Vec<2>& p2) requires(D == 2);
 
   /// @brief eq. 19-20: the plane through p1, p2, p3 (3D), normal along
   /// n = (p2 - p1) x (p3 - p1). Seen from the outside (phi > 0), p1, p2, p3 run
@@ -96,14 +95,13 @@ struct HalfSpace {
   /// @note Throws std::invalid_argument when two points coincide or the three
   /// are collinear (|n| <= 1e-12 |p2 - p1| |p3 - p1|, the sine of the angle at
   /// p1), or are not finite.
-  static HalfSpace throughPoints(const Vec<3>& p1, const Vec<3>& p2, const Vec<3>& p3)
-    requires(D == 3);
+  static HalfSpace throughPoints(const Vec<3>& p1, const Vec<3>& p2, const Vec<3>& p3) requires(D == 3);
 };
 
 namespace detail {
 /// @brief Checks the arguments of a grid sampling (box lower <= upper and
-/// finite, spacing > 0, 0 <= paddingCells, fewer than 2^24 nodes per axis);
-/// throws std::invalid_argument naming the bad one.
+/// finite, spacing > 0, 0 <= paddingCells, fewer than 2^24 nodes per axis and
+/// 2^31 in all); throws std::invalid_argument naming the bad one.
 template <int D>
 void checkSampling(const Box<D>& box, double spacing, int paddingCells);
 }  // namespace detail
@@ -123,7 +121,7 @@ Grid<D> sampleGrid(const Box<D>& box, double spacing, int paddingCells, F&& sdf)
   Grid<D> grid = Grid<D>::covering(box, spacing, paddingCells);
   // Evaluate the distance at every node; nodes are independent, so the result
   // does not depend on the thread count. An exception thrown by `sdf` must not
-  // leave a parallel region: the first one is kept and rethrown afterwards.
+  // leave a parallel region: the first one caught is kept and rethrown afterwards.
   const std::ptrdiff_t count = std::ptrdiff_t(grid.size());
   std::exception_ptr failure;
 #ifdef LSDEM_HAVE_OPENMP
@@ -157,8 +155,7 @@ Grid<D> sphereGrid(double radius, double spacing, int paddingCells = kDefaultPad
 /// @param spacing node spacing, world units, > 0.
 /// @param paddingCells cells of padding beyond the box.
 template <int D>
-Grid<D> boxGrid(const Vec<D>& halfExtents, double rounding, double spacing,
-                int paddingCells = kDefaultPaddingCells);
+Grid<D> boxGrid(const Vec<D>& halfExtents, double rounding, double spacing, int paddingCells = kDefaultPaddingCells);
 
 /// @brief Signed-distance grid of the ellipse/ellipsoid of sdfEllipsoid.
 /// @param semiAxes world units, > 0.
