@@ -29,9 +29,16 @@ Grid<D> Grid<D>::covering(const Box<D>& box, double spacing, int paddingCells, f
   const Vec<D> centre = 0.5 * (box.lower + box.upper);
   Index<D> dims;
   Vec<D> origin;
+  double total = 1.0;
   for (int a = 0; a < D; ++a) {
     const double half = 0.5 * (box.upper[a] - box.lower[a]);
-    const int halfCells = int(std::ceil(half / spacing - 1e-9)) + paddingCells;
+    const double cells = std::ceil(half / spacing - 1e-9) + paddingCells;
+    total *= 2.0 * cells + 1.0;
+    if (!(half >= 0.0) || !std::isfinite(cells) || cells > double(1 << 23) || total > 2147483647.0) {
+      throw std::invalid_argument("a grid of spacing " + std::to_string(spacing) + " over a box " +
+                                  std::to_string(2.0 * half) + " wide is too large or invalid");
+    }
+    const int halfCells = int(cells);
     dims[a] = 2 * halfCells + 1;
     origin[a] = centre[a] - halfCells * spacing;
   }

@@ -133,3 +133,9 @@ TEST(Grid, OutsideIsDefinedAndContinuous) {
   // Far outside the value is positive and finite.
   EXPECT_GT(g.value(Vec<2>(-100.0, -100.0)), 100.0);
 }
+
+TEST(Grid, CoveringRefusesAbsurdSizes) {
+  Box<3> box{Vec<3>::Constant(-1.0), Vec<3>::Constant(1.0)};
+  EXPECT_THROW(Grid<3>::covering(box, 1e-9, 4), std::invalid_argument);
+  EXPECT_THROW(Grid<3>::covering(box, std::nan(""), 4), std::invalid_argument);
+}
