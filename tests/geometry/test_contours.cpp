@@ -1,3 +1,4 @@
+#include "support/Sampling.h"
 #include "lsdem/geometry/Contours.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -22,6 +23,8 @@
 #endif
 
 using namespace lsdem::geometry;
+using lsdem::test::sampled;
+using lsdem::test::boxAround;
 
 namespace {
 
@@ -30,13 +33,6 @@ using SurfaceMesh = CGAL::Surface_mesh<Kernel::Point_3>;
 namespace PMP = CGAL::Polygon_mesh_processing;
 constexpr double kPi = std::numbers::pi;
 
-// A grid covering `box` + 4 cells, filled with an analytic level set.
-template <int D, class F>
-Grid<D> sample(const Box<D>& box, double h, F f) {
-  Grid<D> g = Grid<D>::covering(box, h, 4);
-  for (std::size_t n = 0; n < g.size(); ++n) g[n] = float(f(g.nodePosition(g.unlinear(n))));
-  return g;
-}
 
 Box<2> square(double r, const Vec<2>& c = Vec<2>::Zero()) { return {c - Vec<2>::Constant(r), c + Vec<2>::Constant(r)}; }
 Box<3> cube(double r, const Vec<3>& c = Vec<3>::Zero()) { return {c - Vec<3>::Constant(r), c + Vec<3>::Constant(r)}; }
@@ -109,7 +105,7 @@ TEST(MarchingSquares, CircleLengthAndAreaConvergeAtSecondOrder) {
   double previousLength = 0, previousArea = 0;
   for (int level = 0; level < 3; ++level) {
     const double h = R / (10.0 * std::pow(2.0, level));
-    const auto loops = marchingSquares(sample<2>(square(R, c), h, [&](const Vec<2>& x) { return (x - c).norm() - R; }));
+    const auto loops = marchingSquares(sampled<2>(square(R, c), h, [&](const Vec<2>& x) { return (x - c).norm() - R; }));
     ASSERT_EQ(loops.size(), 1u);
     const double lengthError = std::abs(perimeter(loops[0]) - 2 * kPi * R) / (2 * kPi * R);
     const double areaError = std::abs(signedArea(loops[0]) - kPi * R * R) / (kPi * R * R);
@@ -133,7 +129,7 @@ TEST(MarchingSquares, CircleLengthAndAreaConvergeAtSecondOrder) {
 // second-order error of Ramanujan's perimeter and pi a b.
 TEST(MarchingSquares, EllipseLengthAndArea) {
   const double a = 1.0, b = 0.45, h = 0.02;
-  const auto loops = marchingSquares(sample<2>(Box<2>{Vec<2>(-a, -b), Vec<2>(a, b)}, h, [&](const Vec<2>& x) {
+  const auto loops = marchingSquares(sampled<2>(Box<2>{Vec<2>(-a, -b), Vec<2>(a, b)}, h, [&](const Vec<2>& x) {
     return b * (std::hypot(x[0] / a, x[1] / b) - 1.0);
   }));
   ASSERT_EQ(loops.size(), 1u);
@@ -145,7 +141,7 @@ TEST(MarchingSquares, EllipseLengthAndArea) {
 TEST(MarchingSquares, TwoCirclesGiveTwoLoops) {
   const double R = 0.5, h = 0.025;
   const Vec<2> c1(-0.8, 0.0), c2(0.8, 0.1);
-  const auto loops = marchingSquares(sample<2>(Box<2>{Vec<2>(-1.3, -0.5), Vec<2>(1.3, 0.6)}, h, [&](const Vec<2>& x) {
+  const auto loops = marchingSquares(sampled<2>(Box<2>{Vec<2>(-1.3, -0.5), Vec<2>(1.3, 0.6)}, h, [&](const Vec<2>& x) {
     return std::min((x - c1).norm(), (x - c2).norm()) - R;
   }));
   ASSERT_EQ(loops.size(), 2u);
@@ -159,7 +155,7 @@ TEST(MarchingSquares, TwoCirclesGiveTwoLoops) {
 // the signed areas add up to the annulus area.
 TEST(MarchingSquares, AnnulusHasClockwiseHole) {
   const double R0 = 0.4, R1 = 1.0, h = 0.02;
-  const auto loops = marchingSquares(sample<2>(square(R1), h, [&](const Vec<2>& x) {
+  const auto loops = marchingSquares(sampled<2>(square(R1), h, [&](const Vec<2>& x) {
     return std::max(x.norm() - R1, R0 - x.norm());
   }));
   ASSERT_EQ(loops.size(), 2u);
@@ -206,7 +202,7 @@ TEST(MarchingSquares, ZeroNodesAreOutsideAndClamped) {
 // points are at most a cell diagonal apart.
 TEST(MarchingSquares, LoopsAreSimpleAndConnected) {
   const double h = 0.05;
-  const auto loops = marchingSquares(sample<2>(square(1.0), h, [](const Vec<2>& x) {
+  const auto loops = marchingSquares(sampled<2>(square(1.0), h, [](const Vec<2>& x) {
     return x.norm() - 0.7 - 0.2 * std::sin(5 * std::atan2(x[1], x[0]));
   }));
   ASSERT_EQ(loops.size(), 1u);
@@ -236,7 +232,7 @@ TEST(MarchingSquares, BorderAndEmpty) {
 TEST(MarchingCubes, SphereIsWatertightAndAccurate) {
   const double R = 1.0, h = 0.1;
   const Vec<3> c(0.011, -0.023, 0.031);
-  const TriangleMesh mesh = marchingCubes(sample<3>(cube(R, c), h, [&](const Vec<3>& x) { return (x - c).norm() - R; }));
+  const TriangleMesh mesh = marchingCubes(sampled<3>(cube(R, c), h, [&](const Vec<3>& x) { return (x - c).norm() - R; }));
   expectWatertight(mesh, 2);
   const double areaError = mesh.area() / (4 * kPi * R * R) - 1;
   const double volumeError = mesh.signedVolume() / (4.0 / 3.0 * kPi * R * R * R) - 1;
@@ -251,7 +247,7 @@ TEST(MarchingCubes, SphereIsWatertightAndAccurate) {
 // Torus: genus 1, chi = 0; volume 2 pi^2 R r^2.
 TEST(MarchingCubes, TorusHasGenusOne) {
   const double R = 0.7, r = 0.3, h = 0.05;
-  const TriangleMesh mesh = marchingCubes(sample<3>(Box<3>{Vec<3>(-1, -1, -0.3), Vec<3>(1, 1, 0.3)}, h, [&](const Vec<3>& x) {
+  const TriangleMesh mesh = marchingCubes(sampled<3>(Box<3>{Vec<3>(-1, -1, -0.3), Vec<3>(1, 1, 0.3)}, h, [&](const Vec<3>& x) {
     return std::hypot(std::hypot(x[0], x[1]) - R, x[2]) - r;
   }));
   expectWatertight(mesh, 0);
@@ -262,7 +258,7 @@ TEST(MarchingCubes, TorusHasGenusOne) {
 // Two separate spheres: chi = 4 (two components of genus 0).
 TEST(MarchingCubes, TwoSpheres) {
   const Vec<3> c1(-0.6, 0, 0), c2(0.6, 0.05, 0);
-  const TriangleMesh mesh = marchingCubes(sample<3>(Box<3>{Vec<3>(-1.1, -0.5, -0.5), Vec<3>(1.1, 0.55, 0.5)}, 0.1,
+  const TriangleMesh mesh = marchingCubes(sampled<3>(Box<3>{Vec<3>(-1.1, -0.5, -0.5), Vec<3>(1.1, 0.55, 0.5)}, 0.1,
                                                     [&](const Vec<3>& x) {
                                                       return std::min((x - c1).norm(), (x - c2).norm()) - 0.45;
                                                     }));
@@ -331,7 +327,7 @@ TEST(MarchingCubes, InteriorAtBorderIsClosed) {
 // Same mesh for 1 and 2 threads; time for a 64^3 sphere.
 TEST(MarchingCubes, DeterministicAndTimed) {
   const double R = 1.0, h = 2 * R / 56;  // 56 cells across + 4 padding each side = 65 nodes
-  const Grid<3> g = sample<3>(cube(R), h, [&](const Vec<3>& x) { return x.norm() - R; });
+  const Grid<3> g = sampled<3>(cube(R), h, [&](const Vec<3>& x) { return x.norm() - R; });
   std::cout << "grid " << g.dims().transpose() << "\n";
 #ifdef LSDEM_HAVE_OPENMP
   omp_set_num_threads(1);

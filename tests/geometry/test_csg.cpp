@@ -1,3 +1,4 @@
+#include "support/Sampling.h"
 #include "lsdem/geometry/Csg.h"
 #include "lsdem/geometry/MassProperties.h"
 #include "lsdem/geometry/Primitives.h"
@@ -9,20 +10,13 @@
 #include <numbers>
 
 using namespace lsdem::geometry;
+using lsdem::test::sampled;
+using lsdem::test::boxAround;
 
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// A grid covering `box` with spacing h (4 cells of padding), sampled from f(world point).
-template <int D, class F>
-Grid<D> sampled(const Box<D>& box, double h, F f) {
-  return sampleGrid<D>(box, h, kDefaultPaddingCells, f);
-}
-template <int D>
-Box<D> boxAround(const Vec<D>& centre, double radius) {
-  return {centre - Vec<D>::Constant(radius), centre + Vec<D>::Constant(radius)};
-}
 
 // A plane (eq. 19) through `point` with normal `normal`: signed distance, negative on the -normal side.
 template <int D>

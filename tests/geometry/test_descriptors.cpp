@@ -1,3 +1,4 @@
+#include "support/Sampling.h"
 #include "lsdem/geometry/Descriptors.h"
 #include "lsdem/geometry/Primitives.h"
 
@@ -7,21 +8,14 @@
 #include <numbers>
 
 using namespace lsdem::geometry;
+using lsdem::test::sampled;
+using lsdem::test::boxAround;
 
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// A grid covering `box` with spacing h (4 cells of padding), sampled from f(world point).
-template <int D, class F>
-Grid<D> sampled(const Box<D>& box, double h, F f) {
-  return sampleGrid<D>(box, h, kDefaultPaddingCells, f);
-}
 
-template <int D>
-Box<D> boxAround(const Vec<D>& centre, double radius) {
-  return {centre - Vec<D>::Constant(radius), centre + Vec<D>::Constant(radius)};
-}
 
 // Nodes on a closed curve given by its points in order: each weighs half of
 // its two adjacent chords, so the weights sum to the polygon's perimeter.

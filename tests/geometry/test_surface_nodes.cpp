@@ -1,3 +1,4 @@
+#include "support/Sampling.h"
 #include "lsdem/geometry/SurfaceNodes.h"
 
 #include <gtest/gtest.h>
@@ -15,18 +16,13 @@
 #endif
 
 using namespace lsdem::geometry;
+using lsdem::test::sampled;
+using lsdem::test::boxAround;
 
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// A grid covering `box` + 4 cells, filled with an analytic level set.
-template <int D, class F>
-Grid<D> sample(const Box<D>& box, double h, F f) {
-  Grid<D> g = Grid<D>::covering(box, h, 4);
-  for (std::size_t n = 0; n < g.size(); ++n) g[n] = float(f(g.nodePosition(g.unlinear(n))));
-  return g;
-}
 
 // Ramanujan's second approximation of an ellipse's perimeter.
 double ellipsePerimeter(double a, double b) {
@@ -83,7 +79,7 @@ double maxNearestNeighbour(const NodeSet<D>& nodes) {
 TEST(SurfaceNodes2D, CirclePerimeterCountAndSpacing) {
   const double R = 1.0, h = 0.1;
   const Vec<2> c(0.017, -0.031);
-  const Grid<2> g = sample<2>(Box<2>{c - Vec<2>::Constant(R), c + Vec<2>::Constant(R)}, h,
+  const Grid<2> g = sampled<2>(Box<2>{c - Vec<2>::Constant(R), c + Vec<2>::Constant(R)}, h,
                               [&](const Vec<2>& x) { return (x - c).norm() - R; });
   std::size_t previousCount = 0;
   for (const double density : {1.0, 2.0, 4.0}) {
@@ -110,7 +106,7 @@ TEST(SurfaceNodes2D, CirclePerimeterCountAndSpacing) {
 TEST(SurfaceNodes2D, EllipsePerimeter) {
   const Vec<2> semi(1.0, 0.4);
   const double h = 0.05;
-  const Grid<2> g = sample<2>(Box<2>{-semi, semi}, h, [&](const Vec<2>& x) { return ellipsoidDistance<2>(x, semi); });
+  const Grid<2> g = sampled<2>(Box<2>{-semi, semi}, h, [&](const Vec<2>& x) { return ellipsoidDistance<2>(x, semi); });
   for (const double density : {1.0, 2.0}) {
     const NodeSet<2> nodes = surfaceNodes(g, density);
     const double P = ellipsePerimeter(semi[0], semi[1]);
@@ -126,7 +122,7 @@ TEST(SurfaceNodes2D, EllipsePerimeter) {
 // to both perimeters; a tiny blob still gets 3 nodes.
 TEST(SurfaceNodes2D, EveryContourGetsNodes) {
   const double R0 = 0.3, R1 = 0.8, h = 0.05;
-  const Grid<2> ring = sample<2>(Box<2>{Vec<2>::Constant(-R1), Vec<2>::Constant(R1)}, h,
+  const Grid<2> ring = sampled<2>(Box<2>{Vec<2>::Constant(-R1), Vec<2>::Constant(R1)}, h,
                                  [&](const Vec<2>& x) { return std::max(x.norm() - R1, R0 - x.norm()); });
   const NodeSet<2> nodes = surfaceNodes(ring, 1.0);
   EXPECT_NEAR(nodes.totalWeight(), 2 * kPi * (R0 + R1), 0.01 * 2 * kPi * (R0 + R1));
@@ -155,7 +151,7 @@ TEST(SurfaceNodes2D, BadDensityAndEmpty) {
 TEST(SurfaceNodes3D, SphereAreaCountAndSpacing) {
   const double R = 1.0, h = 0.1;
   const Vec<3> c(0.013, -0.027, 0.004);
-  const Grid<3> g = sample<3>(Box<3>{c - Vec<3>::Constant(R), c + Vec<3>::Constant(R)}, h,
+  const Grid<3> g = sampled<3>(Box<3>{c - Vec<3>::Constant(R), c + Vec<3>::Constant(R)}, h,
                               [&](const Vec<3>& x) { return (x - c).norm() - R; });
   std::size_t previousCount = 0;
   for (const double density : {1.0, 2.0}) {
@@ -195,7 +191,7 @@ TEST(SurfaceNodes3D, SphereAreaCountAndSpacing) {
 TEST(SurfaceNodes3D, EllipsoidArea) {
   const Vec<3> semi(1.0, 0.7, 0.45);
   const double h = 0.04;
-  const Grid<3> g = sample<3>(Box<3>{-semi, semi}, h, [&](const Vec<3>& x) { return ellipsoidDistance<3>(x, semi); });
+  const Grid<3> g = sampled<3>(Box<3>{-semi, semi}, h, [&](const Vec<3>& x) { return ellipsoidDistance<3>(x, semi); });
   const double reference = ellipsoidArea(semi[0], semi[1], semi[2]);
   for (const double density : {1.0, 2.0}) {
     const NodeSet<3> nodes = surfaceNodes(g, density);
@@ -219,7 +215,7 @@ TEST(SurfaceNodes3D, BadDensityAndEmpty) {
 
 // Same nodes and weights for 1 and 2 threads.
 TEST(SurfaceNodes3D, DeterministicAcrossThreads) {
-  const Grid<3> g = sample<3>(Box<3>{Vec<3>::Constant(-0.5), Vec<3>::Constant(0.5)}, 0.1,
+  const Grid<3> g = sampled<3>(Box<3>{Vec<3>::Constant(-0.5), Vec<3>::Constant(0.5)}, 0.1,
                               [](const Vec<3>& x) { return x.norm() - 0.5; });
 #ifdef LSDEM_HAVE_OPENMP
   omp_set_num_threads(1);
