@@ -395,7 +395,7 @@ void BroadPhase<D>::findPairs() {
 
   // Each chunk of cells searches its neighbourhoods into its own buffer.
   const std::ptrdiff_t nChunks = std::ptrdiff_t(chunks);
-  const bool parallel = nChunks > 1 && std::ptrdiff_t(sortedPosition_.size()) > kParallelBodies;
+  [[maybe_unused]] const bool parallel = nChunks > 1 && std::ptrdiff_t(sortedPosition_.size()) > kParallelBodies;
 #pragma omp parallel for schedule(dynamic, 1) if (parallel)
   for (std::ptrdiff_t chunk = 0; chunk < nChunks; ++chunk) {
     std::vector<std::uint64_t>& out = chunkPairs_[chunk];

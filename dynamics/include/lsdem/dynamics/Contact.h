@@ -33,7 +33,7 @@ struct PairContact {
   std::uint32_t b = 0;                   ///< particle index, or wall/tool index for wall contacts
   Vec<D> force = Vec<D>::Zero();         ///< total force on a, N (b gets -force)
   Spin<D> torqueA = Rotation<D>::zeroSpin();  ///< torque on a about its centroid, N m
-  Spin<D> torqueB = Rotation<D>::zeroSpin();  ///< torque on b about its centroid (particle pairs), N m
+  Spin<D> torqueB = Rotation<D>::zeroSpin();  ///< torque on b about its centroid (particle pairs), or on the plane / tool about Plane::point / ToolPose::position, N m
   std::uint32_t firstNode = 0;           ///< first of this pair's records in the node-contact buffer
   std::uint32_t nodeCount = 0;           ///< number of node contacts (0: the pair does not touch)
   double elasticEnergy = 0.0;            ///< energy stored in the pair's springs, J

@@ -1,0 +1,217 @@
+#pragma once
+/// @file NarrowPhase.h
+/// @brief The narrow phase and contact forces (eq. 3-4): surface nodes of one
+/// body tested against the level set of the other, then the contact law
+/// (ContactLaw.h) turned into per-node and per-pair forces, with the persistent
+/// shear history friction needs.
+///
+/// Contact test (eq. 3): a surface node p of one body touches the other body
+/// when phi_other(p) < 0; the overlap is -phi and the normal is the normalised
+/// gradient of phi_other (eq. 4), pointing out of the other body. The contact
+/// point is the node's world position.
+///
+/// Order independence of particle pairs. The paper tests the nodes of one
+/// ("master") body against the level set of the other ("slave"); which body is
+/// the master then changes the answer (a sharp corner pressed into a face is
+/// seen by the corner's nodes, not by the face's). lsdem tests both directions
+/// and weights each direction's node forces by 1/2: swapping the two bodies
+/// swaps the two halves, so the forces come out equal and opposite to round-off,
+/// and two identical bodies in symmetric contact get the total stiffness of a
+/// one-sided test (each direction sees the same overlap, half the stiffness).
+///
+/// Boundaries are one-sided with weight 1: planes (exact, a dot product per
+/// node) and kinematic level-set bodies (tools), whose level set the particle's
+/// nodes are tested against. Tools are large (a jaw, a bucket), so their level
+/// set resolves the contact geometry well, and their node counts are large, so
+/// testing them against every nearby particle would cost far more than the
+/// particle's nodes against the tool.
+///
+/// Cost. Per pair and direction the node owner's body frame is mapped to the
+/// other body's grid frame by one composed rigid map (the other shape's
+/// bodyToGrid, the inverse of its pose, the owner's pose), so a node costs one
+/// D x D matrix-vector product, a bounding-sphere test (in the grid frame),
+/// a grid-box test and, only for nodes near the other body, one multilinear
+/// look-up. The law's parts (normal model, formulation, friction, damping) are
+/// template parameters of the kernel, chosen once per compute() call, so a part
+/// the scene does not declare costs nothing per node.
+///
+/// Determinism. Pairs run in parallel (OpenMP); each pair writes only its own
+/// records (node contacts go to per-thread buffers and are concatenated in
+/// pair order afterwards), and accumulate() sums forces into particles in pair
+/// order, so results are bitwise identical for any number of threads.
+
+#include "lsdem/dynamics/Contact.h"
+#include "lsdem/dynamics/ContactLaw.h"
+#include "lsdem/dynamics/Particles.h"
+#include "lsdem/dynamics/Wall.h"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace lsdem::dynamics {
+
+/// Total contact loads on the boundaries this step (what a platen servo or a
+/// recorder reads), world frame.
+template <int D>
+struct BoundaryLoads {
+  std::vector<Vec<D>> planeForce;   ///< force of the particles on each plane, N
+  std::vector<Spin<D>> planeTorque; ///< torque of the particles on each plane about Plane::point, N m
+  std::vector<Vec<D>> toolForce;    ///< force of the particles on each tool, N
+  std::vector<Spin<D>> toolTorque;  ///< torque of the particles on each tool about ToolPose::position, N m
+};
+
+namespace detail {
+
+/// Per-node working values of the contact solver (internal).
+template <int D>
+struct NodeWork {
+  double stiffness = 0.0;          ///< stiffness factor: direction weight x (1 | w_i / w_ref); k_i = kn x this
+  double area = 0.0;               ///< direction weight x node weight w_i (m in 2D, m^2 in 3D)
+  double gradient = 1.0;           ///< |grad phi| of the other body's level set at the node (1 for planes)
+  Vec<D> shear = Vec<D>::Zero();   ///< shear displacement after this step, world frame, m
+};
+
+/// Output buffers of one thread (internal); aligned so threads do not share cache lines.
+template <int D>
+struct alignas(64) ThreadBuffers {
+  std::vector<PairContact<D>> pairs;
+  std::vector<NodeContact<D>> nodes;
+  std::vector<NodeWork<D>> work;
+  std::uint64_t nodeChecks = 0;
+};
+
+/// Where one task's records went (internal): thread buffer ranges and output offsets.
+struct TaskOutput {
+  std::uint32_t thread = 0;
+  std::uint32_t firstPair = 0, pairCount = 0;  ///< in the thread's buffer
+  std::uint32_t firstNode = 0, nodeCount = 0;  ///< in the thread's buffer
+  std::uint64_t outPair = 0, outNode = 0;      ///< in the solver's output
+};
+
+/// One pair's shear history (internal): key and its node contacts in the
+/// previous step's output (nodeContacts(), nodeShear()).
+struct HistoryPair {
+  std::uint64_t idA = 0;    ///< global id of particle a
+  std::uint64_t other = 0;  ///< global id of b, or a tagged plane / tool index
+  std::uint32_t first = 0, count = 0;
+};
+
+}  // namespace detail
+
+/// @brief Finds the node contacts of particle pairs, particles and planes, and
+/// particles and tools, and computes their forces with one contact law; owns
+/// the shear history (friction) and all scratch buffers, so a step allocates
+/// nothing once the buffers have grown to the problem's size.
+///
+/// Use per step: compute(...) at the new positions, then accumulate(particles)
+/// (after zeroing the particles' forces and before the integrator's kick).
+///
+/// Shear history is keyed by (global id of a, global id of b | plane index |
+/// tool index, owner side, node index), so it survives particles being removed
+/// or reordered; a node contact that is absent in one step loses its history.
+/// Planes and tools are keyed by their index in the lists passed to compute(),
+/// which must therefore keep their order between steps.
+template <int D>
+class ContactSolver {
+ public:
+  /// A candidate particle pair (indices into Particles), a = lower global id.
+  using Pair = std::array<std::uint32_t, 2>;
+
+  /// @brief A solver for one contact law.
+  /// @note Throws std::invalid_argument for an invalid law (validateContactLaw).
+  explicit ContactSolver(const ContactLawDef& law);
+
+  /// @brief The law this solver applies.
+  const ContactLawDef& law() const { return law_; }
+
+  /// @brief Computes the node contacts and forces of the candidate pairs, of
+  /// every particle against every plane and against every tool, at the current
+  /// state of `particles`; fills pairContacts() and nodeContacts() and updates
+  /// the shear history. Does not touch particles.force (see accumulate()).
+  /// @param particles particle state (positions, orientations, velocities, masses, shapes, ids).
+  /// @param pairs candidate pairs (the broad phase's), each in canonical order:
+  ///   particles.id[a] < particles.id[b]. Pairs whose bounding spheres do not
+  ///   overlap are skipped at the cost of one distance test.
+  /// @param planes plane walls (unit normals).
+  /// @param tools kinematic level-set bodies (non-null shapes).
+  /// @param dt time step, s, > 0: the shear displacement increment is v_t dt.
+  /// @note Throws std::invalid_argument for dt <= 0 or not finite, an index out
+  /// of range, a pair not in canonical order, a plane normal not of unit length
+  /// (within 1e-6) or a tool without a shape; nothing is changed then.
+  void compute(const Particles<D>& particles, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
+               const std::vector<ToolPose<D>>& tools, double dt);
+
+  /// @brief Adds the forces and torques of the last compute() into
+  /// `particles` (force, torque), pair by pair in output order (a fixed order,
+  /// so sums are the same for any thread count), and returns the total loads
+  /// on the planes and tools.
+  /// @note `particles` must hold the same particles as at compute(); throws
+  /// std::invalid_argument when its size differs.
+  const BoundaryLoads<D>& accumulate(Particles<D>& particles);
+
+  /// @brief Touching pairs of the last compute(), in order: particle pairs (in
+  /// candidate order), then particle-plane contacts (by particle, then plane),
+  /// then particle-tool contacts (by particle, then tool). For plane and tool
+  /// records `b` is the plane / tool index and `torqueB` is the torque on the
+  /// plane about Plane::point / on the tool about ToolPose::position.
+  const std::vector<PairContact<D>>& pairContacts() const { return pairs_; }
+  /// @brief The particle-pair records of pairContacts().
+  std::span<const PairContact<D>> particleContacts() const { return {pairs_.data(), particlePairCount_}; }
+  /// @brief The particle-plane records of pairContacts().
+  std::span<const PairContact<D>> planeContacts() const {
+    return {pairs_.data() + particlePairCount_, planePairCount_};
+  }
+  /// @brief The particle-tool records of pairContacts().
+  std::span<const PairContact<D>> toolContacts() const {
+    return {pairs_.data() + particlePairCount_ + planePairCount_, pairs_.size() - particlePairCount_ - planePairCount_};
+  }
+  /// @brief Node contacts of the last compute(); pair k owns
+  /// [pairContacts()[k].firstNode, + nodeCount). Within a pair: the nodes of a
+  /// inside b (ownerIsB = 0) by node index, then those of b inside a.
+  const std::vector<NodeContact<D>>& nodeContacts() const { return nodes_; }
+  /// @brief Shear displacement of each node contact after the last compute()
+  /// (world frame, m; in the tangent plane), aligned with nodeContacts(); empty
+  /// when the law has no friction.
+  const std::vector<Vec<D>>& nodeShear() const { return shear_; }
+
+  /// @brief Elastic energy stored in all contact springs after the last compute(), J.
+  double elasticEnergy() const { return elasticEnergy_; }
+  /// @brief Power dissipated by contact damping and sliding friction in the last compute(), W.
+  double dissipatedPower() const { return dissipatedPower_; }
+  /// @brief Nodes tested against a level set or plane in the last compute()
+  /// (the narrow phase's unit of work).
+  std::uint64_t nodeChecks() const { return nodeChecks_; }
+  /// @brief Node contacts carrying shear history into the next compute().
+  std::size_t historySize() const { return history_.empty() ? 0 : shear_.size(); }
+  /// @brief Forgets every shear history (e.g. after a restart without it).
+  void clearHistory() { history_.clear(); }
+
+ private:
+  template <NormalModel Normal, ForceFormulation Formulation, bool Friction, bool Damping>
+  void run(const Particles<D>& particles, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
+           const std::vector<ToolPose<D>>& tools, double dt);
+  void gather(const Particles<D>& particles, std::size_t particlePairTasks, std::size_t planeTasks);
+
+  ContactLawDef law_;
+  // Output of the last compute(); nodes_ / shear_ with history_ are also the history.
+  std::vector<PairContact<D>> pairs_;
+  std::vector<NodeContact<D>> nodes_;
+  std::vector<Vec<D>> shear_;
+  std::vector<detail::HistoryPair> history_;  // sorted by (idA, other)
+  std::size_t particlePairCount_ = 0, planePairCount_ = 0;
+  std::size_t particleCount_ = 0, planeCount_ = 0, toolCount_ = 0;
+  double elasticEnergy_ = 0.0, dissipatedPower_ = 0.0;
+  std::uint64_t nodeChecks_ = 0;
+  // Scratch reused between steps.
+  std::vector<detail::ThreadBuffers<D>> threads_;
+  std::vector<detail::TaskOutput> tasks_;
+  BoundaryLoads<D> loads_;
+};
+
+extern template class ContactSolver<2>;
+extern template class ContactSolver<3>;
+
+}  // namespace lsdem::dynamics

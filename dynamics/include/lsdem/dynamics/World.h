@@ -1,0 +1,202 @@
+#pragma once
+/// @file World.h
+/// @brief The LS-DEM world: particles, walls and tools, the contact law, the
+/// declared effects, and the step that advances them.
+///
+/// One step (DESIGN "One step"), velocity Verlet in two halves (Integrator.h):
+///
+///     integrate: half kick + drift       x(n) -> x(n+1), v(n) -> v(n+1/2)
+///     moveKinematicBodies()              tools and planes to t(n+1)
+///     broadPhase()                       candidate pairs, Verlet skin
+///     narrowPhase() + contactForces()    node contacts and forces (eq. 3-4)
+///     applyEffects()                     gravity, damping, ... (declared only)
+///     integrate: half kick               v(n+1/2) -> v(n+1)
+///     afterStep()                        breakage, removal, recorders
+///
+/// The force stages of a step are the ones that close it, so the state between
+/// steps (positions, velocities, forces, contacts) is consistent: breakage and
+/// output read contacts computed at the positions they describe.
+
+#include "lsdem/dynamics/BroadPhase.h"
+#include "lsdem/dynamics/Effect.h"
+#include "lsdem/dynamics/Motion.h"
+#include "lsdem/dynamics/NarrowPhase.h"
+#include "lsdem/dynamics/Particles.h"
+#include "lsdem/dynamics/Wall.h"
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace lsdem::dynamics {
+
+/// A kinematic level-set body (jaw, bucket, platen) with prescribed motion.
+template <int D>
+struct ToolDef {
+  std::string name;
+  std::shared_ptr<const geometry::Shape<D>> shape;  ///< required
+  Motion<D> motion;                                  ///< pose of the shape's body frame over time
+};
+
+/// An infinite plane wall, optionally translating at constant velocity.
+template <int D>
+struct PlaneDef {
+  std::string name;
+  Plane<D> plane;  ///< at t = 0
+};
+
+/// Everything that configures a world (STYLE 7). Effects are declared by
+/// giving them a value; an absent effect is not built.
+template <int D>
+struct WorldDef {
+  ContactLawDef contact;                    ///< contact law (friction and damping parts inside)
+  BroadPhaseDef<D> broadPhase;              ///< Verlet skin
+  double dt = 0.0;                          ///< s; 0: automatic, safety x the critical step, re-checked as particles are added
+  double dtSafety = 0.2;                    ///< fraction of the critical step used or allowed
+  bool forceDt = false;                     ///< accept a user dt above the safe step
+  std::optional<Vec<D>> gravity;            ///< m/s^2
+  std::optional<double> globalDamping;      ///< C_g, 1/s (Tables 1-2)
+  std::optional<double> localDamping;       ///< Cundall alpha in [0, 1)
+  std::optional<geometry::Box<D>> outflow;  ///< particles whose centroid leaves this box are removed
+  bool checkFinite = false;                 ///< check every state value for NaN/Inf each step (debug)
+};
+
+/// The energy budget of a run, J. Work done on the particles counts positive.
+struct EnergyLedger {
+  double kineticTranslational = 0.0;
+  double kineticRotational = 0.0;
+  double elastic = 0.0;          ///< stored in contact springs now
+  double gravityWork = 0.0;      ///< work of gravity on the particles so far
+  double boundaryWork = 0.0;     ///< work of moving planes and tools on the particles so far
+  double dampingLoss = 0.0;      ///< removed by global and local damping so far
+  double contactLoss = 0.0;      ///< dissipated by contact damping and sliding friction so far
+  double removedEnergy = 0.0;    ///< kinetic energy carried away by removed particles
+  double addedEnergy = 0.0;      ///< kinetic energy brought by particles added after the start
+  double initial = 0.0;          ///< kinetic + elastic at the start
+
+  double total() const { return kineticTranslational + kineticRotational + elastic; }
+  /// @brief Energy now minus energy accounted for: 0 for an exact budget.
+  double balanceError() const {
+    return total() + dampingLoss + contactLoss + removedEnergy - initial - gravityWork - boundaryWork - addedEnergy;
+  }
+  /// @brief balanceError relative to the largest term of the budget.
+  double relativeBalanceError() const;
+};
+
+/// A particle taken out of the simulation (outflow, fines).
+struct RemovedParticle {
+  std::uint64_t id = 0;
+  double time = 0.0;         ///< s
+  double mass = 0.0;         ///< kg
+  double volume = 0.0;       ///< m^D
+  double sieveSize = 0.0;    ///< m (eq. 21)
+  std::string reason;        ///< "outflow", "fines", ...
+};
+
+/// Stages of the step whose wall-clock time is reported.
+enum class Stage { Integrate, Kinematics, BroadPhase, NarrowPhase, Accumulate, Effects, AfterStep, Count };
+const char* stageName(Stage s);
+
+template <int D>
+class World {
+ public:
+  /// @note Throws std::invalid_argument for invalid parameters (the contact
+  /// law's, dt < 0, safety not in (0, 1], damping out of range).
+  explicit World(const WorldDef<D>& def);
+
+  // ---- building ----
+  /// @brief Adds a particle; re-checks the time step. Returns its index.
+  std::size_t addParticle(const ParticleDef<D>& def);
+  /// @brief Removes particle `index`, recording it (for mass balance and size
+  /// distributions) with `reason`.
+  void removeParticle(std::size_t index, const std::string& reason);
+  std::size_t addTool(const ToolDef<D>& def);
+  std::size_t addPlane(const PlaneDef<D>& def);
+  /// @brief Declares one more effect (breakage plugs in here).
+  void addEffect(std::unique_ptr<Effect<D>> effect);
+  /// @brief Tells the world particles were replaced in bulk (breakage): the
+  /// broad phase rebuilds and the time step is re-checked.
+  void particlesChanged();
+
+  // ---- running ----
+  /// @brief Advances one step of dt().
+  void step();
+  /// @brief Advances n steps.
+  void run(std::uint64_t n);
+
+  // ---- state ----
+  Particles<D>& particles() { return particles_; }
+  const Particles<D>& particles() const { return particles_; }
+  double time() const { return time_; }
+  double dt() const { return dt_; }
+  /// @brief The critical time step of the current particles (s).
+  double criticalDt() const { return dtCritical_; }
+  std::uint64_t steps() const { return steps_; }
+  const WorldDef<D>& def() const { return def_; }
+  const ContactSolver<D>& contacts() const { return contacts_; }
+  const BroadPhase<D>& broadPhase() const { return broad_; }
+  const std::vector<ToolDef<D>>& tools() const { return tools_; }
+  const std::vector<ToolPose<D>>& toolPoses() const { return toolPoses_; }
+  const std::vector<Plane<D>>& planes() const { return planes_; }
+  const std::vector<std::string>& planeNames() const { return planeNames_; }
+  /// @brief Loads of the particles on planes and tools from the last step.
+  const BoundaryLoads<D>& boundaryLoads() const { return loads_; }
+  const EnergyLedger& energy() const { return energy_; }
+  EnergyLedger& energyLedger() { return energy_; }
+  const std::vector<RemovedParticle>& removed() const { return removed_; }
+  /// @brief Names of the effects that run, in order.
+  std::vector<std::string> effectNames() const;
+  /// @brief Wall-clock seconds spent in each stage so far; effects are also
+  /// reported one by one in effectSeconds().
+  const std::array<double, std::size_t(Stage::Count)>& stageSeconds() const { return stageSeconds_; }
+  const std::vector<double>& effectSeconds() const { return effectSeconds_; }
+  /// @brief Total mass of the particles now, kg.
+  double particleMass() const;
+  /// @brief Total mass removed so far, kg.
+  double removedMass() const;
+
+ private:
+  void computeForces(double dtClosing);
+  void moveKinematicBodies(double t);
+  void updateTimeStep();
+  void checkFinite() const;
+  double shapeStiffness(const geometry::Shape<D>& shape);
+  void refreshEnergy();
+
+  WorldDef<D> def_;
+  Particles<D> particles_;
+  BroadPhase<D> broad_;
+  ContactSolver<D> contacts_;
+  std::vector<ToolDef<D>> tools_;
+  std::vector<ToolPose<D>> toolPoses_;
+  std::vector<Plane<D>> planes_;
+  std::vector<Plane<D>> planesAtStart_;
+  std::vector<std::string> planeNames_;
+  BoundaryLoads<D> loads_;
+  std::vector<std::unique_ptr<Effect<D>>> effects_;
+  std::vector<double> effectSeconds_;
+  std::array<double, std::size_t(Stage::Count)> stageSeconds_{};
+
+  // Time step: per particle effective contact stiffness (N/m), cached per shape.
+  std::vector<double> stiffness_;
+  std::vector<std::pair<const geometry::Shape<D>*, double>> shapeStiffness_;
+  double dt_ = 0.0;
+  double dtCritical_ = 0.0;
+
+  // Scratch for the broad phase.
+  std::vector<double> radii_;
+
+  double time_ = 0.0;
+  std::uint64_t steps_ = 0;
+  bool forcesValid_ = false;
+  EnergyLedger energy_;
+  std::vector<RemovedParticle> removed_;
+};
+
+extern template class World<2>;
+extern template class World<3>;
+
+}  // namespace lsdem::dynamics

@@ -1,0 +1,648 @@
+#include "lsdem/dynamics/NarrowPhase.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace lsdem::dynamics {
+namespace {
+
+using detail::HistoryPair;
+using detail::NodeWork;
+using detail::TaskOutput;
+using detail::ThreadBuffers;
+using geometry::Box;
+using geometry::Grid;
+using geometry::Rigid;
+using geometry::Shape;
+
+// Tags in the second half of a history key for boundaries (global ids stay below 2^62).
+constexpr std::uint64_t kPlaneTag = std::uint64_t(1) << 62;
+constexpr std::uint64_t kToolTag = std::uint64_t(2) << 62;
+// Node keys order the node contacts of a pair: ownerIsB in the top bit, then the node index.
+constexpr std::uint32_t kOwnerIsBBit = std::uint32_t(1) << 31;
+
+// Threads the parallel loops may use, and the calling thread's index.
+int threadCount() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+int threadIndex() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+template <int D>
+std::uint32_t nodeKey(const NodeContact<D>& c) {
+  return (c.ownerIsB ? kOwnerIsBBit : 0u) | c.node;
+}
+
+// Law constants of one compute() call.
+struct LawConstants {
+  double kn = 0.0, ks = 0.0, mu = 0.0, zeta = 0.0, eStar = 0.0, dt = 0.0;
+};
+
+// A pair's node contacts of the previous step (its shear history), by node key.
+template <int D>
+struct HistoryView {
+  const NodeContact<D>* nodes = nullptr;
+  const Vec<D>* shear = nullptr;
+  std::uint32_t count = 0;
+};
+
+// Stiffness factor of a node: the direction weight, times w_i / w_ref when area weighted.
+template <ForceFormulation Formulation>
+double stiffnessFactor(double directionWeight, double nodeWeight, double weightToFactor) {
+  if constexpr (Formulation == ForceFormulation::PerNode) {
+    (void)nodeWeight;
+    (void)weightToFactor;
+    return directionWeight;
+  } else {
+    return nodeWeight * weightToFactor;
+  }
+}
+
+// eq. 3-4 for one direction: appends to `buf` the nodes of `owner` (pose Ro, xo)
+// inside the level set of `other` (pose Rt, xt), with normals of sign
+// `normalSign` x grad phi_other (so they point from b towards a), and returns
+// the number of nodes tested.
+template <int D, ForceFormulation Formulation>
+std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
+                              const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
+                              std::uint8_t ownerIsB, ThreadBuffers<D>& buf) {
+  // One composed map per direction: owner body -> world -> other body -> other grid.
+  const Rigid<D>& toGrid = other.bodyToGrid();
+  const Mat<D> RtT = Rt.transpose();
+  const Mat<D> map = toGrid.rotation * RtT * Ro;
+  const Vec<D> shift = toGrid.rotation * (RtT * (xo - xt)) + toGrid.translation;
+  // Grid-frame gradient -> world normal pointing from b towards a.
+  const Mat<D> gradToWorld = normalSign * (Rt * toGrid.rotation.transpose());
+  // Cheap rejections: the other body's bounding sphere (centred on its centroid,
+  // the grid-frame image of the body origin) and its grid box.
+  const Grid<D>& grid = other.grid();
+  const Box<D> box = grid.bounds();
+  const Vec<D> centre = toGrid.translation;
+  const double reach2 = other.boundingRadius() * other.boundingRadius();
+  const double weightToFactor = directionWeight / referenceNodeWeight<D>(owner.grid().spacing());
+
+  // Test every node of the owner.
+  const std::vector<Vec<D>>& nodes = owner.nodes().positions;
+  const std::vector<double>& weights = owner.nodes().weights;
+  const std::size_t count = nodes.size();
+  for (std::size_t i = 0; i < count; ++i) {
+    const Vec<D> g = map * nodes[i] + shift;
+    if ((g - centre).squaredNorm() > reach2) continue;
+    if (!box.contains(g)) continue;
+    Vec<D> grad;
+    const double phi = grid.valueAndGradient(g, grad);
+    if (!(phi < 0.0)) continue;
+    // A node at a point of zero gradient (a medial point) has no normal: skipped.
+    Vec<D> normal = gradToWorld * grad;
+    const double length = normal.norm();
+    if (!(length > 0.0)) continue;
+    NodeContact<D> c;
+    c.point = Ro * nodes[i] + xo;
+    c.normal = normal / length;
+    c.overlap = -phi;
+    c.node = std::uint32_t(i);
+    c.ownerIsB = ownerIsB;
+    buf.nodes.push_back(c);
+    NodeWork<D> w;
+    w.stiffness = stiffnessFactor<Formulation>(directionWeight, weights[i], weightToFactor);
+    w.area = directionWeight * weights[i];
+    w.gradient = length;
+    buf.work.push_back(w);
+  }
+  return count;
+}
+
+// A particle's nodes against a plane (one-sided, weight 1); `offset` is the
+// signed distance of the particle's centroid from the plane. Returns the number
+// of nodes tested.
+template <int D, ForceFormulation Formulation>
+std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Plane<D>& plane,
+                           double offset, ThreadBuffers<D>& buf) {
+  // The plane normal in the owner's body frame: distance = offset + nb . x_body.
+  const Vec<D> nb = Ro.transpose() * plane.normal;
+  const double weightToFactor = 1.0 / referenceNodeWeight<D>(owner.grid().spacing());
+  const std::vector<Vec<D>>& nodes = owner.nodes().positions;
+  const std::vector<double>& weights = owner.nodes().weights;
+  const std::size_t count = nodes.size();
+  for (std::size_t i = 0; i < count; ++i) {
+    const double distance = offset + nb.dot(nodes[i]);
+    if (!(distance < 0.0)) continue;
+    NodeContact<D> c;
+    c.point = Ro * nodes[i] + xo;
+    c.normal = plane.normal;
+    c.overlap = -distance;
+    c.node = std::uint32_t(i);
+    c.ownerIsB = 0;
+    buf.nodes.push_back(c);
+    NodeWork<D> w;
+    w.stiffness = stiffnessFactor<Formulation>(1.0, weights[i], weightToFactor);
+    w.area = weights[i];
+    buf.work.push_back(w);
+  }
+  return count;
+}
+
+// The dashpot at the edge of a contact. The integrator samples a node's force
+// once per step, and the sample stands for the impulse over the step around
+// it; the elastic force vanishes at the edge of contact, but the dashpot
+// force c v_n does not, so a sample taken in the first or last step of a
+// contact would charge a whole step of dashpot impulse for the fraction of the
+// step the node actually touched, and the restitution would depend on where
+// in a step the contact starts and ends (by up to +-zeta omega dt / e). With
+// r = overlap / (|v_n| dt) the contact began (or ends) r steps before (after)
+// the sample; when r < 1 this is its first (last) sample, which stands for
+// 1/2 + r steps of contact (in [1/2, 3/2]); otherwise it stands for one step.
+// Exact for a contact entered and left at constant normal speed.
+inline double boundaryWeight(double overlap, double normalSpeed, double dt) {
+  const double travel = std::abs(normalSpeed) * dt;
+  return overlap < travel ? 0.5 + overlap / travel : 1.0;
+}
+
+// The contact law for one pair whose node contacts are buf.nodes[begin, end):
+// normal force (linear per node or Hertz per pair), damping, friction with
+// history; fills each node's force and shear and the pair record's totals.
+// `invMassSum` = 1/ma + 1/mb (1/ma against a boundary); `centreB` is the point
+// b's torque is taken about; velocityB(x) is b's material velocity at x.
+template <int D, NormalModel Normal, bool Friction, bool Damping, class VelocityB>
+void applyLaw(PairContact<D>& rec, ThreadBuffers<D>& buf, std::size_t begin, const LawConstants& law,
+              double invMassSum, double hertzRadius, const Vec<D>& xa, const Vec<D>& va, const Spin<D>& wa,
+              const Vec<D>& centreB, const VelocityB& velocityB, const HistoryView<D>& history) {
+  const std::size_t end = buf.nodes.size();
+  // Pair-level normal stiffness K; for Hertz also the force and its spreading weights w_i delta_i.
+  double stiffness = 0.0, hertz = 0.0, deepest = 0.0, spreadTotal = 0.0;
+  if constexpr (Normal == NormalModel::Linear) {
+    (void)hertzRadius;
+    for (std::size_t j = begin; j < end; ++j) stiffness += buf.work[j].stiffness;
+    stiffness *= law.kn;
+  } else {
+    for (std::size_t j = begin; j < end; ++j) {
+      deepest = std::max(deepest, buf.nodes[j].overlap);
+      spreadTotal += buf.work[j].area * buf.nodes[j].overlap;
+    }
+    hertz = hertzForce(law.eStar, hertzRadius, deepest);
+    stiffness = hertzStiffness(law.eStar, hertzRadius, deepest);
+  }
+  // Dashpot of the pair, C = 2 zeta sqrt(m_eff K), shared like the stiffness.
+  double damping = 0.0;
+  if constexpr (Damping) {
+    if (invMassSum > 0.0) damping = dampingCoefficient(law.zeta, 1.0 / invMassSum, stiffness);
+  } else {
+    (void)invMassSum;
+  }
+
+  // Node by node: normal, damping and friction forces, summed into the pair.
+  double elastic = 0.0, power = 0.0;
+  std::uint32_t cursor = 0;
+  for (std::size_t j = begin; j < end; ++j) {
+    NodeContact<D>& c = buf.nodes[j];
+    NodeWork<D>& w = buf.work[j];
+    // Elastic normal force and the node's share of the pair's stiffness.
+    double fn = 0.0, share = 0.0;
+    if constexpr (Normal == NormalModel::Linear) {
+      // F = k delta grad phi (eq. 4 takes the gradient itself as the normal):
+      // the force of the potential k phi^2 / 2, so undamped, frictionless
+      // contacts conserve energy even where the interpolated level set is not
+      // exactly a distance (|grad phi| != 1 deep inside or near corners).
+      const double k = law.kn * w.stiffness;
+      fn = k * c.overlap * w.gradient;
+      share = stiffness > 0.0 ? k / stiffness : 0.0;
+      elastic += 0.5 * k * c.overlap * c.overlap;
+    } else {
+      share = spreadTotal > 0.0 ? w.area * c.overlap / spreadTotal : 0.0;
+      fn = hertz * share;
+    }
+    Vec<D> force;
+    if constexpr (Damping || Friction) {
+      // Velocity of a's material point relative to b's at the contact point.
+      const Vec<D> vrel = va + Rotation<D>::velocityAt(wa, c.point - xa) - velocityB(c.point);
+      const double vn = vrel.dot(c.normal);
+      // Dashpot opposing the normal relative velocity, weighted by the part of
+      // the step the node is in contact (see boundaryWeight).
+      if constexpr (Damping) {
+        const double cn = damping * share * boundaryWeight(c.overlap, vn, law.dt);
+        fn -= cn * vn;
+        power += cn * vn * vn;
+      }
+      force = fn * c.normal;
+      if constexpr (Friction) {
+        // Previous shear of this node contact (both lists ascend by node key),
+        // turned into the current tangent plane with its length kept.
+        Vec<D> shear = Vec<D>::Zero();
+        const std::uint32_t key = nodeKey(c);
+        while (cursor < history.count && nodeKey(history.nodes[cursor]) < key) ++cursor;
+        if (cursor < history.count && nodeKey(history.nodes[cursor]) == key) {
+          const Vec<D>& old = history.shear[cursor];
+          shear = old - old.dot(c.normal) * c.normal;
+          const double projected2 = shear.squaredNorm();
+          if (projected2 > 0.0) shear *= std::sqrt(old.squaredNorm() / projected2);
+        }
+        // Add this step's tangential displacement; spring force capped by Coulomb.
+        shear += law.dt * (vrel - vn * c.normal);
+        const double kt = law.ks * w.stiffness;
+        Vec<D> ft = -kt * shear;
+        const double cap = law.mu * std::max(fn, 0.0);
+        const double ftNorm = ft.norm();
+        if (ftNorm > cap) {
+          // Sliding: the force sits on the cap, the spring is shortened to match,
+          // and the slip (|ft| - cap) / kt dissipates cap x slip.
+          power += cap * (ftNorm - cap) / (kt * law.dt);
+          const double scale = cap / ftNorm;
+          ft *= scale;
+          shear *= scale;
+        }
+        if (kt > 0.0) elastic += ft.squaredNorm() / (2.0 * kt);
+        w.shear = shear;
+        force += ft;
+      }
+    } else {
+      force = fn * c.normal;
+    }
+    // This node's force on a, and its moments about a's centroid and b's reference point.
+    c.force = force;
+    rec.force += force;
+    rec.torqueA += Rotation<D>::moment(c.point - xa, force);
+    rec.torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-force));
+  }
+  if constexpr (Normal == NormalModel::Hertz) elastic += 0.4 * hertz * deepest;
+  rec.elasticEnergy = elastic;
+  rec.dissipatedPower = power;
+}
+
+// Calls f(std::true_type) or f(std::false_type): a runtime flag made a template argument.
+template <class F>
+void withFlag(bool flag, F&& f) {
+  if (flag) {
+    f(std::true_type{});
+  } else {
+    f(std::false_type{});
+  }
+}
+
+bool keyLess(const HistoryPair& h, std::uint64_t idA, std::uint64_t other) {
+  return h.idA < idA || (h.idA == idA && h.other < other);
+}
+
+}  // namespace
+
+template <int D>
+ContactSolver<D>::ContactSolver(const ContactLawDef& law) : law_(law) {
+  validateContactLaw(law_);
+}
+
+template <int D>
+void ContactSolver<D>::compute(const Particles<D>& particles, const std::vector<Pair>& pairs,
+                               const std::vector<Plane<D>>& planes, const std::vector<ToolPose<D>>& tools, double dt) {
+  // Check the inputs before anything changes.
+  if (!(dt > 0.0) || !std::isfinite(dt)) {
+    std::ostringstream msg;
+    msg << "contact solver: dt must be > 0 s, got " << dt;
+    throw std::invalid_argument(msg.str());
+  }
+  const std::size_t n = particles.size();
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const auto [a, b] = pairs[k];
+    if (a >= n || b >= n || !(particles.id[a] < particles.id[b])) {
+      std::ostringstream msg;
+      msg << "contact solver: pair " << k << " = (" << a << ", " << b << ") is out of range (" << n
+          << " particles) or not in canonical order (id of a < id of b)";
+      throw std::invalid_argument(msg.str());
+    }
+  }
+  for (std::size_t j = 0; j < planes.size(); ++j) {
+    const double length = planes[j].normal.norm();
+    if (!(std::abs(length - 1.0) <= 1e-6)) {
+      std::ostringstream msg;
+      msg << "contact solver: plane " << j << " normal must be a unit vector, |n| = " << length;
+      throw std::invalid_argument(msg.str());
+    }
+  }
+  for (std::size_t j = 0; j < tools.size(); ++j) {
+    if (tools[j].shape == nullptr) {
+      throw std::invalid_argument("contact solver: tool " + std::to_string(j) + " has no shape");
+    }
+  }
+  particleCount_ = n;
+  planeCount_ = planes.size();
+  toolCount_ = tools.size();
+
+  // Run the kernel compiled for the law's parts.
+  const auto withNormal = [&](auto next) {
+    if (law_.normal == NormalModel::Hertz) {
+      next(std::integral_constant<NormalModel, NormalModel::Hertz>{});
+    } else {
+      next(std::integral_constant<NormalModel, NormalModel::Linear>{});
+    }
+  };
+  const auto withFormulation = [&](auto next) {
+    if (law_.formulation == ForceFormulation::AreaWeighted) {
+      next(std::integral_constant<ForceFormulation, ForceFormulation::AreaWeighted>{});
+    } else {
+      next(std::integral_constant<ForceFormulation, ForceFormulation::PerNode>{});
+    }
+  };
+  withNormal([&](auto normal) {
+    withFormulation([&](auto formulation) {
+      withFlag(law_.hasFriction, [&](auto friction) {
+        withFlag(law_.hasDamping, [&](auto damping) {
+          this->template run<decltype(normal)::value, decltype(formulation)::value, decltype(friction)::value,
+                             decltype(damping)::value>(particles, pairs, planes, tools, dt);
+        });
+      });
+    });
+  });
+
+  // Concatenate the per-thread records in task order; totals and history.
+  gather(particles, pairs.size(), planes.empty() ? 0 : n);
+}
+
+template <int D>
+template <NormalModel Normal, ForceFormulation Formulation, bool Friction, bool Damping>
+void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
+                           const std::vector<ToolPose<D>>& tools, double dt) {
+  LawConstants law;
+  law.kn = law_.kn;
+  law.ks = law_.ks;
+  law.mu = law_.friction;
+  law.zeta = law_.dampingRatio;
+  law.eStar = Normal == NormalModel::Hertz ? effectiveModulus(law_) : 0.0;
+  law.dt = dt;
+
+  // Tasks: one per candidate pair, then one per particle for the planes and one for the tools.
+  const std::size_t n = p.size();
+  const std::size_t pairTasks = pairs.size();
+  const std::size_t planeTasks = planes.empty() ? 0 : n;
+  const std::size_t toolTasks = tools.empty() ? 0 : n;
+  tasks_.resize(pairTasks + planeTasks + toolTasks);
+  threads_.resize(std::size_t(threadCount()));
+  for (ThreadBuffers<D>& buf : threads_) {
+    buf.pairs.clear();
+    buf.nodes.clear();
+    buf.work.clear();
+    buf.nodeChecks = 0;
+  }
+
+  // The previous step's node contacts of a pair key, for friction.
+  const auto historyOf = [&](std::uint64_t idA, std::uint64_t other) {
+    HistoryView<D> view;
+    if constexpr (Friction) {
+      const auto it = std::lower_bound(history_.begin(), history_.end(), 0,
+                                       [&](const HistoryPair& h, int) { return keyLess(h, idA, other); });
+      if (it != history_.end() && it->idA == idA && it->other == other) {
+        view.nodes = nodes_.data() + it->first;
+        view.shear = shear_.data() + it->first;
+        view.count = it->count;
+      }
+    } else {
+      (void)idA;
+      (void)other;
+    }
+    return view;
+  };
+  // Runs task k on the calling thread's buffers and records where its output went.
+  const auto runTask = [&](std::size_t k, auto&& body) {
+    const int t = threadIndex();
+    ThreadBuffers<D>& buf = threads_[std::size_t(t)];
+    TaskOutput& out = tasks_[k];
+    out.thread = std::uint32_t(t);
+    out.firstPair = std::uint32_t(buf.pairs.size());
+    out.firstNode = std::uint32_t(buf.nodes.size());
+    body(buf);
+    out.pairCount = std::uint32_t(buf.pairs.size()) - out.firstPair;
+    out.nodeCount = std::uint32_t(buf.nodes.size()) - out.firstNode;
+  };
+
+  // Particle pairs: both directions, each weighted 1/2 (order independence, see the header).
+  const std::ptrdiff_t pairCount = std::ptrdiff_t(pairTasks);
+#pragma omp parallel for schedule(dynamic, 8) if (pairCount > 32)
+  for (std::ptrdiff_t k = 0; k < pairCount; ++k) {
+    runTask(std::size_t(k), [&](ThreadBuffers<D>& buf) {
+      const std::uint32_t ia = pairs[std::size_t(k)][0], ib = pairs[std::size_t(k)][1];
+      const Shape<D>& sa = *p.shape[ia];
+      const Shape<D>& sb = *p.shape[ib];
+      const Vec<D>& xa = p.position[ia];
+      const Vec<D>& xb = p.position[ib];
+      // Bounding spheres apart: no node can touch.
+      const double reach = sa.boundingRadius() + sb.boundingRadius();
+      if ((xb - xa).squaredNorm() > reach * reach) return;
+      // Nodes of a in b, then nodes of b in a.
+      const Mat<D> Ra = p.rotation(ia), Rb = p.rotation(ib);
+      const std::size_t begin = buf.nodes.size();
+      buf.nodeChecks += collectLevelSet<D, Formulation>(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf);
+      buf.nodeChecks += collectLevelSet<D, Formulation>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf);
+      if (buf.nodes.size() == begin) return;
+      // The law on the pair's node contacts.
+      PairContact<D> rec;
+      rec.a = ia;
+      rec.b = ib;
+      rec.firstNode = std::uint32_t(begin);
+      rec.nodeCount = std::uint32_t(buf.nodes.size() - begin);
+      double radius = 0.0;
+      if constexpr (Normal == NormalModel::Hertz) {
+        radius = combinedRadius(equivalentRadius<D>(sa.volume()), equivalentRadius<D>(sb.volume()));
+      }
+      const Vec<D>& vb = p.velocity[ib];
+      const Spin<D>& wb = p.angularVelocity[ib];
+      const auto velocityB = [&](const Vec<D>& x) { return Vec<D>(vb + Rotation<D>::velocityAt(wb, x - xb)); };
+      applyLaw<D, Normal, Friction, Damping>(rec, buf, begin, law, p.invMass[ia] + p.invMass[ib], radius, xa,
+                                             p.velocity[ia], p.angularVelocity[ia], xb, velocityB,
+                                             historyOf(p.id[ia], p.id[ib]));
+      buf.pairs.push_back(rec);
+    });
+  }
+
+  // Particles against planes: one-sided, exact distances.
+  const std::ptrdiff_t planeCount = std::ptrdiff_t(planeTasks);
+#pragma omp parallel for schedule(dynamic, 64) if (planeCount > 256)
+  for (std::ptrdiff_t i = 0; i < planeCount; ++i) {
+    runTask(pairTasks + std::size_t(i), [&](ThreadBuffers<D>& buf) {
+      const Shape<D>& s = *p.shape[std::size_t(i)];
+      const Vec<D>& x = p.position[std::size_t(i)];
+      for (std::size_t j = 0; j < planes.size(); ++j) {
+        const Plane<D>& plane = planes[j];
+        // Centroid farther from the plane than the bounding radius: no node can touch.
+        const double offset = plane.signedDistance(x);
+        if (offset > s.boundingRadius()) continue;
+        const std::size_t begin = buf.nodes.size();
+        buf.nodeChecks += collectPlane<D, Formulation>(s, p.rotation(std::size_t(i)), x, plane, offset, buf);
+        if (buf.nodes.size() == begin) continue;
+        PairContact<D> rec;
+        rec.a = std::uint32_t(i);
+        rec.b = std::uint32_t(j);
+        rec.firstNode = std::uint32_t(begin);
+        rec.nodeCount = std::uint32_t(buf.nodes.size() - begin);
+        const double radius = Normal == NormalModel::Hertz ? equivalentRadius<D>(s.volume()) : 0.0;
+        const auto velocityB = [&](const Vec<D>&) { return plane.velocity; };
+        applyLaw<D, Normal, Friction, Damping>(rec, buf, begin, law, p.invMass[std::size_t(i)], radius, x,
+                                               p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
+                                               plane.point, velocityB,
+                                               historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)));
+        buf.pairs.push_back(rec);
+      }
+    });
+  }
+
+  // Particles against tools: the particle's nodes in the tool's level set, weight 1.
+  const std::ptrdiff_t toolCount = std::ptrdiff_t(toolTasks);
+#pragma omp parallel for schedule(dynamic, 64) if (toolCount > 256)
+  for (std::ptrdiff_t i = 0; i < toolCount; ++i) {
+    runTask(pairTasks + planeTasks + std::size_t(i), [&](ThreadBuffers<D>& buf) {
+      const Shape<D>& s = *p.shape[std::size_t(i)];
+      const Vec<D>& x = p.position[std::size_t(i)];
+      for (std::size_t j = 0; j < tools.size(); ++j) {
+        const ToolPose<D>& tool = tools[j];
+        const Shape<D>& ts = *tool.shape;
+        // Bounding spheres apart: no node can touch.
+        const double reach = s.boundingRadius() + ts.boundingRadius();
+        if ((tool.position - x).squaredNorm() > reach * reach) continue;
+        const std::size_t begin = buf.nodes.size();
+        buf.nodeChecks += collectLevelSet<D, Formulation>(s, p.rotation(std::size_t(i)), x, ts,
+                                                          Rotation<D>::matrix(tool.orientation), tool.position, 1.0,
+                                                          1.0, 0, buf);
+        if (buf.nodes.size() == begin) continue;
+        PairContact<D> rec;
+        rec.a = std::uint32_t(i);
+        rec.b = std::uint32_t(j);
+        rec.firstNode = std::uint32_t(begin);
+        rec.nodeCount = std::uint32_t(buf.nodes.size() - begin);
+        double radius = 0.0;
+        if constexpr (Normal == NormalModel::Hertz) {
+          radius = combinedRadius(equivalentRadius<D>(s.volume()), equivalentRadius<D>(ts.volume()));
+        }
+        const auto velocityB = [&](const Vec<D>& at) { return tool.velocityAt(at); };
+        applyLaw<D, Normal, Friction, Damping>(rec, buf, begin, law, p.invMass[std::size_t(i)], radius, x,
+                                               p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
+                                               tool.position, velocityB,
+                                               historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)));
+        buf.pairs.push_back(rec);
+      }
+    });
+  }
+}
+
+template <int D>
+void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particlePairTasks, std::size_t planeTasks) {
+  // Output offsets of every task, in task order; the counts per kind of pair.
+  std::uint64_t pairTotal = 0, nodeTotal = 0;
+  for (std::size_t k = 0; k < tasks_.size(); ++k) {
+    if (k == particlePairTasks) particlePairCount_ = std::size_t(pairTotal);
+    if (k == particlePairTasks + planeTasks) planePairCount_ = std::size_t(pairTotal) - particlePairCount_;
+    tasks_[k].outPair = pairTotal;
+    tasks_[k].outNode = nodeTotal;
+    pairTotal += tasks_[k].pairCount;
+    nodeTotal += tasks_[k].nodeCount;
+  }
+  if (tasks_.size() <= particlePairTasks) particlePairCount_ = std::size_t(pairTotal);
+  if (tasks_.size() <= particlePairTasks + planeTasks) planePairCount_ = std::size_t(pairTotal) - particlePairCount_;
+
+  // Copy every task's records to its place (tasks are independent).
+  const bool friction = law_.hasFriction;
+  pairs_.resize(pairTotal);
+  nodes_.resize(nodeTotal);
+  shear_.resize(friction ? nodeTotal : 0);
+  const std::ptrdiff_t taskCount = std::ptrdiff_t(tasks_.size());
+#pragma omp parallel for schedule(static) if (taskCount > 1024)
+  for (std::ptrdiff_t k = 0; k < taskCount; ++k) {
+    const TaskOutput& t = tasks_[std::size_t(k)];
+    const ThreadBuffers<D>& buf = threads_[t.thread];
+    for (std::uint32_t q = 0; q < t.pairCount; ++q) {
+      PairContact<D> rec = buf.pairs[t.firstPair + q];
+      rec.firstNode = std::uint32_t(rec.firstNode - t.firstNode + t.outNode);
+      pairs_[t.outPair + q] = rec;
+    }
+    for (std::uint32_t q = 0; q < t.nodeCount; ++q) {
+      nodes_[t.outNode + q] = buf.nodes[t.firstNode + q];
+      if (friction) shear_[t.outNode + q] = buf.work[t.firstNode + q].shear;
+    }
+  }
+
+  // Totals, summed in output order.
+  elasticEnergy_ = 0.0;
+  dissipatedPower_ = 0.0;
+  for (const PairContact<D>& rec : pairs_) {
+    elasticEnergy_ += rec.elasticEnergy;
+    dissipatedPower_ += rec.dissipatedPower;
+  }
+  nodeChecks_ = 0;
+  for (const ThreadBuffers<D>& buf : threads_) nodeChecks_ += buf.nodeChecks;
+
+  // Shear history for the next step: the pair keys, sorted, pointing into nodes_ / shear_.
+  history_.clear();
+  if (!friction) return;
+  for (std::size_t k = 0; k < pairs_.size(); ++k) {
+    const PairContact<D>& rec = pairs_[k];
+    HistoryPair h;
+    h.idA = particles.id[rec.a];
+    if (k < particlePairCount_) {
+      h.other = particles.id[rec.b];
+    } else if (k < particlePairCount_ + planePairCount_) {
+      h.other = kPlaneTag | rec.b;
+    } else {
+      h.other = kToolTag | rec.b;
+    }
+    h.first = rec.firstNode;
+    h.count = rec.nodeCount;
+    history_.push_back(h);
+  }
+  const auto less = [](const HistoryPair& x, const HistoryPair& y) { return keyLess(x, y.idA, y.other); };
+  if (!std::is_sorted(history_.begin(), history_.end(), less)) std::sort(history_.begin(), history_.end(), less);
+}
+
+template <int D>
+const BoundaryLoads<D>& ContactSolver<D>::accumulate(Particles<D>& particles) {
+  if (particles.size() != particleCount_) {
+    throw std::invalid_argument("contact solver: accumulate() got " + std::to_string(particles.size()) +
+                                " particles, compute() had " + std::to_string(particleCount_));
+  }
+  loads_.planeForce.assign(planeCount_, Vec<D>::Zero());
+  loads_.planeTorque.assign(planeCount_, Rotation<D>::zeroSpin());
+  loads_.toolForce.assign(toolCount_, Vec<D>::Zero());
+  loads_.toolTorque.assign(toolCount_, Rotation<D>::zeroSpin());
+  // Particle pairs: a gets the force, b the reaction.
+  std::size_t k = 0;
+  for (; k < particlePairCount_; ++k) {
+    const PairContact<D>& rec = pairs_[k];
+    particles.force[rec.a] += rec.force;
+    particles.torque[rec.a] += rec.torqueA;
+    particles.force[rec.b] -= rec.force;
+    particles.torque[rec.b] += rec.torqueB;
+  }
+  // Planes, then tools: the particle gets the force, the boundary's load the reaction.
+  for (; k < particlePairCount_ + planePairCount_; ++k) {
+    const PairContact<D>& rec = pairs_[k];
+    particles.force[rec.a] += rec.force;
+    particles.torque[rec.a] += rec.torqueA;
+    loads_.planeForce[rec.b] -= rec.force;
+    loads_.planeTorque[rec.b] += rec.torqueB;
+  }
+  for (; k < pairs_.size(); ++k) {
+    const PairContact<D>& rec = pairs_[k];
+    particles.force[rec.a] += rec.force;
+    particles.torque[rec.a] += rec.torqueA;
+    loads_.toolForce[rec.b] -= rec.force;
+    loads_.toolTorque[rec.b] += rec.torqueB;
+  }
+  return loads_;
+}
+
+template class ContactSolver<2>;
+template class ContactSolver<3>;
+
+}  // namespace lsdem::dynamics

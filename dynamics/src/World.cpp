@@ -1,0 +1,355 @@
+#include "lsdem/dynamics/World.h"
+
+#include "lsdem/dynamics/Integrator.h"
+#include "lsdem/dynamics/TimeStep.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace lsdem::dynamics {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Hertz contacts are pair-level: their stiffness does not grow with the node
+// count. The time step uses the tangent stiffness at an overlap of this
+// fraction of the combined radius, a deep overlap for a Hertz contact.
+constexpr double kHertzOverlapFraction = 0.05;
+
+template <class T>
+bool finite(const T& v) {
+  if constexpr (std::is_arithmetic_v<T>) {
+    return std::isfinite(v);
+  } else if constexpr (std::is_same_v<T, Eigen::Quaterniond>) {
+    return v.coeffs().allFinite();
+  } else {
+    return v.allFinite();
+  }
+}
+
+}  // namespace
+
+const char* stageName(Stage s) {
+  switch (s) {
+    case Stage::Integrate: return "integrate";
+    case Stage::Kinematics: return "kinematics";
+    case Stage::BroadPhase: return "broad_phase";
+    case Stage::NarrowPhase: return "narrow_phase";
+    case Stage::Accumulate: return "accumulate";
+    case Stage::Effects: return "effects";
+    case Stage::AfterStep: return "after_step";
+    case Stage::Count: break;
+  }
+  return "unknown";
+}
+
+double EnergyLedger::relativeBalanceError() const {
+  const double scale = std::max({std::abs(initial), std::abs(total()), std::abs(gravityWork), std::abs(boundaryWork),
+                                 dampingLoss, contactLoss, removedEnergy, addedEnergy,
+                                 std::numeric_limits<double>::min()});
+  return balanceError() / scale;
+}
+
+template <int D>
+World<D>::World(const WorldDef<D>& def) : def_(def), broad_(def.broadPhase), contacts_(def.contact) {
+  if (!(def.dt >= 0.0) || !std::isfinite(def.dt)) {
+    throw std::invalid_argument("dt must be >= 0 (0: automatic), got " + std::to_string(def.dt));
+  }
+  if (!(def.dtSafety > 0.0 && def.dtSafety <= 1.0)) {
+    throw std::invalid_argument("dt safety factor must be in (0, 1], got " + std::to_string(def.dtSafety));
+  }
+  // Effects the scene declared, and only those.
+  if (def.gravity) addEffect(std::make_unique<Gravity<D>>(*def.gravity));
+  if (def.globalDamping) addEffect(std::make_unique<GlobalDamping<D>>(*def.globalDamping));
+  if (def.localDamping) addEffect(std::make_unique<LocalDamping<D>>(*def.localDamping));
+  if (def.outflow) addEffect(std::make_unique<Outflow<D>>(*def.outflow));
+  dt_ = def.dt;
+}
+
+// ---------------------------------------------------------------- building --
+
+template <int D>
+double World<D>::shapeStiffness(const geometry::Shape<D>& shape) {
+  for (const auto& [s, k] : shapeStiffness_) {
+    if (s == &shape) return k;
+  }
+  const ContactLawDef& law = def_.contact;
+  double k = 0.0;
+  if (law.normal == NormalModel::Hertz) {
+    const double R = combinedRadius(equivalentRadius<D>(shape.volume()), equivalentRadius<D>(shape.volume()));
+    k = 2.0 * hertzStiffness(effectiveModulus(law), R, kHertzOverlapFraction * R);
+  } else {
+    NodeStiffness ns;
+    const double w = referenceNodeWeight<D>(shape.grid().spacing());
+    ns.perNode = law.formulation == ForceFormulation::PerNode ? law.kn : 0.0;
+    ns.perWeight = law.formulation == ForceFormulation::AreaWeighted ? law.kn / w : 0.0;
+    ns.tangentialRatio = law.hasFriction ? law.ks / law.kn : 0.0;
+    k = stiffestContact(shape, ns).stiffness;
+  }
+  shapeStiffness_.emplace_back(&shape, k);
+  return k;
+}
+
+template <int D>
+void World<D>::updateTimeStep() {
+  const double zeta = def_.contact.hasDamping ? def_.contact.dampingRatio : 0.0;
+  dtCritical_ = criticalTimeStep(particles_.mass, stiffness_, zeta);
+  if (!std::isfinite(dtCritical_)) return;  // no contacts possible yet
+  if (def_.dt > 0.0) {
+    checkUserTimeStep(def_.dt, dtCritical_, def_.forceDt, def_.dtSafety);
+    dt_ = def_.dt;
+  } else {
+    // Automatic: never grow during a run (adding particles only lowers it).
+    const double stable = stableTimeStep(dtCritical_, def_.dtSafety);
+    dt_ = dt_ > 0.0 ? std::min(dt_, stable) : stable;
+  }
+}
+
+template <int D>
+std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
+  const std::size_t i = particles_.add(def);
+  stiffness_.push_back(shapeStiffness(*def.shape));
+  updateTimeStep();
+  broad_.invalidate();
+  forcesValid_ = false;
+  if (steps_ > 0) energy_.addedEnergy += particles_.kineticEnergy(i);
+  return i;
+}
+
+template <int D>
+void World<D>::removeParticle(std::size_t index, const std::string& reason) {
+  RemovedParticle r;
+  r.id = particles_.id[index];
+  r.time = time_;
+  r.mass = particles_.mass[index];
+  r.volume = particles_.shape[index]->volume();
+  r.sieveSize = particles_.shape[index]->descriptors().sieveSize;
+  r.reason = reason;
+  removed_.push_back(r);
+  energy_.removedEnergy += particles_.kineticEnergy(index);
+  particles_.remove(index);
+  if (index < stiffness_.size()) {
+    stiffness_[index] = stiffness_.back();
+    stiffness_.pop_back();
+  }
+  broad_.invalidate();
+  forcesValid_ = false;
+}
+
+template <int D>
+std::size_t World<D>::addTool(const ToolDef<D>& def) {
+  if (!def.shape) throw std::invalid_argument("tool '" + def.name + "' needs a shape");
+  tools_.push_back(def);
+  toolPoses_.emplace_back();
+  toolPoses_.back().shape = def.shape.get();
+  moveKinematicBodies(time_);
+  forcesValid_ = false;
+  return tools_.size() - 1;
+}
+
+template <int D>
+std::size_t World<D>::addPlane(const PlaneDef<D>& def) {
+  const double n = def.plane.normal.norm();
+  if (!(std::abs(n - 1.0) < 1e-6)) {
+    throw std::invalid_argument("plane '" + def.name + "' needs a unit normal, |n| = " + std::to_string(n));
+  }
+  Plane<D> atStart = def.plane;
+  planesAtStart_.push_back(atStart);
+  atStart.point += time_ * atStart.velocity;
+  planes_.push_back(atStart);
+  planeNames_.push_back(def.name);
+  forcesValid_ = false;
+  return planes_.size() - 1;
+}
+
+template <int D>
+void World<D>::addEffect(std::unique_ptr<Effect<D>> effect) {
+  effects_.push_back(std::move(effect));
+  effectSeconds_.push_back(0.0);
+}
+
+template <int D>
+void World<D>::particlesChanged() {
+  broad_.invalidate();
+  forcesValid_ = false;
+  stiffness_.resize(particles_.size());
+  for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(*particles_.shape[i]);
+  updateTimeStep();
+}
+
+template <int D>
+std::vector<std::string> World<D>::effectNames() const {
+  std::vector<std::string> names;
+  for (const auto& e : effects_) names.push_back(e->name());
+  return names;
+}
+
+// ----------------------------------------------------------------- running --
+
+template <int D>
+void World<D>::moveKinematicBodies(double t) {
+  for (std::size_t k = 0; k < tools_.size(); ++k) {
+    // A servo platen reacts to the force the particles exerted last step.
+    if (auto* servo = std::get_if<ServoPlaten<D>>(&tools_[k].motion)) {
+      if (k < loads_.toolForce.size() && t > time_) {
+        servo->update(-loads_.toolForce[k].dot(servo->def().direction), t - time_);
+      }
+    }
+    const KinematicState<D> s = evaluate(tools_[k].motion, t);
+    ToolPose<D>& pose = toolPoses_[k];
+    pose.position = s.position;
+    pose.orientation = s.orientation;
+    pose.velocity = s.velocity;
+    pose.angularVelocity = s.angularVelocity;
+  }
+  for (std::size_t k = 0; k < planes_.size(); ++k) {
+    planes_[k].point = planesAtStart_[k].point + t * planesAtStart_[k].velocity;
+  }
+}
+
+template <int D>
+void World<D>::computeForces(double dtClosing) {
+  // Broad phase: bounding spheres with a Verlet skin.
+  auto t0 = Clock::now();
+  radii_.resize(particles_.size());
+  for (std::size_t i = 0; i < particles_.size(); ++i) radii_[i] = particles_.shape[i]->boundingRadius();
+  broad_.update(particles_.position, radii_, particles_.id);
+  stageSeconds_[std::size_t(Stage::BroadPhase)] += secondsSince(t0);
+
+  // Narrow phase and contact law (eq. 3-4). The shear increment needs a step;
+  // the initial evaluation uses the step to come.
+  t0 = Clock::now();
+  contacts_.compute(particles_, broad_.pairs(), planes_, toolPoses_, dtClosing > 0.0 ? dtClosing : dt_);
+  stageSeconds_[std::size_t(Stage::NarrowPhase)] += secondsSince(t0);
+
+  // Sum contact forces into the particles in a fixed order.
+  t0 = Clock::now();
+  for (std::size_t i = 0; i < particles_.size(); ++i) {
+    particles_.force[i].setZero();
+    particles_.torque[i] = Rotation<D>::zeroSpin();
+  }
+  loads_ = contacts_.accumulate(particles_);
+  stageSeconds_[std::size_t(Stage::Accumulate)] += secondsSince(t0);
+
+  // Declared effects.
+  for (std::size_t e = 0; e < effects_.size(); ++e) {
+    t0 = Clock::now();
+    effects_[e]->applyForces(*this, dtClosing);
+    const double s = secondsSince(t0);
+    effectSeconds_[e] += s;
+    stageSeconds_[std::size_t(Stage::Effects)] += s;
+  }
+
+  // Contact dissipation and the work of moving boundaries over the closing step.
+  if (dtClosing > 0.0) {
+    energy_.contactLoss += contacts_.dissipatedPower() * dtClosing;
+    double power = 0.0;
+    for (std::size_t k = 0; k < planes_.size(); ++k) power -= loads_.planeForce[k].dot(planes_[k].velocity);
+    for (std::size_t k = 0; k < toolPoses_.size(); ++k) {
+      power -= loads_.toolForce[k].dot(toolPoses_[k].velocity);
+      power -= Rotation<D>::dot(loads_.toolTorque[k], toolPoses_[k].angularVelocity);
+    }
+    energy_.boundaryWork += power * dtClosing;
+  }
+  forcesValid_ = true;
+}
+
+template <int D>
+void World<D>::step() {
+  if (!(dt_ > 0.0)) {
+    throw std::logic_error("no time step: give dt, or add particles so the automatic step can be estimated");
+  }
+  // Forces of the current state, once, before the first step or after changes.
+  if (!forcesValid_) {
+    computeForces(0.0);
+    if (steps_ == 0) {
+      refreshEnergy();
+      energy_.initial = energy_.total();
+    }
+  }
+
+  // Half kick and drift.
+  auto t0 = Clock::now();
+  kickDrift(particles_, dt_);
+  stageSeconds_[std::size_t(Stage::Integrate)] += secondsSince(t0);
+
+  // Tools and planes to the end of the step.
+  t0 = Clock::now();
+  moveKinematicBodies(time_ + dt_);
+  stageSeconds_[std::size_t(Stage::Kinematics)] += secondsSince(t0);
+
+  // Forces at the new positions, then the closing half kick.
+  computeForces(dt_);
+  t0 = Clock::now();
+  kick(particles_, dt_);
+  time_ += dt_;
+  ++steps_;
+  stageSeconds_[std::size_t(Stage::Integrate)] += secondsSince(t0);
+
+  // Between steps: removal, breakage, recorders.
+  t0 = Clock::now();
+  for (std::size_t e = 0; e < effects_.size(); ++e) {
+    const auto te = Clock::now();
+    effects_[e]->afterStep(*this);
+    effectSeconds_[e] += secondsSince(te);
+  }
+  stageSeconds_[std::size_t(Stage::AfterStep)] += secondsSince(t0);
+
+  refreshEnergy();
+  if (def_.checkFinite) checkFinite();
+}
+
+template <int D>
+void World<D>::run(std::uint64_t n) {
+  for (std::uint64_t s = 0; s < n; ++s) step();
+}
+
+template <int D>
+void World<D>::refreshEnergy() {
+  double kt = 0.0, kr = 0.0;
+  for (std::size_t i = 0; i < particles_.size(); ++i) {
+    const double t = 0.5 * particles_.mass[i] * particles_.velocity[i].squaredNorm();
+    kt += t;
+    kr += particles_.kineticEnergy(i) - t;
+  }
+  energy_.kineticTranslational = kt;
+  energy_.kineticRotational = kr;
+  energy_.elastic = contacts_.elasticEnergy();
+}
+
+template <int D>
+void World<D>::checkFinite() const {
+  const Particles<D>& p = particles_;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!finite(p.position[i]) || !finite(p.orientation[i]) || !finite(p.velocity[i]) ||
+        !finite(p.angularVelocity[i]) || !finite(p.force[i]) || !finite(p.torque[i])) {
+      throw std::runtime_error("non-finite state of particle id " + std::to_string(p.id[i]) + " at step " +
+                               std::to_string(steps_) + " (t = " + std::to_string(time_) + " s)");
+    }
+  }
+}
+
+template <int D>
+double World<D>::particleMass() const {
+  double m = 0.0;
+  for (double x : particles_.mass) m += x;
+  return m;
+}
+
+template <int D>
+double World<D>::removedMass() const {
+  double m = 0.0;
+  for (const RemovedParticle& r : removed_) m += r.mass;
+  return m;
+}
+
+template class World<2>;
+template class World<3>;
+
+}  // namespace lsdem::dynamics

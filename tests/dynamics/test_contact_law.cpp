@@ -1,0 +1,354 @@
+/// @file test_contact_law.cpp
+/// @brief The contact law's parts: parameter checks and closed forms, Coulomb
+/// friction with shear history (a block on an incline sticks below the
+/// friction angle and slides with a = g (sin - mu cos) above it, dissipating
+/// mu N v), the tangential spring, and the area-weighted formulation's
+/// independence of the node density.
+
+#include "lsdem/dynamics/ContactLaw.h"
+#include "lsdem/dynamics/Integrator.h"
+#include "lsdem/dynamics/NarrowPhase.h"
+#include "lsdem/geometry/ShapeDef.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+using namespace lsdem;
+using namespace lsdem::dynamics;
+
+namespace {
+
+constexpr double kGravity = 9.81;
+
+// Expects `law` to be rejected with a message naming `name`.
+void expectRejected(const ContactLawDef& law, const std::string& name) {
+  try {
+    validateContactLaw(law);
+    ADD_FAILURE() << "accepted a bad " << name;
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+  }
+}
+
+// A block: half extents 0.2 x 0.1 (x 0.15) m, 10 (2D) or 8 (3D) cells across
+// its smallest dimension.
+template <int D>
+std::shared_ptr<const geometry::Shape<D>> block(double nodesPerCell) {
+  geometry::ShapeDef<D> def;
+  def.kind = geometry::ShapeKind::Box;
+  if constexpr (D == 2) {
+    def.halfExtents = Vec<2>(0.2, 0.1);
+    def.cellsAcross = 10;
+  } else {
+    def.halfExtents = Vec<3>(0.2, 0.1, 0.15);
+    def.cellsAcross = 8;
+  }
+  def.options.nodesPerCell = nodesPerCell;
+  return geometry::buildShape(def);
+}
+
+// The orientation putting the block's -y face (in its grid frame) flat on a
+// plane of normal +y: body vector u = bodyToGrid^T (-y) turned onto world -y.
+template <int D>
+Orientation<D> faceDown(const geometry::Shape<D>& shape) {
+  const Vec<D> u = shape.bodyToGrid().rotation.transpose() * Vec<D>(-Vec<D>::UnitY());
+  if constexpr (D == 2) {
+    return -0.5 * std::numbers::pi - std::atan2(u[1], u[0]);
+  } else {
+    return Eigen::Quaterniond::FromTwoVectors(u, -Vec<3>::UnitY());
+  }
+}
+
+// One step with a constant body force (gravity) on every particle.
+template <int D>
+void step(Particles<D>& p, ContactSolver<D>& solver, const std::vector<Plane<D>>& planes, const Vec<D>& gravity,
+          double dt) {
+  kickDrift(p, dt);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.force[i] = p.mass[i] * gravity;
+    p.torque[i] = Rotation<D>::zeroSpin();
+  }
+  solver.compute(p, {}, planes, {}, dt);
+  solver.accumulate(p);
+  kick(p, dt);
+}
+
+struct InclineResult {
+  double displacement = 0.0;      // m, along the slope after 1 s
+  double speed = 0.0;             // m/s, along the slope after 1 s
+  double acceleration = 0.0;      // m/s^2, (v(1 s) - v(0.5 s)) / 0.5 s
+  double dissipatedPower = 0.0;   // W, at 1 s
+  double energyError = 0.0;       // J, kinetic + potential + elastic + dissipated, change over 1 s
+  double dissipated = 0.0;        // J, dissipated over 1 s
+};
+
+// A block resting on the plane y = 0 under gravity tilted by theta (the
+// incline's frame: x down the slope, y its normal), for 1 s. The stiffness is
+// scaled to a contact period of ~4 ms (3D blocks have ~300 nodes on a face).
+template <int D>
+InclineResult incline(double theta, double mu) {
+  const auto shape = block<D>(1.0);
+  ContactLawDef law;
+  law.kn = D == 2 ? 3e7 : 3e5;
+  law.ks = 0.8 * law.kn;
+  law.friction = mu;
+  law.dampingRatio = 0.4;
+  ContactSolver<D> solver(law);
+  Particles<D> p;
+  ParticleDef<D> def;
+  def.shape = shape;
+  def.orientation = faceDown(*shape);
+  def.position = 0.1 * Vec<D>::UnitY();
+  p.add(def);
+  const std::vector<Plane<D>> planes{Plane<D>{Vec<D>::Zero(), Vec<D>::UnitY(), Vec<D>::Zero()}};
+  Vec<D> gravity = Vec<D>::Zero();
+  gravity[0] = kGravity * std::sin(theta);
+  gravity[1] = -kGravity * std::cos(theta);
+
+  // Integrate 1 s, keeping the energy books: E = kinetic + potential + elastic + dissipated.
+  const double dt = 2e-5;
+  const auto energy = [&] { return p.kineticEnergy(0) - p.mass[0] * gravity.dot(p.position[0]) + solver.elasticEnergy(); };
+  InclineResult r;
+  const Vec<D> x0 = p.position[0];
+  double e0 = 0.0, speedHalf = 0.0;
+  const int steps = int(std::lround(1.0 / dt));
+  for (int s = 0; s < steps; ++s) {
+    step<D>(p, solver, planes, gravity, dt);
+    if (s == 0) {
+      e0 = energy();
+    } else {
+      r.dissipated += dt * solver.dissipatedPower();
+    }
+    if (s + 1 == steps / 2) speedHalf = p.velocity[0][0];
+  }
+  r.displacement = p.position[0][0] - x0[0];
+  r.speed = p.velocity[0][0];
+  r.acceleration = (r.speed - speedHalf) / 0.5;
+  r.dissipatedPower = solver.dissipatedPower();
+  r.energyError = energy() + r.dissipated - e0;
+  return r;
+}
+
+// Total normal stiffness of the block's flat face pressed on a plane, from the
+// force at two overlaps (1e-7 and 2e-7 cells: only the nodes of the face
+// touch, not those rounding its edges), and the nodes touching.
+template <int D>
+std::pair<double, std::size_t> faceStiffness(const std::shared_ptr<const geometry::Shape<D>>& shape,
+                                             ForceFormulation formulation) {
+  ContactLawDef law;
+  law.formulation = formulation;
+  law.hasFriction = false;
+  law.hasDamping = false;
+  ContactSolver<D> solver(law);
+  Particles<D> p;
+  ParticleDef<D> def;
+  def.shape = shape;
+  def.orientation = faceDown(*shape);
+  p.add(def);
+  const std::vector<Plane<D>> planes{Plane<D>{Vec<D>::Zero(), Vec<D>::UnitY(), Vec<D>::Zero()}};
+  const double h = shape->grid().spacing();
+  double force[2];
+  std::size_t nodes[2];
+  for (int k = 0; k < 2; ++k) {
+    p.position[0] = (0.1 - 1e-7 * h * (k + 1)) * Vec<D>::UnitY();
+    solver.compute(p, {}, planes, {}, 1e-5);
+    EXPECT_EQ(solver.pairContacts().size(), 1u);
+    force[k] = solver.pairContacts()[0].force[1];
+    nodes[k] = solver.pairContacts()[0].nodeCount;
+  }
+  EXPECT_EQ(nodes[0], nodes[1]);
+  return {(force[1] - force[0]) / (1e-7 * h), nodes[1]};
+}
+
+template <int D>
+void checkAreaWeighted() {
+  double areaK[3], perNodeK[3];
+  std::size_t count[3];
+  const double densities[3] = {1.0, 2.0, 4.0};
+  for (int k = 0; k < 3; ++k) {
+    const auto shape = block<D>(densities[k]);
+    std::tie(areaK[k], count[k]) = faceStiffness<D>(shape, ForceFormulation::AreaWeighted);
+    perNodeK[k] = faceStiffness<D>(shape, ForceFormulation::PerNode).first;
+    // PerNode: every touching node carries kn.
+    EXPECT_NEAR(perNodeK[k], 3e7 * double(count[k]), 1e-5 * perNodeK[k]);
+  }
+  for (int k = 1; k < 3; ++k) {
+    // AreaWeighted: the face keeps its stiffness.
+    EXPECT_NEAR(areaK[k], areaK[0], 0.05 * areaK[0]) << "density " << densities[k];
+    // PerNode: grows like the node count, ~ density^(D-1).
+    const double growth = std::pow(densities[k], D - 1);
+    EXPECT_NEAR(perNodeK[k] / perNodeK[0], growth, 0.15 * growth) << "density " << densities[k];
+  }
+  // At 1 node per cell the two formulations agree (to the spread of node areas).
+  EXPECT_NEAR(areaK[0], perNodeK[0], 0.1 * perNodeK[0]);
+  // AreaWeighted is kn per reference node weight: K = kn x (face length / area) / w_ref.
+  const double face = D == 2 ? 0.4 : 0.4 * 0.3;
+  const double kExpected = 3e7 * face / referenceNodeWeight<D>(block<D>(1.0)->grid().spacing());
+  EXPECT_NEAR(areaK[0], kExpected, 0.06 * kExpected);
+}
+
+}  // namespace
+
+TEST(ContactLaw, RejectsBadParameters) {
+  const ContactLawDef good;
+  EXPECT_NO_THROW(validateContactLaw(good));
+  ContactLawDef law = good;
+  law.kn = 0.0;
+  expectRejected(law, "kn");
+  law = good;
+  law.kn = std::numeric_limits<double>::quiet_NaN();
+  expectRejected(law, "kn");
+  law = good;
+  law.ks = -1.0;
+  expectRejected(law, "ks");
+  law = good;
+  law.friction = -0.1;
+  expectRejected(law, "friction");
+  law = good;
+  law.dampingRatio = 1.0;
+  expectRejected(law, "dampingRatio");
+  law = good;
+  law.dampingRatio = -0.1;
+  expectRejected(law, "dampingRatio");
+  law = good;
+  law.normal = NormalModel::Hertz;
+  expectRejected(law, "youngsModulus");  // E = 0 by default
+  law.youngsModulus = 1e9;
+  EXPECT_NO_THROW(validateContactLaw(law));
+  law.poissonRatio = 0.5;
+  expectRejected(law, "poissonRatio");
+  // The solver checks its law and its inputs.
+  law = good;
+  law.ks = -1.0;
+  EXPECT_THROW(ContactSolver<2>{law}, std::invalid_argument);
+  ContactSolver<2> solver(good);
+  Particles<2> p;
+  EXPECT_THROW(solver.compute(p, {}, {}, {}, 0.0), std::invalid_argument);
+  EXPECT_THROW(solver.compute(p, {}, {}, {}, std::numeric_limits<double>::quiet_NaN()), std::invalid_argument);
+  const std::vector<Plane<2>> bad{Plane<2>{Vec<2>::Zero(), Vec<2>(0.0, 2.0), Vec<2>::Zero()}};
+  EXPECT_THROW(solver.compute(p, {}, bad, {}, 1e-5), std::invalid_argument);
+  const std::vector<ToolPose<2>> noShape(1);
+  EXPECT_THROW(solver.compute(p, {}, {}, noShape, 1e-5), std::invalid_argument);
+}
+
+TEST(ContactLaw, ClosedForms) {
+  // Restitution and damping ratio are inverse; e(0) = 1; e(0.4) of the paper's C_res.
+  EXPECT_DOUBLE_EQ(restitutionCoefficient(0.0), 1.0);
+  EXPECT_NEAR(restitutionCoefficient(0.4), std::exp(-std::numbers::pi * 0.4 / std::sqrt(0.84)), 1e-15);
+  for (const double zeta : {0.05, 0.4, 0.9}) {
+    EXPECT_NEAR(dampingRatioForRestitution(restitutionCoefficient(zeta)), zeta, 1e-12);
+  }
+  EXPECT_THROW(dampingRatioForRestitution(0.0), std::invalid_argument);
+  // Hertz: E* = E / (2 (1 - nu^2)); F and dF/ddelta at a known point.
+  ContactLawDef law;
+  law.youngsModulus = 2e9;
+  law.poissonRatio = 0.5 * std::sqrt(2.0);  // 1 - nu^2 = 1/2 (the formula, not the validator)
+  EXPECT_NEAR(effectiveModulus(law), 2e9, 1e-3);
+  EXPECT_NEAR(hertzForce(3.0, 4.0, 0.25), 4.0 / 3.0 * 3.0 * 2.0 * 0.125, 1e-15);
+  EXPECT_NEAR(hertzStiffness(3.0, 4.0, 0.25), 2.0 * 3.0 * 1.0, 1e-15);
+  EXPECT_EQ(hertzForce(3.0, 4.0, -1.0), 0.0);
+  // Equal-volume radii; a plane is an infinite radius.
+  EXPECT_NEAR(equivalentRadius<2>(std::numbers::pi * 0.25), 0.5, 1e-15);
+  EXPECT_NEAR(equivalentRadius<3>(4.0 / 3.0 * std::numbers::pi * 8.0), 2.0, 1e-14);
+  EXPECT_DOUBLE_EQ(combinedRadius(2.0, std::numeric_limits<double>::infinity()), 2.0);
+  EXPECT_DOUBLE_EQ(combinedRadius(2.0, 2.0), 1.0);
+  EXPECT_DOUBLE_EQ(dampingCoefficient(0.5, 4.0, 9.0), 6.0);
+  EXPECT_DOUBLE_EQ(referenceNodeWeight<2>(0.1), 0.1);
+  EXPECT_DOUBLE_EQ(referenceNodeWeight<3>(0.1), kNodeAreaPerCellArea3D * 0.01);
+}
+
+// Below the friction angle (tan theta = mu / 2) the block holds: after 1 s it
+// has moved by its shear springs' deflection only (~1 um; sliding freely it
+// would have gone 1.4 m).
+TEST(ContactLaw, BlockSticksBelowFrictionAngle2D) {
+  const InclineResult r = incline<2>(std::atan(0.3), 0.6);
+  EXPECT_LT(std::abs(r.displacement), 1e-5);
+  EXPECT_LT(std::abs(r.speed), 1e-4);
+}
+TEST(ContactLaw, BlockSticksBelowFrictionAngle3D) {
+  const InclineResult r = incline<3>(std::atan(0.3), 0.6);
+  EXPECT_LT(std::abs(r.displacement), 1e-4);
+  EXPECT_LT(std::abs(r.speed), 1e-3);
+}
+
+// Above it (tan theta = 1.5 mu) the block slides with a = g (sin theta -
+// mu cos theta), friction dissipates mu N v, and kinetic + potential + elastic
+// energy plus the reported dissipation stays constant.
+template <int D>
+void checkSliding() {
+  const double mu = 0.6, theta = std::atan(1.5 * mu);
+  const InclineResult r = incline<D>(theta, mu);
+  const double a = kGravity * (std::sin(theta) - mu * std::cos(theta));
+  EXPECT_NEAR(r.acceleration, a, 0.03 * a);
+  EXPECT_NEAR(r.speed, a * 1.0, 0.05 * a);
+  const double mass = 2650.0 * block<D>(1.0)->volume();
+  const double frictionPower = mu * mass * kGravity * std::cos(theta) * r.speed;
+  EXPECT_NEAR(r.dissipatedPower, frictionPower, 0.03 * frictionPower);
+  EXPECT_LT(std::abs(r.energyError), 0.01 * r.dissipated);
+}
+TEST(ContactLaw, BlockSlidesAboveFrictionAngle2D) { checkSliding<2>(); }
+TEST(ContactLaw, BlockSlidesAboveFrictionAngle3D) { checkSliding<3>(); }
+
+// The tangential spring: a sphere pressed on a plane and moved sideways at
+// constant speed carries F_t = -ks s per node (s = v t accumulated in the
+// history) until |F_t| reaches mu F_n, then slides at the cap; the history is
+// dropped once the node leaves the plane.
+TEST(ContactLaw, ShearSpringAndCoulombCap) {
+  geometry::ShapeDef<2> def;
+  def.kind = geometry::ShapeKind::Sphere;
+  def.radius = 0.5;
+  def.cellsAcross = 10;
+  def.options.nodesPerCell = 1.0;
+  const auto shape = geometry::buildShape(def);
+  // Put node 0 at the bottom, 0.1 mm into the plane y = 0.
+  const Vec<2> xb = shape->nodes().positions[0];
+  Particles<2> p;
+  ParticleDef<2> pd;
+  pd.shape = shape;
+  pd.orientation = -0.5 * std::numbers::pi - std::atan2(xb[1], xb[0]);
+  pd.position = Vec<2>(0.0, xb.norm() - 1e-4);
+  pd.velocity = Vec<2>(0.01, 0.0);
+  p.add(pd);
+  ContactLawDef law;
+  law.hasDamping = false;
+  law.friction = 0.5;
+  ContactSolver<2> solver(law);
+  const std::vector<Plane<2>> planes{Plane<2>{Vec<2>::Zero(), Vec<2>::UnitY(), Vec<2>::Zero()}};
+  const double dt = 1e-5, fn = law.kn * 1e-4;
+  // Stick: the shear grows by v dt per step (the body is held in place: no integration).
+  for (int s = 1; s <= 10; ++s) {
+    solver.compute(p, {}, planes, {}, dt);
+    ASSERT_EQ(solver.nodeContacts().size(), 1u);
+    const NodeContact<2>& c = solver.nodeContacts()[0];
+    const double shear = 0.01 * dt * s;
+    const double ft = std::min(law.ks * shear, law.friction * fn);
+    EXPECT_NEAR(c.force[0], -ft, 1e-9 * fn) << "step " << s;
+    EXPECT_NEAR(c.force[1], fn, 1e-9 * fn);
+    EXPECT_NEAR(solver.nodeShear()[0][0], ft / law.ks, 1e-15);
+  }
+  // Slide: a faster motion takes the force to the cap and dissipates mu F_n |v_t|.
+  p.velocity[0] = Vec<2>(10.0, 0.0);
+  solver.compute(p, {}, planes, {}, dt);
+  EXPECT_NEAR(solver.nodeContacts()[0].force[0], -law.friction * fn, 1e-9 * fn);
+  EXPECT_NEAR(solver.nodeShear()[0][0], law.friction * fn / law.ks, 1e-15);
+  EXPECT_GT(solver.dissipatedPower(), 0.0);
+  EXPECT_NEAR(solver.elasticEnergy(), 0.5 * law.kn * 1e-8 + std::pow(law.friction * fn, 2) / (2.0 * law.ks),
+              1e-9 * fn * 1e-4);
+  EXPECT_EQ(solver.historySize(), 1u);
+  // Lift off: the history is dropped; touching again starts from zero shear.
+  p.position[0][1] += 2e-4;
+  solver.compute(p, {}, planes, {}, dt);
+  EXPECT_TRUE(solver.nodeContacts().empty());
+  EXPECT_EQ(solver.historySize(), 0u);
+  p.position[0][1] -= 2e-4;
+  p.velocity[0] = Vec<2>(0.01, 0.0);
+  solver.compute(p, {}, planes, {}, dt);
+  EXPECT_NEAR(solver.nodeShear()[0][0], 0.01 * dt, 1e-15);
+}
+
+TEST(ContactLaw, AreaWeightedStiffnessIndependentOfNodeDensity2D) { checkAreaWeighted<2>(); }
+TEST(ContactLaw, AreaWeightedStiffnessIndependentOfNodeDensity3D) { checkAreaWeighted<3>(); }

@@ -1,0 +1,453 @@
+/// @file test_narrow_phase.cpp
+/// @brief The narrow phase (eq. 3-4): contact geometry against exact spheres,
+/// order independence of the two-sided test, planes and tools, Newton's third
+/// law and the balance of moments, shear history keyed by global ids, input
+/// checks, and bitwise-identical results for 1 and 2 threads.
+
+#include "lsdem/dynamics/Integrator.h"
+#include "lsdem/dynamics/NarrowPhase.h"
+#include "lsdem/geometry/ShapeDef.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+using namespace lsdem;
+using namespace lsdem::dynamics;
+
+namespace {
+
+using PairList = std::vector<std::array<std::uint32_t, 2>>;
+using ShapePtr2 = std::shared_ptr<const geometry::Shape<2>>;
+
+template <int D>
+std::shared_ptr<const geometry::Shape<D>> sphere(double radius, double cells) {
+  geometry::ShapeDef<D> def;
+  def.kind = geometry::ShapeKind::Sphere;
+  def.radius = radius;
+  def.cellsAcross = cells;
+  def.options.nodesPerCell = 1.0;
+  return geometry::buildShape(def);
+}
+
+template <int D>
+std::shared_ptr<const geometry::Shape<D>> grain(std::uint64_t seed) {
+  geometry::ShapeDef<D> def;
+  def.kind = geometry::ShapeKind::RandomGrain;
+  def.grain.equivalentDiameter = 1.0;
+  def.grain.elongation = 1.3;
+  def.grain.roughness = 0.15;
+  def.grain.seed = seed;
+  def.cellsAcross = 10;
+  def.options.nodesPerCell = 1.0;
+  return geometry::buildShape(def);
+}
+
+template <int D>
+Orientation<D> randomOrientation(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  if constexpr (D == 2) {
+    return std::numbers::pi * u(rng);
+  } else {
+    Eigen::Quaterniond q(u(rng), u(rng), u(rng), u(rng));
+    return q.normalized();
+  }
+}
+
+template <int D>
+Spin<D> randomSpin(std::mt19937_64& rng, double scale) {
+  std::uniform_real_distribution<double> u(-scale, scale);
+  if constexpr (D == 2) {
+    return u(rng);
+  } else {
+    return Vec<3>(u(rng), u(rng), u(rng));
+  }
+}
+
+template <int D>
+Vec<D> randomVector(std::mt19937_64& rng, double scale) {
+  std::uniform_real_distribution<double> u(-scale, scale);
+  Vec<D> v;
+  for (int a = 0; a < D; ++a) v[a] = u(rng);
+  return v;
+}
+
+// Every pair of particles whose bounding spheres overlap, in canonical order.
+template <int D>
+PairList allPairs(const Particles<D>& p) {
+  PairList pairs;
+  for (std::uint32_t i = 0; i < p.size(); ++i) {
+    for (std::uint32_t j = i + 1; j < p.size(); ++j) {
+      const double reach = p.shape[i]->boundingRadius() + p.shape[j]->boundingRadius();
+      if ((p.position[i] - p.position[j]).squaredNorm() < reach * reach) {
+        pairs.push_back(p.id[i] < p.id[j] ? std::array<std::uint32_t, 2>{i, j} : std::array<std::uint32_t, 2>{j, i});
+      }
+    }
+  }
+  return pairs;
+}
+
+template <int D>
+void clearForces(Particles<D>& p) {
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.force[i].setZero();
+    p.torque[i] = Rotation<D>::zeroSpin();
+  }
+}
+
+double spinNorm(double s) { return std::abs(s); }
+double spinNorm(const Vec<3>& s) { return s.norm(); }
+
+// eq. 3-4 against exact spheres: every node contact of two overlapping
+// spheres lies inside the other sphere by its reported overlap, and its normal
+// is the other sphere's radial direction (pointing from b towards a).
+template <int D>
+void checkSphereGeometry() {
+  const auto shape = sphere<D>(0.5, 20);
+  Particles<D> p;
+  ParticleDef<D> def;
+  def.shape = shape;
+  std::mt19937_64 rng(3);
+  def.orientation = randomOrientation<D>(rng);
+  p.add(def);
+  def.orientation = randomOrientation<D>(rng);
+  def.position = Vec<D>::Ones().normalized() * 0.97;  // 3 cm overlap
+  p.add(def);
+  ContactLawDef law;
+  law.hasFriction = false;
+  law.hasDamping = false;
+  ContactSolver<D> solver(law);
+  solver.compute(p, {{0, 1}}, {}, {}, 1e-5);
+  ASSERT_EQ(solver.pairContacts().size(), 1u);
+  std::size_t sides[2] = {0, 0};
+  const double h = shape->grid().spacing();
+  for (const NodeContact<D>& c : solver.nodeContacts()) {
+    const std::size_t other = c.ownerIsB ? 0 : 1;
+    const Vec<D> radial = (c.point - p.position[other]).normalized();
+    // Depth inside the other sphere (exact surface radius R = 0.5), to the
+    // accuracy of multilinear interpolation of its distance: (D-1) h^2 / (8 R).
+    EXPECT_NEAR(c.overlap, 0.5 - (c.point - p.position[other]).norm(), 1.1 * (D - 1) * h * h / 4.0);
+    // Normal: radial out of the other body, signed to point from b to a, to
+    // the accuracy of the interpolated gradient (~ h / (2 R) per axis).
+    const Vec<D> expected = c.ownerIsB ? Vec<D>(-radial) : radial;
+    EXPECT_GT(c.normal.dot(expected), std::cos(h / 0.5));
+    EXPECT_NEAR(c.normal.norm(), 1.0, 1e-12);
+    // Linear per-node law with weight 1/2 per direction: F = k delta grad phi,
+    // along the normal; |grad phi| of the interpolated distance is 1 to the
+    // accuracy of its gradient (~ h / (2 R)).
+    const double ratio = c.force.norm() / (0.5 * law.kn * c.overlap);
+    EXPECT_NEAR(ratio, 1.0, h / (2 * 0.5));
+    EXPECT_TRUE(c.force.isApprox(ratio * 0.5 * law.kn * c.overlap * c.normal, 1e-12));
+    ++sides[c.ownerIsB];
+  }
+  EXPECT_GT(sides[0], 3u);
+  EXPECT_GT(sides[1], 3u);
+  // The pair force pushes a away from b; the sum of node forces is the pair force.
+  const PairContact<D>& pc = solver.pairContacts()[0];
+  EXPECT_LT(pc.force.dot(p.position[1] - p.position[0]), 0.0);
+  Vec<D> sum = Vec<D>::Zero();
+  for (const NodeContact<D>& c : solver.nodeContacts()) sum += c.force;
+  EXPECT_TRUE(sum.isApprox(pc.force, 1e-12));
+}
+
+// Swapping the roles of a and b (the other particle gets the lower id) gives
+// the same forces and torques on each body to round-off, for random grains in
+// random overlapping poses with random velocities (damping and friction on).
+template <int D>
+void checkOrderIndependence() {
+  std::mt19937_64 rng(11);
+  const auto shapeX = grain<D>(21), shapeY = grain<D>(22);
+  ContactLawDef law;  // the paper's law: linear per node, friction, damping
+  int tested = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    // Pose of Y around X, close enough for the grains to overlap.
+    const Orientation<D> qx = randomOrientation<D>(rng), qy = randomOrientation<D>(rng);
+    const Vec<D> xy = randomVector<D>(rng, 1.0).normalized() * 0.8;
+    const Vec<D> vx = randomVector<D>(rng, 0.5), vy = randomVector<D>(rng, 0.5);
+    const Spin<D> wx = randomSpin<D>(rng, 2.0), wy = randomSpin<D>(rng, 2.0);
+    // Two stores: X added first (X = a), or Y added first (Y = a).
+    Particles<D> stores[2];
+    for (int s = 0; s < 2; ++s) {
+      for (int k = 0; k < 2; ++k) {
+        const bool isX = (k == 0) == (s == 0);
+        ParticleDef<D> def;
+        def.shape = isX ? shapeX : shapeY;
+        def.orientation = isX ? qx : qy;
+        def.position = isX ? Vec<D>(Vec<D>::Zero()) : xy;
+        def.velocity = isX ? vx : vy;
+        def.angularVelocity = isX ? wx : wy;
+        stores[s].add(def);
+      }
+    }
+    // Forces after two steps of history (friction), accumulated into the particles.
+    Vec<D> force[2][2];
+    Spin<D> torque[2][2];
+    std::size_t nodes[2];
+    for (int s = 0; s < 2; ++s) {
+      ContactSolver<D> solver(law);
+      for (int k = 0; k < 2; ++k) {
+        clearForces(stores[s]);
+        solver.compute(stores[s], {{0, 1}}, {}, {}, 1e-4);
+        solver.accumulate(stores[s]);
+        stores[s].position[0] += 1e-4 * stores[s].velocity[0];
+        stores[s].position[1] += 1e-4 * stores[s].velocity[1];
+      }
+      nodes[s] = solver.nodeContacts().size();
+      // Index of X and Y in this store.
+      const std::size_t ix = s == 0 ? 0 : 1, iy = 1 - ix;
+      force[s][0] = stores[s].force[ix];
+      force[s][1] = stores[s].force[iy];
+      torque[s][0] = stores[s].torque[ix];
+      torque[s][1] = stores[s].torque[iy];
+    }
+    if (nodes[0] == 0) continue;
+    ++tested;
+    EXPECT_EQ(nodes[0], nodes[1]);
+    const double scale = force[0][0].norm();
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_LT((force[0][k] - force[1][k]).norm(), 1e-12 * scale) << "trial " << trial;
+      EXPECT_LT(spinNorm(torque[0][k] - torque[1][k]), 1e-12 * scale) << "trial " << trial;
+    }
+    EXPECT_LT((force[0][0] + force[0][1]).norm(), 1e-12 * scale);
+  }
+  EXPECT_GE(tested, 15);
+}
+
+// A dense random cluster of grains in a box of planes with a tool: forces,
+// torques and node contacts after a few steps, as raw bytes.
+template <int D>
+std::vector<unsigned char> clusterRun(int threads, std::size_t count) {
+#ifdef _OPENMP
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(threads);
+#else
+  (void)threads;
+#endif
+  std::mt19937_64 rng(5);
+  const auto shapes = std::array{grain<D>(1), grain<D>(2), grain<D>(3)};
+  const auto toolShape = sphere<D>(1.5, 15);
+  Particles<D> p;
+  const int perRow = D == 2 ? int(std::ceil(std::sqrt(double(count)))) : int(std::ceil(std::cbrt(double(count))));
+  for (std::size_t i = 0; i < count; ++i) {
+    ParticleDef<D> def;
+    def.shape = shapes[i % 3];
+    Vec<D> cell;
+    std::size_t r = i;
+    for (int a = 0; a < D; ++a) {
+      cell[a] = double(r % std::size_t(perRow));
+      r /= std::size_t(perRow);
+    }
+    def.position = 0.85 * cell + randomVector<D>(rng, 0.05);
+    def.orientation = randomOrientation<D>(rng);
+    def.velocity = randomVector<D>(rng, 0.3);
+    def.angularVelocity = randomSpin<D>(rng, 1.0);
+    p.add(def);
+  }
+  const double extent = 0.85 * (perRow - 1);
+  std::vector<Plane<D>> planes;
+  for (int a = 0; a < D; ++a) {
+    planes.push_back(Plane<D>{-0.45 * Vec<D>::Unit(a), Vec<D>::Unit(a), Vec<D>::Zero()});
+    planes.push_back(Plane<D>{(extent + 0.45) * Vec<D>::Unit(a), -Vec<D>::Unit(a), Vec<D>::Zero()});
+  }
+  ToolPose<D> tool;
+  tool.shape = toolShape.get();
+  tool.position = Vec<D>::Constant(0.5 * extent);
+  tool.velocity = Vec<D>::UnitX() * 0.1;
+  tool.angularVelocity = randomSpin<D>(rng, 0.5);
+  const std::vector<ToolPose<D>> tools{tool};
+  ContactSolver<D> solver(ContactLawDef{});
+  std::vector<unsigned char> bytes;
+  const auto append = [&](const void* data, std::size_t size) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    bytes.insert(bytes.end(), b, b + size);
+  };
+  const double dt = 2e-5;
+  for (int s = 0; s < 4; ++s) {
+    kickDrift(p, dt);
+    clearForces(p);
+    solver.compute(p, allPairs(p), planes, tools, dt);
+    const BoundaryLoads<D>& loads = solver.accumulate(p);
+    kick(p, dt);
+    append(loads.planeForce.data(), loads.planeForce.size() * sizeof(Vec<D>));
+    append(loads.toolForce.data(), loads.toolForce.size() * sizeof(Vec<D>));
+  }
+  EXPECT_GT(solver.particleContacts().size(), count);
+  EXPECT_GT(solver.planeContacts().size(), 0u);
+  EXPECT_GT(solver.toolContacts().size(), 0u);
+  EXPECT_GT(solver.historySize(), 0u);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    append(&p.force[i], sizeof(Vec<D>));
+    append(&p.torque[i], sizeof(Spin<D>));
+    append(&p.position[i], sizeof(Vec<D>));
+    append(&p.velocity[i], sizeof(Vec<D>));
+  }
+  for (const NodeContact<D>& c : solver.nodeContacts()) {
+    append(c.force.data(), sizeof(Vec<D>));
+    append(&c.node, sizeof(c.node));
+  }
+  const double energy[2] = {solver.elasticEnergy(), solver.dissipatedPower()};
+  append(energy, sizeof(energy));
+#ifdef _OPENMP
+  omp_set_num_threads(before);
+#endif
+  return bytes;
+}
+
+// Newton's third law and the balance of moments over a cluster's particle
+// pairs: the forces sum to zero and so do the moments about the origin
+// (x_i x F_i + T_i), to round-off.
+template <int D>
+void checkBalance() {
+  std::mt19937_64 rng(8);
+  Particles<D> p;
+  for (int i = 0; i < 12; ++i) {
+    ParticleDef<D> def;
+    def.shape = grain<D>(std::uint64_t(i % 3 + 1));
+    def.position = randomVector<D>(rng, 0.9);
+    def.orientation = randomOrientation<D>(rng);
+    def.velocity = randomVector<D>(rng, 0.3);
+    def.angularVelocity = randomSpin<D>(rng, 1.0);
+    p.add(def);
+  }
+  ContactSolver<D> solver(ContactLawDef{});
+  clearForces(p);
+  const PairList pairs = allPairs(p);
+  solver.compute(p, pairs, {}, {}, 1e-4);
+  solver.accumulate(p);
+  ASSERT_GT(solver.particleContacts().size(), 5u);
+  Vec<D> total = Vec<D>::Zero();
+  Spin<D> moment = Rotation<D>::zeroSpin();
+  double scale = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    total += p.force[i];
+    moment += Rotation<D>::moment(p.position[i], p.force[i]) + p.torque[i];
+    scale = std::max(scale, p.force[i].norm());
+  }
+  EXPECT_LT(total.norm(), 1e-12 * scale * double(p.size()));
+  EXPECT_LT(spinNorm(moment), 1e-12 * scale * double(p.size()));
+  // Nodes tested: only pairs whose bounding spheres overlap, both directions.
+  std::uint64_t expected = 0;
+  for (const auto& [a, b] : pairs) expected += p.shape[a]->nodes().size() + p.shape[b]->nodes().size();
+  EXPECT_EQ(solver.nodeChecks(), expected);
+}
+
+}  // namespace
+
+TEST(NarrowPhase, SphereContactGeometry2D) { checkSphereGeometry<2>(); }
+TEST(NarrowPhase, SphereContactGeometry3D) { checkSphereGeometry<3>(); }
+TEST(NarrowPhase, SwappingThePairGivesEqualAndOppositeForces2D) { checkOrderIndependence<2>(); }
+TEST(NarrowPhase, SwappingThePairGivesEqualAndOppositeForces3D) { checkOrderIndependence<3>(); }
+TEST(NarrowPhase, ForcesAndMomentsBalance2D) { checkBalance<2>(); }
+TEST(NarrowPhase, ForcesAndMomentsBalance3D) { checkBalance<3>(); }
+
+TEST(NarrowPhase, OneAndTwoThreadsAreBitwiseIdentical) {
+#ifndef _OPENMP
+  GTEST_SKIP() << "built without OpenMP";
+#else
+  const std::vector<unsigned char> one2 = clusterRun<2>(1, 300), two2 = clusterRun<2>(2, 300);
+  ASSERT_EQ(one2.size(), two2.size());
+  EXPECT_EQ(std::memcmp(one2.data(), two2.data(), one2.size()), 0);
+  const std::vector<unsigned char> one3 = clusterRun<3>(1, 64), two3 = clusterRun<3>(2, 64);
+  ASSERT_EQ(one3.size(), two3.size());
+  EXPECT_EQ(std::memcmp(one3.data(), two3.data(), one3.size()), 0);
+#endif
+}
+
+// A particle against a flat face of a large box tool: the same force as
+// against a plane at the same place (one-sided, weight 1); the tool's load is
+// the reaction, with its moment about the tool's position; a tool moving with
+// the particle adds no damping.
+TEST(NarrowPhase, ToolFaceActsLikeAPlane) {
+  geometry::ShapeDef<2> boxDef;
+  boxDef.kind = geometry::ShapeKind::Box;
+  boxDef.halfExtents = Vec<2>(4.0, 1.0);
+  boxDef.spacing = 0.05;
+  boxDef.options.nodesPerCell = 1.0;
+  const auto box = geometry::buildShape(boxDef);
+  // Tool orientation putting its grid-frame +y face up, top face at y = 0.
+  const Vec<2> up = box->bodyToGrid().rotation.transpose() * Vec<2>::UnitY();
+  ToolPose<2> tool;
+  tool.shape = box.get();
+  tool.orientation = 0.5 * std::numbers::pi - std::atan2(up[1], up[0]);
+  tool.position = Vec<2>(0.3, -1.0);
+  tool.velocity = Vec<2>(0.2, -0.1);
+  const std::vector<ToolPose<2>> tools{tool};
+  const std::vector<Plane<2>> planes{Plane<2>{Vec<2>::Zero(), Vec<2>::UnitY(), tool.velocity}};
+  Particles<2> p;
+  ParticleDef<2> def;
+  def.shape = sphere<2>(0.5, 10);
+  def.position = Vec<2>(0.0, 0.49);
+  def.velocity = tool.velocity;  // at rest relative to the tool
+  p.add(def);
+  ContactLawDef law;
+  ContactSolver<2> withTool(law), withPlane(law);
+  withTool.compute(p, {}, {}, tools, 1e-5);
+  withPlane.compute(p, {}, planes, {}, 1e-5);
+  ASSERT_EQ(withTool.toolContacts().size(), 1u);
+  ASSERT_EQ(withPlane.planeContacts().size(), 1u);
+  const PairContact<2>& t = withTool.toolContacts()[0];
+  const PairContact<2>& q = withPlane.planeContacts()[0];
+  EXPECT_EQ(t.nodeCount, q.nodeCount);
+  EXPECT_NEAR(t.force[1], q.force[1], 1e-3 * q.force[1]);
+  EXPECT_NEAR(t.force[0], 0.0, 1e-3 * q.force[1]);
+  // Pure elastic force: the sum of kn x overlap (no damping at zero relative speed).
+  double elastic = 0.0;
+  for (const NodeContact<2>& c : withPlane.nodeContacts()) elastic += law.kn * c.overlap;
+  EXPECT_NEAR(q.force[1], elastic, 1e-9 * elastic);
+  // Loads: the reaction on the tool, and its moment about the tool's position.
+  Particles<2> copy = p;
+  clearForces(copy);
+  const BoundaryLoads<2>& loads = withTool.accumulate(copy);
+  EXPECT_TRUE(loads.toolForce[0].isApprox(-t.force, 1e-15));
+  double moment = 0.0;
+  for (const NodeContact<2>& c : withTool.nodeContacts()) moment += Rotation<2>::moment(c.point - tool.position, -c.force);
+  EXPECT_NEAR(loads.toolTorque[0], moment, 1e-9 * std::abs(moment));
+  EXPECT_TRUE(copy.force[0].isApprox(t.force, 1e-15));
+  EXPECT_TRUE(loads.planeForce.empty());
+}
+
+// Shear history is keyed by global ids: removing another particle (which
+// moves the last particle into its slot) does not lose it.
+TEST(NarrowPhase, HistorySurvivesReindexing) {
+  const auto shape = sphere<2>(0.5, 10);
+  Particles<2> p;
+  ParticleDef<2> def;
+  def.shape = shape;
+  def.position = Vec<2>(-5.0, 0.0);
+  p.add(def);  // id 0, far away; removed later
+  def.position = Vec<2>(0.0, 0.0);
+  p.add(def);  // id 1
+  def.position = Vec<2>(0.98, 0.0);
+  def.velocity = Vec<2>(0.0, 0.01);  // sliding past along y
+  p.add(def);  // id 2
+  ContactLawDef law;
+  law.hasDamping = false;
+  ContactSolver<2> solver(law);
+  const double dt = 1e-5;
+  solver.compute(p, {{1, 2}}, {}, {}, dt);
+  ASSERT_GT(solver.nodeContacts().size(), 0u);
+  // First step: the shear is the tangential part of (v_a - v_b) dt.
+  const Vec<2> n = solver.nodeContacts()[0].normal;
+  const Vec<2> vRel(0.0, -0.01);
+  const Vec<2> first = solver.nodeShear()[0];
+  EXPECT_TRUE(first.isApprox(dt * (vRel - vRel.dot(n) * n), 1e-12));
+  // Remove id 0: id 2 moves to index 0, id 1 stays at index 1; pair (id 1, id 2) = indices (1, 0).
+  p.remove(0);
+  ASSERT_EQ(p.id[0], 2u);
+  ASSERT_EQ(p.id[1], 1u);
+  solver.compute(p, {{1, 0}}, {}, {}, dt);
+  EXPECT_TRUE(solver.nodeShear()[0].isApprox(2.0 * first, 1e-12));
+  // The solver insists on canonical order (id of a < id of b) and valid indices.
+  EXPECT_THROW(solver.compute(p, {{0, 1}}, {}, {}, dt), std::invalid_argument);
+  EXPECT_THROW(solver.compute(p, {{1, 2}}, {}, {}, dt), std::invalid_argument);
+  // accumulate() needs the particles compute() saw.
+  solver.compute(p, {{1, 0}}, {}, {}, dt);
+  p.remove(1);
+  EXPECT_THROW(solver.accumulate(p), std::invalid_argument);
+}
