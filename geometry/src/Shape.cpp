@@ -13,6 +13,21 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromGrid(Grid<D> grid, const ShapeOpti
   if (!(options.nodesPerCell > 0.0) || !std::isfinite(options.nodesPerCell)) {
     throw std::invalid_argument("node density must be positive, got " + std::to_string(options.nodesPerCell));
   }
+  NodeSet<D> nodes = surfaceNodes(grid, options.nodesPerCell);
+  if (nodes.empty()) {
+    throw std::invalid_argument("the level set has no surface to place nodes on");
+  }
+  return fromGridAndNodes(std::move(grid), std::move(nodes), options);
+}
+
+template <int D>
+std::shared_ptr<const Shape<D>> Shape<D>::fromGridAndNodes(Grid<D> grid, NodeSet<D> nodesGrid,
+                                                          const ShapeOptions& options) {
+  if (nodesGrid.empty() || nodesGrid.positions.size() != nodesGrid.weights.size()) {
+    throw std::invalid_argument("a shape needs surface nodes with one weight each (" +
+                                std::to_string(nodesGrid.positions.size()) + " positions, " +
+                                std::to_string(nodesGrid.weights.size()) + " weights)");
+  }
   std::shared_ptr<Shape> shape(new Shape());
   shape->options_ = options;
 
@@ -24,11 +39,7 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromGrid(Grid<D> grid, const ShapeOpti
   shape->bodyToGrid_.rotation = massGrid.principalAxes();
   shape->bodyToGrid_.translation = massGrid.centroid;
 
-  // Surface nodes in the grid frame give the descriptors; then move them to the body frame.
-  NodeSet<D> nodesGrid = surfaceNodes(grid, options.nodesPerCell);
-  if (nodesGrid.empty()) {
-    throw std::invalid_argument("the level set has no surface to place nodes on");
-  }
+  // Descriptors from the grid-frame nodes; then the nodes move to the body frame.
   shape->descriptors_ = computeDescriptors(grid, massGrid, nodesGrid);
   shape->nodes_.weights = std::move(nodesGrid.weights);
   shape->nodes_.positions.reserve(nodesGrid.positions.size());

@@ -42,6 +42,16 @@ class Shape {
   /// options are out of range.
   static std::shared_ptr<const Shape> fromGrid(Grid<D> grid, const ShapeOptions& options = {});
 
+  /// @brief Makes a shape from a grid and surface nodes given in the grid's
+  /// frame (breakage: a fragment keeps its parent's nodes on its side and gets
+  /// new ones on the fracture surface). Mass properties, principal frame and
+  /// descriptors are computed as in fromGrid; `options.nodesPerCell` is only
+  /// recorded.
+  /// @note Throws std::invalid_argument when the grid has no interior, the node
+  /// set is empty, or positions and weights differ in count.
+  static std::shared_ptr<const Shape> fromGridAndNodes(Grid<D> grid, NodeSet<D> nodesInGridFrame,
+                                                      const ShapeOptions& options = {});
+
   /// The level set, in the grid frame (world units).
   const Grid<D>& grid() const { return grid_; }
   /// Map from body-frame points to grid-frame points: x_grid = bodyToGrid().apply(x_body).
