@@ -10,4 +10,7 @@ namespace lsdem::apps {
 /// `lsdem shape FILE.toml [--json]`: mass properties, descriptors, grid and nodes of one shape.
 void addShapeCommand(CLI::App& app);
 
+/// `lsdem split FILE.toml --plane nx,ny[,nz],d [--json]`: level-set splitting of one shape by a plane.
+void addSplitCommand(CLI::App& app);
+
 }  // namespace lsdem::apps

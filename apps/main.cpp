@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("lsdem ") + LSDEM_VERSION);
   app.require_subcommand(1);
   lsdem::apps::addShapeCommand(app);
+  lsdem::apps::addSplitCommand(app);
 
   try {
     app.parse(argc, argv);

@@ -117,3 +117,34 @@ TEST(Cli, BadInputIsOneLineWithFileLineKeyAndExitCode2) {
   EXPECT_EQ(m.code, 2) << m.out;
   EXPECT_NE(m.out.find("nothere.stl"), std::string::npos);
 }
+
+// `lsdem split` on the sphere of the docs: the spherical cap above z = 0.25 and
+// the rest, within 1 % of the analytic volumes and centroids, and corrected
+// volumes that add up to the parent's.
+TEST(Cli, SplitSphereGivesSphericalCaps) {
+  const Result r = run("split " + example("sphere.toml") + " --plane 0,0,1,0.25 --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const double pi = 3.14159265358979323846, R = 0.5, h = 0.25;
+  const double cap = pi * h * h * (3 * R - h) / 3, sphere = 4.0 / 3.0 * pi * R * R * R;
+  const std::size_t second = r.out.find("\"side\": -1") + 10;  // the text after the first fragment
+  EXPECT_NEAR(jsonNumber(r.out, "volume"), sphere - cap, 0.01 * (sphere - cap));
+  EXPECT_NEAR(jsonNumber(r.out.substr(second), "volume"), cap, 0.01 * cap);
+  EXPECT_GT(jsonNumber(r.out.substr(second), "nodes"), 100);
+  const double parent = jsonNumber(r.out, "parent_volume");
+  EXPECT_NEAR(jsonNumber(r.out, "corrected_volume_sum"), parent, 1e-12 * parent);
+  EXPECT_LT(std::abs(jsonNumber(r.out, "raw_volume_error")), 0.01);
+  // The cap's centroid height 3 (2R - h)^2 / (4 (3R - h)) above the centre.
+  const std::size_t cz = r.out.find("\"centroid\"", second);
+  std::smatch m;
+  const std::string rest = r.out.substr(cz);
+  ASSERT_TRUE(std::regex_search(rest, m, std::regex("\\[\\s*[-0-9.e+]+,\\s*[-0-9.e+]+,\\s*([-0-9.e+]+)")));
+  EXPECT_NEAR(std::stod(m[1]), 3 * (2 * R - h) * (2 * R - h) / (4 * (3 * R - h)), 0.01 * R);
+}
+
+TEST(Cli, SplitRejectsABadPlane) {
+  const Result r = run("split " + example("ellipse.toml") + " --plane 1,0");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.out.find("needs 3 numbers"), std::string::npos) << r.out;
+  const Result nan = run("split " + example("ellipse.toml") + " --plane 1,x,0");
+  EXPECT_EQ(nan.code, 2);
+}

@@ -1,0 +1,204 @@
+#pragma once
+/// @file Split.h
+/// @brief Level-set splitting of a grain by a fracture surface (paper section
+/// 3.2-3.3, eq. 14-15) into fragment shapes, with exact mass bookkeeping.
+///
+/// Sides. With phi the parent's level set and phi_f the fracture surface's
+/// signed distance (both at the same point):
+///   - eq. 15, phi4 = max(phi, phi_f), is the part of the grain where phi_f < 0:
+///     fragments on that side have `side == -1`;
+///   - eq. 14, phi3 = max(phi, -phi_f), is the part where phi_f > 0:
+///     fragments on that side have `side == +1`.
+/// Each side may fall apart into several face-connected pieces (a cut through
+/// both arms of a U gives three fragments); every piece is its own fragment.
+///
+/// Mass bookkeeping. A fragment's raw volume comes from its own grid (eq. 24-30);
+/// the raw volumes of the pieces add up to the parent's only to the
+/// discretisation error of the smoothed Heaviside across the new max() kinks
+/// (reported as SplitResult::rawRelativeError). The split carries the parent's
+/// volume exactly by a proportional correction,
+///     volume_k = rawVolume_k * parentVolume / rawVolumeSum,
+/// so the fragments' volumes sum to the parent's to round-off. A user of a
+/// fragment scales its mass AND its inertia by the same factor
+/// s_k = volume_k / rawVolume_k (Fragment::massScale()):
+///     mass_k    = rho * volume_k,
+///     inertia_k = s_k * rho * (the child shape's own inertia per unit density),
+/// which keeps the child's radius of gyration that of its own grid.
+///
+/// Centroids. The fragments' volume-weighted centroid differs from the
+/// parent's centroid by the same kind of discretisation error (a small fraction
+/// of a cell). The split moves every fragment rigidly by -c_bar, with
+///     c_bar = sum_k volume_k c_k / parentVolume   (parent body frame, reported as
+///     SplitResult::centroidShift),
+/// so that sum_k volume_k c_k = 0 to round-off: the centre of mass does not jump
+/// when the grain breaks.
+///
+/// Momentum (the rule fragmentState() applies). A fragment takes the parent's
+/// rigid-body velocity at its centroid and the parent's angular velocity,
+///     v_k = v + w x (x_k - x),   w_k = w,
+/// with x the parent's centroid and x_k = x + R c_k (world frame). Then
+///   - linear momentum: sum_k m_k v_k = M v + w x (sum_k m_k R c_k) = M v
+///     exactly (to round-off), since sum_k m_k = M and sum_k m_k c_k = 0;
+///   - angular momentum about any point: orbital + spin parts give
+///     sum_k (m_k x_k x v_k + I_k w) = M x x v + I_comb w, with
+///     I_comb = sum_k [I_k + m_k (|r_k|^2 1 - r_k r_k^T)], r_k = R c_k (the
+///     parallel-axis sum about the parent's centroid; in 2D the scalar
+///     sum_k [I_k + m_k |r_k|^2]). It equals the parent's I w + M x x v exactly
+///     when the inertias add up, I_comb = I_parent; otherwise the change is
+///     (I_comb - I_parent) w, whose relative size is
+///     SplitResult::inertiaRelativeError (discretisation error, ~1e-3 at 20
+///     cells across). Kinetic energy changes by (1/2) w.(I_comb - I_parent) w.
+
+#include "lsdem/dynamics/Rotation.h"
+#include "lsdem/geometry/Csg.h"
+#include "lsdem/geometry/Grid.h"
+#include "lsdem/geometry/Primitives.h"
+#include "lsdem/geometry/Shape.h"
+#include "lsdem/geometry/Types.h"
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+namespace lsdem::breakage {
+
+/// @brief A fracture surface in the parent's BODY frame (world units).
+/// Exactly one of the two is used: the plane when set (flat cuts, eq. 18-20:
+/// the fragments get exact new nodes on it), otherwise the signed distance
+/// `field` (curved cuts: fragment nodes are regenerated from their grids).
+template <int D>
+struct FractureSurface {
+  /// Flat cut normal . x = offset in the parent's body frame. The normal need
+  /// not be unit length: the split divides normal and offset by |normal|.
+  std::optional<geometry::HalfSpace<D>> plane;
+  /// Any signed distance phi_f(x_body), world units; used when `plane` is empty.
+  /// Called from several threads at once: it must be a pure function.
+  geometry::SignedDistance<D> field;
+};
+
+/// One fragment of a split.
+template <int D>
+struct Fragment {
+  /// The child's own shape: its grid (a crop of the split level set, in the
+  /// parent's grid frame), nodes and mass properties in its own principal body frame.
+  std::shared_ptr<const geometry::Shape<D>> shape;
+  /// Child body frame -> parent body frame: translation = child centroid in
+  /// parent body coordinates (after the centroid shift, see the file comment),
+  /// rotation = child principal axes in parent body coordinates.
+  geometry::Rigid<D> childToParent;
+  double rawVolume = 0.0;  ///< volume (area in 2D) from the child's own grid (eq. 24-30), world units^D
+  double volume = 0.0;     ///< corrected volume rawVolume * parentVolume / rawVolumeSum, world units^D
+  int side = 0;            ///< -1: the phi_f < 0 side (eq. 15); +1: the phi_f > 0 side (eq. 14)
+
+  /// @brief volume / rawVolume: the factor applied to the child's mass AND
+  /// inertia per unit density (see the file comment).
+  double massScale() const { return volume / rawVolume; }
+};
+
+/// Options of splitShape().
+struct SplitOptions {
+  /// Surface-node density of the fragments, nodes per grid cell of length
+  /// (pts/pix); 0 takes the parent's (parent.options().nodesPerCell). The new
+  /// nodes on a fracture plane are spaced h / nodesPerCell apart.
+  double nodesPerCell = 0.0;
+  /// Cells of padding around each fragment's cropped grid, >= 3 (the
+  /// smoothed-Heaviside band of the mass properties is 3 cells wide).
+  int paddingCells = geometry::kDefaultPaddingCells;
+};
+
+/// Outcome of splitShape().
+template <int D>
+struct SplitResult {
+  /// The fragments, the phi_f < 0 side first, each side's pieces in the order
+  /// of their lowest grid node. Empty when the grain is not split.
+  std::vector<Fragment<D>> fragments;
+  /// True when two or more fragments were made. A surface that leaves the
+  /// grain whole (it misses the grain, or only grazes it so that one side holds
+  /// no interior grid node) gives no fragments and isSplit == false; so does a
+  /// split whose pieces but one are dropped as degenerate.
+  bool isSplit = false;
+  double parentVolume = 0.0;      ///< the parent's volume, world units^D
+  double rawVolumeSum = 0.0;      ///< sum of the kept fragments' raw volumes, world units^D
+  double droppedRawVolume = 0.0;  ///< raw volume of the pieces dropped as degenerate (no surface nodes), world units^D
+  int droppedCount = 0;           ///< number of pieces dropped
+  /// (rawVolumeSum + droppedRawVolume - parentVolume) / parentVolume: the
+  /// discretisation error of the split before correction (0 when not split).
+  double rawRelativeError = 0.0;
+  /// c_bar: the corrected-volume-weighted centroid of the fragments before
+  /// they were moved by -c_bar, parent body frame, world units.
+  geometry::Vec<D> centroidShift = geometry::Vec<D>::Zero();
+  /// |I_comb - I_parent| / |I_parent| per unit density (2D: polar moments;
+  /// 3D: Frobenius norms of the tensors), with the corrected inertias about the
+  /// parent's centroid: the relative change of angular momentum (file comment).
+  double inertiaRelativeError = 0.0;
+};
+
+/// @brief eq. 14-15: splits `parent` by `surface` into fragment shapes.
+///
+/// Steps: the surface is mapped from the parent's body frame to its grid frame
+/// (parent.bodyToGrid()); phi4 = max(phi, phi_f) and phi3 = max(phi, -phi_f) are
+/// formed node by node on the parent's grid (as csgIntersection and
+/// csgDifference do, in one pass); each is split into face-connected
+/// components (connectedComponents; a side in one piece is simply cropped),
+/// each cropped to the piece's extent plus `paddingCells`. Nodes (section 3.3):
+///   - flat cut: every parent node goes to the side of the sign of phi_f at it
+///     (phi_f < 0: side -1, else +1); new nodes are placed on the plane inside
+///     the parent on a square lattice of spacing s = h / nodesPerCell along two
+///     (3D) or one (2D) tangent directions, centred on the projection of the
+///     parent's centroid; lattice points with phi < -s/4 are kept (none closer
+///     to the rim, where the parent's own nodes are), and each gets the weight
+///     A / n_kept, with A = s^(D-1) times the number of lattice points with
+///     phi < 0 (the lattice estimate of the section's length/area). Both sides
+///     get the plane nodes. On each side a node goes to the piece whose cropped
+///     grid is smallest at it.
+///   - curved cut (`field`): each piece's nodes are regenerated from its own
+///     grid (geometry::surfaceNodes).
+///   Every node is then put back on its piece's own zero level set by damped
+///   Newton steps (near the new rim the multilinear interpolant rounds the
+///   max() kink of eq. 14-15 by up to ~h/4); nodes within 1e-4 h of it stay put.
+///   A piece left with no node (a sliver) gets nodes from its own grid; if it
+///   still has none it is dropped (droppedCount, droppedRawVolume).
+/// Each piece becomes a shape with Shape::fromGridAndNodes (the parent's mass
+/// method), then volumes are corrected and centroids shifted as the file
+/// comment describes.
+/// @param parent the grain to split.
+/// @param surface the fracture surface in the parent's body frame.
+/// @param options node density and padding.
+/// @return the fragments and the bookkeeping (see SplitResult).
+/// @note Throws std::invalid_argument when the surface has neither a plane nor
+/// a field, the field gives NaN at a grid node, the plane's normal is zero or not finite or its offset not finite,
+/// options.nodesPerCell is negative or not finite, or options.paddingCells < 3.
+/// Deterministic: the same fragments for any number of threads.
+template <int D>
+SplitResult<D> splitShape(const geometry::Shape<D>& parent, const FractureSurface<D>& surface,
+                          const SplitOptions& options = {});
+
+/// Where a fragment starts and how it moves when its parent breaks.
+template <int D>
+struct FragmentState {
+  geometry::Vec<D> position = geometry::Vec<D>::Zero();    ///< centroid, world frame, m
+  geometry::Mat<D> rotation = geometry::Mat<D>::Identity(); ///< child body -> world rotation
+  geometry::Vec<D> velocity = geometry::Vec<D>::Zero();    ///< v + w x (x_k - x), world frame, m/s
+  dynamics::Spin<D> angularVelocity = dynamics::Rotation<D>::zeroSpin();  ///< the parent's w, world frame, rad/s
+};
+
+/// @brief The rigid-body rule for a fragment's pose and velocity (file
+/// comment): x_k = x + R c_k, R_k = R R_c, v_k = v + w x (x_k - x), w_k = w.
+/// @param fragment a fragment of the parent's split.
+/// @param parentPosition parent centroid x, world frame, m.
+/// @param parentRotation parent body -> world rotation R.
+/// @param parentVelocity parent centroid velocity v, world frame, m/s.
+/// @param parentSpin parent angular velocity w, world frame, rad/s.
+template <int D>
+FragmentState<D> fragmentState(const Fragment<D>& fragment, const geometry::Vec<D>& parentPosition,
+                               const geometry::Mat<D>& parentRotation, const geometry::Vec<D>& parentVelocity,
+                               const dynamics::Spin<D>& parentSpin);
+
+extern template SplitResult<2> splitShape<2>(const geometry::Shape<2>&, const FractureSurface<2>&, const SplitOptions&);
+extern template SplitResult<3> splitShape<3>(const geometry::Shape<3>&, const FractureSurface<3>&, const SplitOptions&);
+extern template FragmentState<2> fragmentState<2>(const Fragment<2>&, const geometry::Vec<2>&, const geometry::Mat<2>&,
+                                                  const geometry::Vec<2>&, const dynamics::Spin<2>&);
+extern template FragmentState<3> fragmentState<3>(const Fragment<3>&, const geometry::Vec<3>&, const geometry::Mat<3>&,
+                                                  const geometry::Vec<3>&, const dynamics::Spin<3>&);
+
+}  // namespace lsdem::breakage

@@ -1,0 +1,383 @@
+#include "lsdem/breakage/Split.h"
+
+#include "lsdem/geometry/Components.h"
+#include "lsdem/geometry/MassProperties.h"
+#include "lsdem/geometry/NodeSet.h"
+#include "lsdem/geometry/SurfaceNodes.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <optional>
+#include <utility>
+
+namespace lsdem::breakage {
+
+using geometry::Grid;
+using geometry::Mat;
+using geometry::Vec;
+using geometry::HalfSpace;
+using geometry::NodeSet;
+using geometry::Rigid;
+using geometry::Shape;
+
+namespace {
+
+/// One side's pieces (components of phi4 or phi3) and the nodes gathered for each.
+template <int D>
+struct Side {
+  int sign = 0;                    ///< -1: phi_f < 0 (eq. 15), +1: phi_f > 0 (eq. 14)
+  std::vector<Grid<D>> pieces;     ///< cropped grids, parent grid frame
+  std::vector<NodeSet<D>> nodes;   ///< per piece, parent grid frame
+};
+
+/// Index of the piece whose grid is smallest at grid-frame point x (the first on a tie).
+template <int D>
+std::size_t owningPiece(const std::vector<Grid<D>>& pieces, const Vec<D>& x) {
+  if (pieces.size() == 1) return 0;
+  std::size_t best = 0;
+  double bestValue = pieces[0].value(x);
+  for (std::size_t k = 1; k < pieces.size(); ++k) {
+    const double v = pieces[k].value(x);
+    if (v < bestValue) {
+      bestValue = v;
+      best = k;
+    }
+  }
+  return best;
+}
+
+/// Orthonormal tangent directions of a unit normal (D - 1 of them), deterministic.
+template <int D>
+std::vector<Vec<D>> tangentBasis(const Vec<D>& n) {
+  if constexpr (D == 2) {
+    return {Vec<2>(-n[1], n[0])};
+  } else {
+    // Start from the coordinate axis least aligned with n.
+    Eigen::Index axis = 0;
+    n.cwiseAbs().minCoeff(&axis);
+    const Vec<3> e = Vec<3>::Unit(axis);
+    const Vec<3> t1 = (e - n.dot(e) * n).normalized();
+    return {t1, n.cross(t1)};
+  }
+}
+
+/// New surface nodes on a fracture plane inside the parent (section 3.3):
+/// lattice of spacing s in the plane's tangent directions around `centre`
+/// (grid frame), out to `radius`; see splitShape's doc for the rim and weights.
+template <int D>
+NodeSet<D> planeNodes(const Grid<D>& parentGrid, const HalfSpace<D>& planeGrid, const Vec<D>& centre,
+                      double radius, double s) {
+  const Vec<D> origin = centre - planeGrid.distance(centre) * planeGrid.normal;
+  const std::vector<Vec<D>> tangents = tangentBasis<D>(planeGrid.normal);
+  const int half = int(std::ceil(radius / s)) + 1;
+  const int width = 2 * half + 1;
+  int lattice = 1;
+  for (int a = 0; a < D - 1; ++a) lattice *= width;
+
+  // Visit every lattice point; count those inside the parent, keep those
+  // deeper than s/4 (clear of the rim, where the parent's nodes are).
+  NodeSet<D> out;
+  std::size_t insideCount = 0;
+  for (int q = 0; q < lattice; ++q) {
+    Vec<D> p = origin;
+    int rest = q;
+    for (int a = 0; a < D - 1; ++a) {
+      p += double(rest % width - half) * s * tangents[std::size_t(a)];
+      rest /= width;
+    }
+    const double phi = parentGrid.value(p);
+    if (!(phi < 0.0)) continue;
+    ++insideCount;
+    if (phi < -0.25 * s) out.positions.push_back(p);
+  }
+
+  // Spread the section's lattice estimate A = s^(D-1) * insideCount evenly over the kept nodes.
+  if (!out.positions.empty()) {
+    const double section = std::pow(s, D - 1) * double(insideCount);
+    out.weights.assign(out.positions.size(), section / double(out.positions.size()));
+  }
+  return out;
+}
+
+/// Moves a node that a fragment's new rim left off its zero level set (the
+/// multilinear interpolant rounds the max() kink of eq. 14-15 by up to ~h/4)
+/// back onto phi = 0 of the piece's grid: damped Newton steps along the
+/// gradient, at most half a cell each, halved until |phi| decreases, so |phi|
+/// never grows. Nodes already on the surface (|phi| <= 1e-4 h) are not moved.
+template <int D>
+Vec<D> snapToSurface(const Grid<D>& grid, Vec<D> x) {
+  const double h = grid.spacing();
+  Vec<D> grad;
+  double phi = grid.valueAndGradient(x, grad);
+  for (int iteration = 0; iteration < 10 && std::abs(phi) > 1e-4 * h; ++iteration) {
+    // Newton step, capped at half a cell.
+    const double gradSquared = grad.squaredNorm();
+    if (gradSquared < 1e-12) break;
+    Vec<D> step = (phi / gradSquared) * grad;
+    const double length = step.norm();
+    if (length > 0.5 * h) step *= 0.5 * h / length;
+    // Backtracking: the first of 1, 1/2, 1/4, ... of the step that lowers |phi|.
+    bool accepted = false;
+    for (double t = 1.0; t > 1.0 / 64.0 && !accepted; t *= 0.5) {
+      Vec<D> trialGrad;
+      const Vec<D> trial = x - t * step;
+      const double trialPhi = grid.valueAndGradient(trial, trialGrad);
+      if (std::abs(trialPhi) < std::abs(phi)) {
+        x = trial;
+        phi = trialPhi;
+        grad = trialGrad;
+        accepted = true;
+      }
+    }
+    if (!accepted) break;
+  }
+  return x;
+}
+
+/// eq. 15 and eq. 14 in one pass over the parent's grid: minus = max(phi,
+/// phi_f) (the phi_f < 0 side), plus = max(phi, -phi_f) (the phi_f > 0 side),
+/// with phi_f = psi(node position) evaluated once per node (csgIntersection and
+/// csgDifference would evaluate it twice). Nodes are independent, so any thread
+/// count gives the same grids.
+template <int D, class Psi>
+void cutGrids(const Grid<D>& grid, const Psi& psi, Grid<D>& minus, Grid<D>& plus) {
+  minus = grid;
+  plus = grid;
+  const std::int64_t count = std::int64_t(grid.size());
+  std::int64_t firstNaN = count;
+#ifdef LSDEM_HAVE_OPENMP
+#pragma omp parallel for schedule(static) reduction(min : firstNaN) if (count > (1 << 18))
+#endif
+  for (std::int64_t n = 0; n < count; ++n) {
+    const std::size_t node = std::size_t(n);
+    const double f = psi(grid.nodePosition(grid.unlinear(node)));
+    if (std::isnan(f)) {
+      firstNaN = std::min(firstNaN, n);
+      continue;
+    }
+    minus[node] = float(std::max(double(grid[node]), f));
+    plus[node] = float(std::max(double(grid[node]), -f));
+  }
+  if (firstNaN < count) {
+    throw std::invalid_argument("splitShape: the fracture surface is NaN at grid node " + std::to_string(firstNaN));
+  }
+}
+
+/// The face-connected pieces of one side (connectedComponents). A side in one
+/// piece, the common case, skips the components' distance transform: its grid
+/// is the side's grid cropped to the piece's node bounding box plus `padding`
+/// cells (nodes beyond the parent's box take Grid::value's outside extension),
+/// which has the same zero level set; only exterior values farther than a
+/// cell diagonal from the piece differ (connectedComponents raises them
+/// towards the distance, which LS-DEM does not need).
+template <int D>
+std::vector<Grid<D>> sidePieces(const Grid<D>& side, int padding) {
+  std::vector<int> labels;
+  const int count = geometry::labelComponents(side, labels);
+  if (count == 0) return {};
+  if (count > 1) return geometry::connectedComponents(side, padding);
+
+  // Node bounding box of the single piece.
+  geometry::Index<D> lower = side.dims(), upper = geometry::Index<D>::Constant(-1);
+  for (std::size_t n = 0; n < side.size(); ++n) {
+    if (labels[n] < 0) continue;
+    const geometry::Index<D> i = side.unlinear(n);
+    lower = lower.min(i);
+    upper = upper.max(i);
+  }
+  // The crop, at least 2 nodes per axis, filled from the side's grid.
+  const geometry::Index<D> cropLo = lower - padding;
+  const geometry::Index<D> cropHi = (upper + padding).max(cropLo + 1);
+  Grid<D> piece(cropHi - cropLo + 1, side.nodePosition(cropLo), side.spacing());
+  for (std::size_t m = 0; m < piece.size(); ++m) {
+    const geometry::Index<D> gi = cropLo + piece.unlinear(m);
+    piece[m] = side.inBounds(gi) ? side.at(gi) : float(side.value(piece.nodePosition(piece.unlinear(m))));
+  }
+  std::vector<Grid<D>> out;
+  out.push_back(std::move(piece));
+  return out;
+}
+
+}  // namespace
+
+template <int D>
+SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surface, const SplitOptions& options) {
+  // Check the arguments.
+  if (!surface.plane && !surface.field) {
+    throw std::invalid_argument("splitShape: the fracture surface has neither a plane nor a field");
+  }
+  if (!std::isfinite(options.nodesPerCell) || options.nodesPerCell < 0.0) {
+    throw std::invalid_argument("splitShape: options.nodesPerCell must be finite and >= 0, got " +
+                                std::to_string(options.nodesPerCell));
+  }
+  if (options.paddingCells < 3) {
+    throw std::invalid_argument("splitShape: options.paddingCells must be >= 3, got " +
+                                std::to_string(options.paddingCells));
+  }
+  std::optional<HalfSpace<D>> planeBody = surface.plane;
+  if (planeBody) {
+    const double norm = planeBody->normal.norm();
+    if (!std::isfinite(norm) || !(norm > 0.0) || !std::isfinite(planeBody->offset)) {
+      throw std::invalid_argument("splitShape: the fracture plane needs a finite non-zero normal and a finite offset "
+                                  "(|normal| = " + std::to_string(norm) + ", offset = " +
+                                  std::to_string(planeBody->offset) + ")");
+    }
+    planeBody->normal /= norm;
+    planeBody->offset /= norm;
+  }
+
+  const Grid<D>& grid = parent.grid();
+  const Rigid<D>& bodyToGrid = parent.bodyToGrid();
+  const double h = grid.spacing();
+  const double nodesPerCell = options.nodesPerCell > 0.0 ? options.nodesPerCell : parent.options().nodesPerCell;
+  geometry::ShapeOptions childOptions = parent.options();
+  childOptions.nodesPerCell = nodesPerCell;
+
+  SplitResult<D> result;
+  result.parentVolume = parent.volume();
+
+  // The fracture surface in the parent's grid frame: x_body = bodyToGrid^-1(x_grid).
+  // A plane n.x_b = c becomes (R n).x_g = c + (R n).t.
+  std::optional<HalfSpace<D>> planeGrid;
+  if (planeBody) {
+    HalfSpace<D> p;
+    p.normal = bodyToGrid.rotation * planeBody->normal;
+    p.offset = planeBody->offset + p.normal.dot(bodyToGrid.translation);
+    planeGrid = p;
+  }
+
+  // eq. 15 (phi_f < 0 side) and eq. 14 (phi_f > 0 side), each cut into its
+  // face-connected pieces.
+  Grid<D> minusGrid, plusGrid;
+  if (planeGrid) {
+    const HalfSpace<D> p = *planeGrid;
+    cutGrids(grid, [&p](const Vec<D>& x) { return p.distance(x); }, minusGrid, plusGrid);
+  } else {
+    cutGrids(grid, [&](const Vec<D>& x) { return surface.field(bodyToGrid.applyInverse(x)); }, minusGrid, plusGrid);
+  }
+  std::array<Side<D>, 2> sides;
+  sides[0].sign = -1;
+  sides[0].pieces = sidePieces(minusGrid, options.paddingCells);
+  sides[1].sign = +1;
+  sides[1].pieces = sidePieces(plusGrid, options.paddingCells);
+
+  // A surface that leaves one side without interior does not split the grain.
+  if (sides[0].pieces.empty() || sides[1].pieces.empty()) return result;
+  for (Side<D>& side : sides) side.nodes.resize(side.pieces.size());
+
+  // Nodes of a flat cut: the parent's by the sign of phi_f, then the new plane
+  // nodes on both sides, each to the piece whose grid is smallest at it.
+  if (planeGrid) {
+    const NodeSet<D>& parentNodes = parent.nodes();
+    for (std::size_t i = 0; i < parentNodes.size(); ++i) {
+      const Vec<D> x = bodyToGrid.apply(parentNodes.positions[i]);
+      Side<D>& side = sides[planeGrid->distance(x) < 0.0 ? 0 : 1];
+      NodeSet<D>& target = side.nodes[owningPiece(side.pieces, x)];
+      target.positions.push_back(x);
+      target.weights.push_back(parentNodes.weights[i]);
+    }
+    const NodeSet<D> onPlane =
+        planeNodes(grid, *planeGrid, bodyToGrid.translation, parent.boundingRadius(), h / nodesPerCell);
+    for (Side<D>& side : sides) {
+      for (std::size_t i = 0; i < onPlane.size(); ++i) {
+        NodeSet<D>& target = side.nodes[owningPiece(side.pieces, onPlane.positions[i])];
+        target.positions.push_back(onPlane.positions[i]);
+        target.weights.push_back(onPlane.weights[i]);
+      }
+    }
+  }
+
+  // Each piece becomes a shape: its nodes are put back on its own zero level
+  // set (the rim's kink moves it); a piece with no nodes takes them from its
+  // own grid (curved cuts always do), and is dropped when it has none even then.
+  const Rigid<D> gridToParentBody = bodyToGrid.inverse();
+  for (Side<D>& side : sides) {
+    for (std::size_t k = 0; k < side.pieces.size(); ++k) {
+      NodeSet<D> nodes = std::move(side.nodes[k]);
+      for (Vec<D>& x : nodes.positions) x = snapToSurface(side.pieces[k], x);
+      if (nodes.empty()) {
+        if constexpr (D == 2) {
+          nodes = geometry::surfaceNodes(side.pieces[k], nodesPerCell);
+        } else {
+          nodes = geometry::surfaceNodes(side.pieces[k], nodesPerCell, nullptr);
+        }
+      }
+      if (nodes.empty()) {
+        result.droppedRawVolume += geometry::massProperties(side.pieces[k], childOptions.massMethod).volume;
+        ++result.droppedCount;
+        continue;
+      }
+      Fragment<D> fragment;
+      fragment.shape = Shape<D>::fromGridAndNodes(std::move(side.pieces[k]), std::move(nodes), childOptions);
+      fragment.childToParent = gridToParentBody * fragment.shape->bodyToGrid();
+      fragment.rawVolume = fragment.shape->volume();
+      fragment.side = side.sign;
+      result.rawVolumeSum += fragment.rawVolume;
+      result.fragments.push_back(std::move(fragment));
+    }
+  }
+  if (result.fragments.size() < 2) {
+    result.fragments.clear();
+    result.rawVolumeSum = 0.0;
+    return result;
+  }
+  result.isSplit = true;
+  result.rawRelativeError = (result.rawVolumeSum + result.droppedRawVolume - result.parentVolume) / result.parentVolume;
+
+  // Carry the parent's volume exactly: proportional correction of every fragment.
+  const double scale = result.parentVolume / result.rawVolumeSum;
+  for (Fragment<D>& fragment : result.fragments) fragment.volume = fragment.rawVolume * scale;
+
+  // Move the fragments so their volume-weighted centroid is the parent's (0 in its body frame).
+  Vec<D> firstMoment = Vec<D>::Zero();
+  for (const Fragment<D>& fragment : result.fragments) firstMoment += fragment.volume * fragment.childToParent.translation;
+  result.centroidShift = firstMoment / result.parentVolume;
+  for (Fragment<D>& fragment : result.fragments) fragment.childToParent.translation -= result.centroidShift;
+
+  // Inertia mismatch: the fragments' corrected inertias moved to the parent's
+  // centroid (parallel axes) against the parent's, per unit density. In 2D the
+  // trace of tr(S) 1 - S is tr(S), the polar moment (eq. 30), and the trace of
+  // the parallel-axis term is |c|^2.
+  Mat<D> combined = Mat<D>::Zero();
+  for (const Fragment<D>& fragment : result.fragments) {
+    const Mat<D>& rc = fragment.childToParent.rotation;
+    const Vec<D>& c = fragment.childToParent.translation;
+    combined += fragment.massScale() * rc * fragment.shape->mass().inertiaTensor() * rc.transpose() +
+                fragment.volume * (c.squaredNorm() * Mat<D>::Identity() - c * c.transpose());
+  }
+  const Mat<D> parentInertia = parent.mass().inertiaTensor();
+  if constexpr (D == 2) {
+    result.inertiaRelativeError = std::abs(combined.trace() - parentInertia.trace()) / parentInertia.trace();
+  } else {
+    result.inertiaRelativeError = (combined - parentInertia).norm() / parentInertia.norm();
+  }
+  return result;
+}
+
+template <int D>
+FragmentState<D> fragmentState(const Fragment<D>& fragment, const Vec<D>& parentPosition, const Mat<D>& parentRotation,
+                               const Vec<D>& parentVelocity, const dynamics::Spin<D>& parentSpin) {
+  // Pose: the child's centroid and principal frame carried by the parent's pose.
+  FragmentState<D> state;
+  const Vec<D> lever = parentRotation * fragment.childToParent.translation;
+  state.position = parentPosition + lever;
+  state.rotation = parentRotation * fragment.childToParent.rotation;
+  // Velocity: the parent's rigid-body velocity at the child's centroid.
+  state.velocity = parentVelocity + dynamics::Rotation<D>::velocityAt(parentSpin, lever);
+  state.angularVelocity = parentSpin;
+  return state;
+}
+
+template SplitResult<2> splitShape<2>(const Shape<2>&, const FractureSurface<2>&, const SplitOptions&);
+template SplitResult<3> splitShape<3>(const Shape<3>&, const FractureSurface<3>&, const SplitOptions&);
+template FragmentState<2> fragmentState<2>(const Fragment<2>&, const Vec<2>&, const Mat<2>&, const Vec<2>&,
+                                           const dynamics::Spin<2>&);
+template FragmentState<3> fragmentState<3>(const Fragment<3>&, const Vec<3>&, const Mat<3>&, const Vec<3>&,
+                                           const dynamics::Spin<3>&);
+
+}  // namespace lsdem::breakage

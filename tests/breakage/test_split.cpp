@@ -1,0 +1,388 @@
+#include "lsdem/breakage/Split.h"
+
+#include "lsdem/geometry/Primitives.h"
+#include "lsdem/geometry/Shape.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#ifdef LSDEM_HAVE_OPENMP
+#include <omp.h>
+#endif
+
+using namespace lsdem::breakage;
+using lsdem::geometry::HalfSpace;
+using lsdem::geometry::Mat;
+using lsdem::geometry::Shape;
+using lsdem::geometry::Vec;
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// A plane given in the shape's grid frame (n.x_g = offset), moved to its body frame.
+template <int D>
+HalfSpace<D> bodyPlane(const Shape<D>& shape, const Vec<D>& normalGrid, double offsetGrid) {
+  HalfSpace<D> p;
+  p.normal = shape.bodyToGrid().rotation.transpose() * normalGrid;
+  p.offset = offsetGrid - normalGrid.dot(shape.bodyToGrid().translation);
+  return p;
+}
+
+template <int D>
+FractureSurface<D> flat(const HalfSpace<D>& plane) {
+  FractureSurface<D> s;
+  s.plane = plane;
+  return s;
+}
+
+// Sphere (circle) of radius R with h = R / 10 (20 cells across the diameter).
+template <int D>
+std::shared_ptr<const Shape<D>> ball(double radius) {
+  return Shape<D>::fromGrid(lsdem::geometry::sphereGrid<D>(radius, radius / 10.0));
+}
+
+// Volume (area) of the part of the ball beyond the plane at distance a from the centre.
+template <int D>
+double capVolume(double r, double a) {
+  if constexpr (D == 2) {
+    return r * r * std::acos(a / r) - a * std::sqrt(r * r - a * a);
+  } else {
+    const double hc = r - a;
+    return kPi * hc * hc * (3.0 * r - hc) / 3.0;
+  }
+}
+// Distance from the centre to the centroid of that part.
+template <int D>
+double capCentroid(double r, double a) {
+  if constexpr (D == 2) {
+    const double t = std::acos(a / r);
+    return 4.0 * r * std::pow(std::sin(t), 3) / (3.0 * (2.0 * t - std::sin(2.0 * t)));
+  } else {
+    const double hc = r - a;
+    return 3.0 * (2.0 * r - hc) * (2.0 * r - hc) / (4.0 * (3.0 * r - hc));
+  }
+}
+// Boundary length (area) of that part: arc (cap) plus the flat section.
+template <int D>
+double capBoundary(double r, double a) {
+  if constexpr (D == 2) {
+    return 2.0 * r * std::acos(a / r) + 2.0 * std::sqrt(r * r - a * a);
+  } else {
+    return 2.0 * kPi * r * (r - a) + kPi * (r * r - a * a);
+  }
+}
+
+// Largest |phi| of a fragment's own level set at its nodes, and the sum of its weights.
+template <int D>
+double worstNodeValue(const Shape<D>& shape) {
+  double worst = 0.0;
+  for (const Vec<D>& x : shape.nodes().positions) worst = std::max(worst, std::abs(shape.value(x)));
+  return worst;
+}
+
+template <int D>
+void checkBallSplit() {
+  const double r = 1.0, h = r / 10.0, a = 0.3;
+  const auto parent = ball<D>(r);
+  const SplitResult<D> split = splitShape<D>(*parent, flat<D>({Vec<D>::UnitX(), a}));
+  ASSERT_TRUE(split.isSplit);
+  ASSERT_EQ(split.fragments.size(), 2u);
+  EXPECT_EQ(split.droppedCount, 0);
+  EXPECT_LT(std::abs(split.rawRelativeError), 0.01);
+  EXPECT_LT(split.inertiaRelativeError, 0.01);
+  EXPECT_LT(split.centroidShift.norm(), 0.01 * h);
+  double sum = 0.0;
+  for (const Fragment<D>& f : split.fragments) {
+    // Side -1 is x < a (the big part, the cap beyond -a mirrored); side +1 the small cap.
+    const double signedA = f.side < 0 ? -a : a;
+    const double expectedVolume = capVolume<D>(r, signedA);
+    const double expectedCentroid = capCentroid<D>(r, signedA) * (f.side < 0 ? -1.0 : 1.0);
+    EXPECT_NEAR(f.rawVolume, expectedVolume, 0.01 * expectedVolume) << "side " << f.side;
+    EXPECT_NEAR(f.volume, expectedVolume, 0.01 * expectedVolume) << "side " << f.side;
+    EXPECT_NEAR(f.childToParent.translation[0], expectedCentroid, 0.01 * r) << "side " << f.side;
+    EXPECT_NEAR(f.childToParent.translation.template tail<D - 1>().norm(), 0.0, 0.01 * r);
+    // Nodes on the fragment's own surface; weights add up to its boundary.
+    EXPECT_LT(worstNodeValue(*f.shape), 0.1 * h) << "side " << f.side;
+    const double boundary = capBoundary<D>(r, signedA);
+    EXPECT_NEAR(f.shape->nodes().totalWeight(), boundary, 0.02 * boundary) << "side " << f.side;
+    // The child's body frame really holds the child: its centroid is 0 there.
+    EXPECT_LT(f.shape->mass().centroid.norm(), 1e-12);
+    sum += f.volume;
+  }
+  EXPECT_NEAR(sum, split.parentVolume, 1e-12 * split.parentVolume);
+  EXPECT_DOUBLE_EQ(split.parentVolume, parent->volume());
+}
+
+}  // namespace
+
+TEST(Split, CircleByLineGivesCircularSegments) { checkBallSplit<2>(); }
+TEST(Split, SphereByPlaneGivesSphericalCaps) { checkBallSplit<3>(); }
+
+// A plane through the centre of a box: two equal halves with the half box's inertia.
+TEST(Split, BoxHalves2D) {
+  const Vec<2> half(1.0, 0.6);
+  const auto parent = Shape<2>::fromGrid(lsdem::geometry::boxGrid<2>(half, 0.0, 0.1));
+  const SplitResult<2> split = splitShape<2>(*parent, flat<2>({Vec<2>::UnitX(), 0.0}));
+  ASSERT_EQ(split.fragments.size(), 2u);
+  const double v = 1.0 * 1.2;  // half box 1.0 x 1.2
+  const double polar = v * (1.0 * 1.0 + 1.2 * 1.2) / 12.0;
+  for (const Fragment<2>& f : split.fragments) {
+    EXPECT_NEAR(f.volume, v, 0.01 * v);
+    EXPECT_NEAR(f.massScale() * f.shape->mass().polarMoment(), polar, 0.02 * polar);
+    EXPECT_NEAR(std::abs(f.childToParent.translation[0]), 0.5, 0.01);
+  }
+  EXPECT_NEAR(split.fragments[0].volume, split.fragments[1].volume, 1e-3 * v);
+}
+
+TEST(Split, BoxHalves3D) {
+  const Vec<3> half(1.0, 0.7, 0.5);
+  const auto parent = Shape<3>::fromGrid(lsdem::geometry::boxGrid<3>(half, 0.0, 0.1));
+  const SplitResult<3> split = splitShape<3>(*parent, flat<3>({Vec<3>::UnitX(), 0.0}));
+  ASSERT_EQ(split.fragments.size(), 2u);
+  // Half box of sides 1.0 x 1.4 x 1.0: principal inertias per unit density, descending second moment order.
+  const double v = 1.0 * 1.4 * 1.0;
+  const Vec<3> sides(1.0, 1.4, 1.0);
+  Vec<3> inertia;
+  for (int i = 0; i < 3; ++i) {
+    inertia[i] = v * (sides.squaredNorm() - sides[i] * sides[i]) / 12.0;
+  }
+  std::sort(inertia.data(), inertia.data() + 3);
+  for (const Fragment<3>& f : split.fragments) {
+    EXPECT_NEAR(f.volume, v, 0.01 * v);
+    Vec<3> got = f.massScale() * f.shape->mass().principalInertia();
+    std::sort(got.data(), got.data() + 3);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(got[i], inertia[i], 0.02 * inertia[i]) << i;
+    EXPECT_NEAR(std::abs(f.childToParent.translation[0]), 0.5, 0.01);
+  }
+  EXPECT_NEAR(split.fragments[0].volume, split.fragments[1].volume, 1e-3 * v);
+}
+
+// A U-shaped grain cut through both arms: the base on one side, two arms on the other.
+TEST(Split, ConcaveGrainCutThroughBothArmsGivesThreeFragments) {
+  const std::vector<Vec<2>> u = {{-3, -3}, {3, -3}, {3, 3}, {1, 3}, {1, -1}, {-1, -1}, {-1, 3}, {-3, 3}};
+  const auto parent = Shape<2>::fromGrid(lsdem::geometry::polygonGrid(u, 0.3));
+  const double h = parent->grid().spacing();
+  const SplitResult<2> split = splitShape<2>(*parent, flat<2>(bodyPlane<2>(*parent, Vec<2>::UnitY(), 1.0)));
+  ASSERT_TRUE(split.isSplit);
+  ASSERT_EQ(split.fragments.size(), 3u);
+  EXPECT_EQ(split.fragments[0].side, -1);
+  EXPECT_EQ(split.fragments[1].side, +1);
+  EXPECT_EQ(split.fragments[2].side, +1);
+  EXPECT_NEAR(split.fragments[0].volume, 20.0, 0.03 * 20.0);
+  double sum = 0.0;
+  for (const Fragment<2>& f : split.fragments) {
+    if (f.side > 0) {
+      EXPECT_NEAR(f.volume, 4.0, 0.03 * 4.0);
+      // Arm centred at x = +-2, y = 2 (grid frame).
+      const Vec<2> c = parent->bodyToGrid().apply(f.childToParent.translation);
+      EXPECT_NEAR(std::abs(c[0]), 2.0, 0.03 * 2.0);
+      EXPECT_NEAR(c[1], 2.0, 0.03 * 2.0);
+      EXPECT_NEAR(f.shape->nodes().totalWeight(), 8.0, 0.03 * 8.0);
+    }
+    EXPECT_LT(worstNodeValue(*f.shape), 0.1 * h);
+    sum += f.volume;
+  }
+  EXPECT_NEAR(sum, split.parentVolume, 1e-12 * split.parentVolume);
+}
+
+// Momentum: the rigid-body rule conserves linear momentum exactly and angular
+// momentum up to (I_comb - I_parent) w, both checked against the formula.
+template <int D>
+void checkMomentum(const Shape<D>& parent, const FractureSurface<D>& surface) {
+  using Rot = lsdem::dynamics::Rotation<D>;
+  const SplitResult<D> split = splitShape<D>(parent, surface);
+  ASSERT_TRUE(split.isSplit);
+  const double rho = 2650.0;
+  Vec<D> x, v;
+  Mat<D> rot;
+  lsdem::dynamics::Spin<D> w;
+  if constexpr (D == 2) {
+    x = Vec<2>(0.3, -1.2);
+    v = Vec<2>(2.0, -0.5);
+    rot = Rot::matrix(0.7);
+    w = 3.0;
+  } else {
+    x = Vec<3>(0.3, -1.2, 0.4);
+    v = Vec<3>(2.0, -0.5, 1.0);
+    rot = Eigen::AngleAxisd(0.7, Vec<3>(1, 2, 3).normalized()).toRotationMatrix();
+    w = Vec<3>(3.0, -1.0, 2.0);
+  }
+  // Spin angular momentum I w of a body with inertia per unit density `inertia` (body frame) and mass scale.
+  auto spin = [&](const Mat<D>& inertiaBody, const Mat<D>& bodyToWorld, double scale) {
+    const Mat<D> world = scale * rho * bodyToWorld * inertiaBody * bodyToWorld.transpose();
+    if constexpr (D == 2) {
+      return lsdem::dynamics::Spin<D>(world.trace() * w);
+    } else {
+      return lsdem::dynamics::Spin<D>(world * w);
+    }
+  };
+  const double mass = rho * split.parentVolume;
+  const Vec<D> p0 = mass * v;
+  const lsdem::dynamics::Spin<D> l0 =
+      spin(parent.mass().inertiaTensor(), rot, 1.0) + Rot::moment(x, mass * v);
+
+  Vec<D> p = Vec<D>::Zero(), massMoment = Vec<D>::Zero();
+  lsdem::dynamics::Spin<D> l = Rot::zeroSpin();
+  Mat<D> combined = Mat<D>::Zero();  // I_comb per unit density, parent body frame
+  for (const Fragment<D>& f : split.fragments) {
+    const FragmentState<D> s = fragmentState<D>(f, x, rot, v, w);
+    const double m = rho * f.volume;
+    p += m * s.velocity;
+    massMoment += m * s.position;
+    l += spin(f.shape->mass().inertiaTensor(), s.rotation, f.massScale()) + Rot::moment(s.position, m * s.velocity);
+    EXPECT_TRUE(s.angularVelocity == w);
+    const Mat<D>& rc = f.childToParent.rotation;
+    const Vec<D>& c = f.childToParent.translation;
+    combined += f.massScale() * rc * f.shape->mass().inertiaTensor() * rc.transpose() +
+                f.volume * (c.squaredNorm() * Mat<D>::Identity() - c * c.transpose());
+  }
+  // Linear momentum and centre of mass to round-off.
+  const double speed = v.norm() + std::sqrt(Rot::dot(w, w)) * parent.boundingRadius();
+  EXPECT_LT((p - p0).norm(), 1e-13 * mass * speed);
+  EXPECT_LT((massMoment - mass * x).norm(), 1e-13 * mass * (x.norm() + parent.boundingRadius()));
+  // Angular momentum: the change is exactly (I_comb - I_parent) w (to round-off),
+  // and small (the inertia mismatch the split reports).
+  const lsdem::dynamics::Spin<D> l0Spin = spin(parent.mass().inertiaTensor(), rot, 1.0);
+  const lsdem::dynamics::Spin<D> predicted =
+      spin(combined, rot, 1.0) - l0Spin;
+  const lsdem::dynamics::Spin<D> dl = l - l0;
+  const double spinScale = std::sqrt(Rot::dot(l0Spin, l0Spin)) + mass * x.norm() * speed;
+  EXPECT_LT(std::sqrt(Rot::dot(dl - predicted, dl - predicted)), 1e-12 * spinScale);
+  EXPECT_LT(std::sqrt(Rot::dot(dl, dl)), 0.01 * std::sqrt(Rot::dot(l0Spin, l0Spin)));
+  EXPECT_LT(split.inertiaRelativeError, 0.01);
+}
+
+TEST(Split, MomentumRule2D) {
+  const std::vector<Vec<2>> u = {{-3, -3}, {3, -3}, {3, 3}, {1, 3}, {1, -1}, {-1, -1}, {-1, 3}, {-3, 3}};
+  const auto parent = Shape<2>::fromGrid(lsdem::geometry::polygonGrid(u, 0.3));
+  checkMomentum<2>(*parent, flat<2>(bodyPlane<2>(*parent, Vec<2>(0.3, 1.0).normalized(), 0.8)));
+}
+
+TEST(Split, MomentumRule3D) {
+  const auto parent = Shape<3>::fromGrid(lsdem::geometry::ellipsoidGrid<3>(Vec<3>(1.0, 0.7, 0.5), 0.1));
+  checkMomentum<3>(*parent, flat<3>({Vec<3>(1.0, 0.4, -0.2).normalized(), 0.25}));
+}
+
+// A plane that misses the grain leaves it whole.
+TEST(Split, PlaneThatMissesLeavesTheGrainWhole) {
+  const auto parent = ball<2>(1.0);
+  const SplitResult<2> split = splitShape<2>(*parent, flat<2>({Vec<2>(1.0, 1.0), 2.0 * std::sqrt(2.0)}));
+  EXPECT_FALSE(split.isSplit);
+  EXPECT_TRUE(split.fragments.empty());
+  EXPECT_DOUBLE_EQ(split.parentVolume, parent->volume());
+  const SplitResult<2> other = splitShape<2>(*parent, flat<2>({Vec<2>::UnitY(), -1.5}));
+  EXPECT_FALSE(other.isSplit);
+}
+
+// Tangent and nearly tangent planes: no crash; either no split or a valid
+// sliver whose volumes still add up to the parent's.
+template <int D>
+void checkGrazing() {
+  const double r = 1.0, h = r / 10.0;
+  const auto parent = ball<D>(r);
+  int splits = 0;
+  for (double offset : {r, r - 0.05 * h, r - 0.7 * h, r - 1.2 * h, r - 1.6 * h, r - 2.3 * h}) {
+    const SplitResult<D> split = splitShape<D>(*parent, flat<D>({Vec<D>::UnitX(), offset}));
+    if (!split.isSplit) {
+      EXPECT_TRUE(split.fragments.empty());
+      continue;
+    }
+    double sum = 0.0;
+    for (const Fragment<D>& f : split.fragments) {
+      EXPECT_GT(f.rawVolume, 0.0);
+      EXPECT_FALSE(f.shape->nodes().empty());
+      sum += f.volume;
+    }
+    EXPECT_NEAR(sum, split.parentVolume, 1e-12 * split.parentVolume) << offset;
+    EXPECT_LT(std::abs(split.rawRelativeError), 0.02) << offset;  // ~1% for a 1-cell sliver
+    ++splits;
+  }
+  // The deeper cuts do make a sliver.
+  EXPECT_GE(splits, 1);
+}
+TEST(Split, GrazingPlane2D) { checkGrazing<2>(); }
+TEST(Split, GrazingPlane3D) { checkGrazing<3>(); }
+
+// A curved cut: a circular bite out of a circle; the lens on the phi_f < 0 side.
+TEST(Split, CurvedFieldCut) {
+  const double r = 1.0, h = r / 10.0, rb = 0.6, d = 1.0;  // bite circle radius rb centred at (d, 0)
+  const auto parent = ball<2>(r);
+  FractureSurface<2> surface;
+  surface.field = [&](const Vec<2>& x) { return (x - Vec<2>(d, 0.0)).norm() - rb; };
+  const SplitResult<2> split = splitShape<2>(*parent, surface);
+  ASSERT_EQ(split.fragments.size(), 2u);
+  // Lens area of two circles (radii r, rb, centre distance d).
+  const double lens = r * r * std::acos((d * d + r * r - rb * rb) / (2 * d * r)) +
+                      rb * rb * std::acos((d * d + rb * rb - r * r) / (2 * d * rb)) -
+                      0.5 * std::sqrt((-d + r + rb) * (d + r - rb) * (d - r + rb) * (d + r + rb));
+  EXPECT_EQ(split.fragments[0].side, -1);
+  EXPECT_NEAR(split.fragments[0].volume, lens, 0.02 * lens);
+  EXPECT_NEAR(split.fragments[1].volume, kPi * r * r - lens, 0.01 * (kPi * r * r - lens));
+  for (const Fragment<2>& f : split.fragments) EXPECT_LT(worstNodeValue(*f.shape), 0.1 * h);
+}
+
+// Non-unit normals are normalised: the same split as with the unit normal.
+TEST(Split, PlaneNormalIsNormalised) {
+  const auto parent = ball<2>(1.0);
+  const SplitResult<2> a = splitShape<2>(*parent, flat<2>({Vec<2>(1.0, 0.0), 0.2}));
+  const SplitResult<2> b = splitShape<2>(*parent, flat<2>({Vec<2>(4.0, 0.0), 0.8}));
+  ASSERT_EQ(a.fragments.size(), b.fragments.size());
+  for (std::size_t k = 0; k < a.fragments.size(); ++k) {
+    EXPECT_DOUBLE_EQ(a.fragments[k].volume, b.fragments[k].volume);
+  }
+}
+
+TEST(Split, RejectsBadInput) {
+  const auto parent = ball<2>(1.0);
+  EXPECT_THROW(splitShape<2>(*parent, FractureSurface<2>{}), std::invalid_argument);
+  EXPECT_THROW(splitShape<2>(*parent, flat<2>({Vec<2>::Zero(), 0.0})), std::invalid_argument);
+  EXPECT_THROW(splitShape<2>(*parent, flat<2>({Vec<2>(std::nan(""), 1.0), 0.0})), std::invalid_argument);
+  EXPECT_THROW(splitShape<2>(*parent, flat<2>({Vec<2>::UnitX(), INFINITY})), std::invalid_argument);
+  SplitOptions bad;
+  bad.nodesPerCell = -1.0;
+  EXPECT_THROW(splitShape<2>(*parent, flat<2>({Vec<2>::UnitX(), 0.0}), bad), std::invalid_argument);
+  bad = {};
+  bad.paddingCells = 2;
+  EXPECT_THROW(splitShape<2>(*parent, flat<2>({Vec<2>::UnitX(), 0.0}), bad), std::invalid_argument);
+}
+
+// The node density option sets the spacing of the new plane nodes.
+TEST(Split, NodeDensityOption) {
+  const auto parent = ball<2>(1.0);
+  SplitOptions dense;
+  dense.nodesPerCell = 4.0;
+  const SplitResult<2> split = splitShape<2>(*parent, flat<2>({Vec<2>::UnitX(), 0.0}), dense);
+  ASSERT_EQ(split.fragments.size(), 2u);
+  // Chord of length 2 at spacing h/4 = 0.025: about 80 plane nodes on each half.
+  for (const Fragment<2>& f : split.fragments) {
+    int onPlane = 0;
+    for (const Vec<2>& x : f.shape->nodes().positions) {
+      if (std::abs(f.childToParent.apply(x)[0] + split.centroidShift[0]) < 1e-9) ++onPlane;
+    }
+    EXPECT_NEAR(onPlane, 80, 4);
+    EXPECT_DOUBLE_EQ(f.shape->options().nodesPerCell, 4.0);
+  }
+}
+
+#ifdef LSDEM_HAVE_OPENMP
+TEST(Split, SameResultForAnyThreadCount) {
+  const auto parent = ball<3>(1.0);
+  const FractureSurface<3> cut = flat<3>({Vec<3>(0.3, 1.0, -0.5), 0.1});
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const SplitResult<3> one = splitShape<3>(*parent, cut);
+  omp_set_num_threads(std::max(2, threads));
+  const SplitResult<3> many = splitShape<3>(*parent, cut);
+  omp_set_num_threads(threads);
+  ASSERT_EQ(one.fragments.size(), many.fragments.size());
+  for (std::size_t k = 0; k < one.fragments.size(); ++k) {
+    EXPECT_EQ(one.fragments[k].volume, many.fragments[k].volume);
+    EXPECT_EQ(one.fragments[k].childToParent.translation, many.fragments[k].childToParent.translation);
+    EXPECT_EQ(one.fragments[k].shape->nodes().positions, many.fragments[k].shape->nodes().positions);
+  }
+}
+#endif
