@@ -11,13 +11,17 @@ std::size_t Particles<D>::add(const ParticleDef<D>& def) {
   if (!(def.density > 0.0) || !std::isfinite(def.density)) {
     throw std::invalid_argument("particle density must be positive, got " + std::to_string(def.density));
   }
+  if (!(def.massScale > 0.0) || !std::isfinite(def.massScale)) {
+    throw std::invalid_argument("particle massScale must be positive, got " + std::to_string(def.massScale));
+  }
   const auto& mp = def.shape->mass();
-  const double m = def.density * mp.volume;
+  const double rho = def.density * def.massScale;
+  const double m = rho * mp.volume;
   Spin<D> I;
   if constexpr (D == 2) {
-    I = def.density * mp.polarMoment();
+    I = rho * mp.polarMoment();
   } else {
-    I = def.density * mp.principalInertia();
+    I = rho * mp.principalInertia();
   }
 
   position.push_back(def.position);

@@ -143,6 +143,12 @@ void World<D>::removeParticle(std::size_t index, const std::string& reason) {
 }
 
 template <int D>
+void World<D>::recordRemoval(const RemovedParticle& r, double kineticEnergy) {
+  removed_.push_back(r);
+  energy_.removedEnergy += kineticEnergy;
+}
+
+template <int D>
 std::size_t World<D>::addTool(const ToolDef<D>& def) {
   if (!def.shape) throw std::invalid_argument("tool '" + def.name + "' needs a shape");
   tools_.push_back(def);

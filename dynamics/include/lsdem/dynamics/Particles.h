@@ -35,6 +35,10 @@ template <int D>
 struct ParticleDef {
   std::shared_ptr<const geometry::Shape<D>> shape;  ///< required
   double density = 2650.0;                          ///< kg/m^3 (kg/m^2 per unit thickness in 2D)
+  /// Factor (> 0) on the mass AND the inertia computed from shape x density:
+  /// breakage's exact-mass correction of a fragment (breakage/Split.h,
+  /// Fragment::massScale()). 1 for an ordinary particle.
+  double massScale = 1.0;
   Vec<D> position = Vec<D>::Zero();                 ///< centroid, world frame, m
   Orientation<D> orientation = Rotation<D>::identity();
   Vec<D> velocity = Vec<D>::Zero();                 ///< m/s
@@ -74,8 +78,8 @@ class Particles {
   bool empty() const { return position.empty(); }
 
   /// @brief Adds a particle; returns its index. Mass and inertia come from
-  /// the shape's per-unit-density properties times `def.density`.
-  /// @note Throws std::invalid_argument for a missing shape or a density <= 0.
+  /// the shape's per-unit-density properties times `def.density` times `def.massScale`.
+  /// @note Throws std::invalid_argument for a missing shape, a density <= 0 or a massScale <= 0.
   std::size_t add(const ParticleDef<D>& def);
   /// @brief Removes particle `index` by moving the last particle into its slot.
   void remove(std::size_t index);

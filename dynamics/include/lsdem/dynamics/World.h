@@ -113,6 +113,10 @@ class World {
   /// @brief Removes particle `index`, recording it (for mass balance and size
   /// distributions) with `reason`.
   void removeParticle(std::size_t index, const std::string& reason);
+  /// @brief Records a removal of matter that never became a particle (breakage
+  /// fines): appends `r` to removed() and adds `kineticEnergy` (J) to the
+  /// ledger's removedEnergy.
+  void recordRemoval(const RemovedParticle& r, double kineticEnergy);
   std::size_t addTool(const ToolDef<D>& def);
   std::size_t addPlane(const PlaneDef<D>& def);
   /// @brief Declares one more effect (breakage plugs in here).

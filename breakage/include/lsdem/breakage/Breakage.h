@@ -1,0 +1,175 @@
+#pragma once
+/// @file Breakage.h
+/// @brief Brittle breakage as one effect a scene declares (paper section 3):
+/// Weibull strengths (eq. 11-13), grain stresses (eq. 5-6) against a criterion
+/// (eq. 7-10), fracture planes through the strongest contacts (eq. 18-21),
+/// level-set splitting (eq. 14-16) and fines removal.
+///
+/// The effect runs in World::afterStep, between steps, and reads the contacts
+/// the step closed with (DESIGN "One step"):
+///   1. every particle without a strength (strength <= 0) gets its Weibull
+///      strength, sampleStrength(weibull, seed, global id, equivalent diameter);
+///   2. grain stresses and principal stresses from this step's contacts; each
+///      particle whose criterion fails at its strength is queued with its
+///      fracture plane (fracturePlane, or bucklingPlane for slender grains when
+///      the buckling mode is on; held, not queued, when no plane is defined),
+///      and so is each manual break that is due;
+///   3. the queue is applied in ascending global id: the parent is split by
+///      its plane (mapped to the parent's body frame); if it does not split,
+///      nothing happens; else the parent leaves the store (not as a removal: its
+///      matter lives on) and each fragment is added with the parent's density
+///      (parent mass / parent shape volume), the split's exact-mass factor,
+///      the rigid-body pose and velocity of fragmentState(), generation + 1,
+///      birth time now and strength childStrength() (eq. 13); a fragment below
+///      minVolume or minNodes is recorded with World::recordRemoval as "fines"
+///      with its kinetic energy instead;
+///   4. world.particlesChanged() once after the batch (the time step is re-checked).
+///
+/// Mass: fragments + fines carry the parent's mass exactly (to round-off;
+/// Split.h). Energy: the kinetic energy of a broken parent leaves the ledger's
+/// addedEnergy and that of its kept fragments enters it, so addedEnergy
+/// accumulates the net change of kinetic energy by splitting; fines carry
+/// theirs to removedEnergy.
+///
+/// Contacts and indices. The stresses need the contact records to describe
+/// the particles as they are. When an effect that ran before this one in the
+/// same afterStep added or removed particles (a removal recorded, or a particle
+/// born, at the current time), the records are stale: that step's stress
+/// evaluation is skipped (strengths and manual breaks still run) and counted in
+/// skippedSteps(). Declare breakage before such effects to avoid it.
+///
+/// Cost: an absent effect costs nothing (the scene adds it). A present one
+/// walks the particles and the contact records once per step into buffers it
+/// reuses; it allocates only when it breaks something.
+
+#include "lsdem/breakage/Criteria.h"
+#include "lsdem/breakage/FracturePlane.h"
+#include "lsdem/breakage/GrainStress.h"
+#include "lsdem/breakage/Split.h"
+#include "lsdem/breakage/Weibull.h"
+#include "lsdem/dynamics/Effect.h"
+#include "lsdem/dynamics/World.h"
+#include "lsdem/geometry/Primitives.h"
+#include "lsdem/geometry/Types.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace lsdem::breakage {
+
+/// A prescribed first break (demolition): particle `particle` is split by
+/// `plane` at the first step ending at or after `time`, whatever its stress.
+template <int D>
+struct ManualBreak {
+  std::uint64_t particle = 0;                 ///< global id of the particle
+  double time = 0.0;                          ///< s
+  geometry::HalfSpace<D> plane;               ///< fracture plane, WORLD frame (normal need not be unit)
+};
+
+/// Everything that configures the breakage effect (STYLE 7).
+template <int D>
+struct BreakageDef {
+  CriterionDef criterion;        ///< which criterion (eq. 7-10) and its reference limits
+  WeibullDef weibull;            ///< strength distribution (eq. 11-13)
+  std::uint64_t seed = 1;        ///< seed of the keyed strengths and buckling directions
+  double minVolume = 0.0;        ///< fragments with a smaller volume (area in 2D) are removed as fines, m^D (>= 0)
+  int minNodes = 0;              ///< fragments with fewer surface nodes are removed as fines (>= 0)
+  /// Instead of removing small fragments: particles below minVolume or
+  /// minNodes do not break (and fragments below them are kept).
+  bool haltBelowMinimum = false;
+  bool buckling = false;         ///< eq. 21 buckling mode (off by default)
+  /// Buckling trigger: circumscribed sphere (circle) volume / grain volume > this (> 1).
+  double bucklingRatio = 10.0;
+  std::vector<ManualBreak<D>> manual;  ///< prescribed first breaks
+};
+
+/// One breakage, as kept in the effect's log.
+template <int D>
+struct BreakageEvent {
+  double time = 0.0;                           ///< s
+  std::uint64_t parent = 0;                    ///< global id of the broken particle
+  std::vector<std::uint64_t> children;         ///< global ids of the kept fragments
+  double criterionValue = 0.0;                 ///< characteristic stress sigma^c at failure, Pa (manual: this step's, 0 without contacts)
+  double strength = 0.0;                       ///< the parent's critical stress, Pa
+  bool manual = false;                         ///< a prescribed break (ManualBreak)
+  bool buckling = false;                       ///< cut by the buckling plane (eq. 21)
+  geometry::Vec<D> planeNormal = geometry::Vec<D>::Zero();  ///< unit normal of the fracture plane, world frame
+  double planeOffset = 0.0;                    ///< normal . x on the plane, world frame, m
+  std::vector<double> childVolumes;            ///< corrected volumes of the kept fragments, m^D
+  std::vector<double> finesVolumes;            ///< corrected volumes of the fragments removed as fines, m^D
+  double rawVolumeError = 0.0;                 ///< the split's relative raw volume error (SplitResult::rawRelativeError)
+  double inertiaRelativeError = 0.0;           ///< SplitResult::inertiaRelativeError
+  double parentMass = 0.0;                     ///< kg
+  geometry::Vec<D> parentMomentum = geometry::Vec<D>::Zero();    ///< kg m/s, world frame
+  geometry::Vec<D> fragmentMomentum = geometry::Vec<D>::Zero();  ///< of all fragments incl. fines, kg m/s
+  double fragmentMass = 0.0;                   ///< of all fragments incl. fines, kg
+  double parentKineticEnergy = 0.0;            ///< J
+  double fragmentKineticEnergy = 0.0;          ///< of all fragments incl. fines, J
+};
+
+/// @brief The breakage effect (see the file comment).
+template <int D>
+class Breakage final : public dynamics::Effect<D> {
+ public:
+  /// @note Throws std::invalid_argument for a bad criterion or Weibull
+  /// parameter, minVolume < 0, minNodes < 0, or bucklingRatio not > 1.
+  explicit Breakage(const BreakageDef<D>& def);
+
+  std::string name() const override { return "breakage"; }
+  /// @brief Strengths, stresses, failures and splits of this step (file comment).
+  void afterStep(dynamics::World<D>& world) override;
+
+  const BreakageDef<D>& def() const { return def_; }
+  const Criterion& criterion() const { return *criterion_; }
+  /// @brief Every breakage so far, in the order applied.
+  const std::vector<BreakageEvent<D>>& events() const { return events_; }
+  /// @brief Number of breakages so far.
+  std::size_t breakages() const { return events_.size(); }
+  /// @brief Sum over breakages of |rawVolumeError| x parent volume: the volume
+  /// the exact-mass correction redistributed, m^D.
+  double rawVolumeError() const { return rawVolumeError_; }
+  /// @brief Mass removed as fines so far, kg.
+  double finesMass() const { return finesMass_; }
+  /// @brief Failures whose plane did not split the grain (it missed or grazed it).
+  std::size_t unsplitFailures() const { return unsplit_; }
+  /// @brief Steps whose stress evaluation was skipped for stale contacts (file comment).
+  std::size_t skippedSteps() const { return skipped_; }
+
+ private:
+  struct Pending {
+    std::uint64_t id;
+    std::size_t index;
+    double criterionValue;
+    geometry::HalfSpace<D> plane;  // world frame
+    bool manual;
+    bool buckling;
+  };
+
+  bool isBelowMinimum(const geometry::Shape<D>& shape) const;
+  void queueFailures(dynamics::World<D>& world);
+  void applyQueue(dynamics::World<D>& world);
+
+  BreakageDef<D> def_;
+  std::unique_ptr<Criterion> criterion_;
+  std::vector<bool> manualDone_;
+  // Reused buffers.
+  std::vector<geometry::Mat<D>> stress_;
+  GrainContactPoints<D> points_;
+  std::vector<Pending> queue_;
+  std::vector<std::size_t> parents_;
+  std::vector<dynamics::ParticleDef<D>> adds_;
+  // Log and totals.
+  std::vector<BreakageEvent<D>> events_;
+  double rawVolumeError_ = 0.0;
+  double finesMass_ = 0.0;
+  std::size_t unsplit_ = 0;
+  std::size_t skipped_ = 0;
+  std::size_t removedSeen_ = 0;
+};
+
+extern template class Breakage<2>;
+extern template class Breakage<3>;
+
+}  // namespace lsdem::breakage

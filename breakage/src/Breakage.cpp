@@ -1,0 +1,265 @@
+#include "lsdem/breakage/Breakage.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace lsdem::breakage {
+
+using dynamics::Orientation;
+using dynamics::ParticleDef;
+using dynamics::Particles;
+using dynamics::Rotation;
+using dynamics::Spin;
+using dynamics::World;
+using geometry::HalfSpace;
+using geometry::Mat;
+using geometry::Shape;
+
+namespace {
+
+// Orientation of a body -> world rotation matrix.
+template <int D>
+Orientation<D> orientationOf(const Mat<D>& r) {
+  if constexpr (D == 2) {
+    return std::atan2(r(1, 0), r(0, 0));
+  } else {
+    Eigen::Quaterniond q(r);
+    q.normalize();
+    return q;
+  }
+}
+
+// Kinetic energy of a particle about to be added from `def`, J (as Particles::kineticEnergy).
+template <int D>
+double kineticEnergyOf(const ParticleDef<D>& def) {
+  const double rho = def.density * def.massScale;
+  const auto& mp = def.shape->mass();
+  const double translational = 0.5 * rho * mp.volume * def.velocity.squaredNorm();
+  if constexpr (D == 2) {
+    return translational + 0.5 * rho * mp.polarMoment() * def.angularVelocity * def.angularVelocity;
+  } else {
+    const Vec<3> wBody = def.orientation.conjugate() * def.angularVelocity;
+    return translational + 0.5 * rho * (mp.principalInertia().array() * wBody.array().square()).sum();
+  }
+}
+
+}  // namespace
+
+template <int D>
+Breakage<D>::Breakage(const BreakageDef<D>& def) : def_(def), criterion_(makeCriterion(def.criterion)) {
+  validateWeibull(def.weibull);
+  if (!(def.minVolume >= 0.0) || !std::isfinite(def.minVolume)) {
+    throw std::invalid_argument("breakage minVolume must be finite and >= 0, got " + std::to_string(def.minVolume));
+  }
+  if (def.minNodes < 0) {
+    throw std::invalid_argument("breakage minNodes must be >= 0, got " + std::to_string(def.minNodes));
+  }
+  if (!(def.bucklingRatio > 1.0) || !std::isfinite(def.bucklingRatio)) {
+    throw std::invalid_argument("breakage bucklingRatio must be finite and > 1, got " +
+                                std::to_string(def.bucklingRatio));
+  }
+  for (const ManualBreak<D>& m : def.manual) {
+    if (!(m.plane.normal.norm() > 0.0) || !m.plane.normal.allFinite() || !std::isfinite(m.plane.offset)) {
+      throw std::invalid_argument("manual break of particle " + std::to_string(m.particle) +
+                                  " needs a finite plane with a nonzero normal");
+    }
+  }
+  manualDone_.assign(def.manual.size(), false);
+}
+
+template <int D>
+bool Breakage<D>::isBelowMinimum(const Shape<D>& shape) const {
+  return shape.volume() < def_.minVolume || shape.nodes().size() < std::size_t(def_.minNodes);
+}
+
+template <int D>
+void Breakage<D>::afterStep(World<D>& world) {
+  Particles<D>& p = world.particles();
+
+  // (i) Weibull strengths (eq. 12) for particles that have none, keyed by global id.
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.strength[i] <= 0.0) {
+      p.strength[i] = sampleStrength(def_.weibull, def_.seed, p.id[i], p.shape[i]->descriptors().equivalentDiameter);
+    }
+  }
+
+  // (ii) Failures of this step and manual breaks that are due.
+  queue_.clear();
+  queueFailures(world);
+
+  // (iii)-(iv) Splits between steps, then one re-check of the time step.
+  if (!queue_.empty()) applyQueue(world);
+  removedSeen_ = world.removed().size();
+}
+
+template <int D>
+void Breakage<D>::queueFailures(World<D>& world) {
+  const Particles<D>& p = world.particles();
+  const double now = world.time();
+
+  // Stale contact records: an earlier effect of this afterStep removed or added particles.
+  bool stale = false;
+  for (std::size_t k = removedSeen_; k < world.removed().size() && !stale; ++k) {
+    stale = world.removed()[k].time == now;
+  }
+  for (std::size_t i = 0; i < p.size() && !stale; ++i) stale = p.birthTime[i] == now;
+  if (stale) ++skipped_;
+
+  // eq. 5-6 per grain and the criterion (eq. 7-10) at its own strength.
+  bool havePoints = false;
+  if (!stale) {
+    grainStresses(p, world.contacts(), stress_);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (stress_[i].isZero(0.0)) continue;
+      const Vec<3> principal = principalStressTriple<D>(stress_[i]);
+      if (!criterion_->fails(principal, p.strength[i])) continue;
+      const Shape<D>& shape = *p.shape[i];
+      if (def_.haltBelowMinimum && isBelowMinimum(shape)) continue;
+      // Fracture plane: buckling (eq. 21) for slender grains, else the strongest contacts (eq. 18-20).
+      const bool buckling = def_.buckling && circumscribedVolumeRatio(shape) > def_.bucklingRatio;
+      std::optional<HalfSpace<D>> plane;
+      if (buckling) {
+        plane = bucklingPlane(shape, p.position[i], p.rotation(i), def_.seed, p.id[i]);
+      } else {
+        if (!havePoints) {
+          strongestContacts(p, world.contacts(), points_);
+          havePoints = true;
+        }
+        plane = fracturePlane<D>(p.position[i], points_.of(i), shape.descriptors().equivalentDiameter);
+      }
+      if (!plane) continue;
+      queue_.push_back({p.id[i], i, criterion_->characteristicStress(principal), *plane, false, buckling});
+    }
+  }
+
+  // Manual breaks that are due (they replace a natural failure of the same particle).
+  for (std::size_t m = 0; m < def_.manual.size(); ++m) {
+    const ManualBreak<D>& mb = def_.manual[m];
+    if (manualDone_[m] || now < mb.time) continue;
+    manualDone_[m] = true;
+    const auto it = std::find(p.id.begin(), p.id.end(), mb.particle);
+    if (it == p.id.end()) continue;
+    const std::size_t i = std::size_t(it - p.id.begin());
+    double value = 0.0;
+    if (!stale && i < stress_.size() && !stress_[i].isZero(0.0)) {
+      value = criterion_->characteristicStress(principalStressTriple<D>(stress_[i]));
+    }
+    HalfSpace<D> plane = mb.plane;
+    const double n = plane.normal.norm();
+    plane.normal /= n;
+    plane.offset /= n;
+    std::erase_if(queue_, [&](const Pending& q) { return q.id == mb.particle; });
+    queue_.push_back({mb.particle, i, value, plane, true, false});
+  }
+}
+
+template <int D>
+void Breakage<D>::applyQueue(World<D>& world) {
+  Particles<D>& p = world.particles();
+  dynamics::EnergyLedger& ledger = world.energyLedger();
+  const double now = world.time();
+  const double m = def_.weibull.modulus;
+  std::sort(queue_.begin(), queue_.end(), [](const Pending& a, const Pending& b) { return a.id < b.id; });
+  parents_.clear();
+  adds_.clear();
+  std::vector<std::size_t> addEvent;
+
+  // Split every queued parent while the store's indices are unchanged.
+  for (const Pending& q : queue_) {
+    const std::size_t i = q.index;
+    const Shape<D>& shape = *p.shape[i];
+    const Mat<D> rotation = p.rotation(i);
+    // World plane n.x = o to the parent's body frame: (R^T n).x_b = o - n.X.
+    FractureSurface<D> surface;
+    surface.plane = HalfSpace<D>{rotation.transpose() * q.plane.normal, q.plane.offset - q.plane.normal.dot(p.position[i])};
+    const SplitResult<D> split = splitShape(shape, surface);
+    if (!split.isSplit) {
+      ++unsplit_;
+      continue;
+    }
+
+    // The event: parent state before the split.
+    BreakageEvent<D> ev;
+    ev.time = now;
+    ev.parent = q.id;
+    ev.criterionValue = q.criterionValue;
+    ev.strength = p.strength[i];
+    ev.manual = q.manual;
+    ev.buckling = q.buckling;
+    ev.planeNormal = q.plane.normal;
+    ev.planeOffset = q.plane.offset;
+    ev.rawVolumeError = split.rawRelativeError;
+    ev.inertiaRelativeError = split.inertiaRelativeError;
+    ev.parentMass = p.mass[i];
+    ev.parentMomentum = p.mass[i] * p.velocity[i];
+    ev.parentKineticEnergy = p.kineticEnergy(i);
+    rawVolumeError_ += std::abs(split.rawRelativeError) * split.parentVolume;
+
+    // Fragments: the parent's density and motion, eq. 13 strengths; small ones leave as fines.
+    const double density = p.mass[i] / shape.volume();
+    const double parentDiameter = shape.descriptors().equivalentDiameter;
+    for (const Fragment<D>& f : split.fragments) {
+      const FragmentState<D> st = fragmentState(f, p.position[i], rotation, p.velocity[i], p.angularVelocity[i]);
+      ParticleDef<D> def;
+      def.shape = f.shape;
+      def.density = density;
+      def.massScale = f.massScale();
+      def.position = st.position;
+      def.orientation = orientationOf<D>(st.rotation);
+      def.velocity = st.velocity;
+      def.angularVelocity = st.angularVelocity;
+      def.material = p.material[i];
+      def.parent = q.id;
+      def.generation = p.generation[i] + 1;
+      def.birthTime = now;
+      def.strength = childStrength(p.strength[i], f.shape->descriptors().equivalentDiameter, parentDiameter, m);
+      const double mass = density * def.massScale * f.shape->volume();
+      const double kinetic = kineticEnergyOf(def);
+      ev.fragmentMass += mass;
+      ev.fragmentMomentum += mass * def.velocity;
+      ev.fragmentKineticEnergy += kinetic;
+      const bool fines = !def_.haltBelowMinimum &&
+                         (f.volume < def_.minVolume || f.shape->nodes().size() < std::size_t(def_.minNodes));
+      if (fines) {
+        dynamics::RemovedParticle r;
+        r.id = p.nextId();
+        p.reserveIdsBelow(r.id + 1);
+        r.time = now;
+        r.mass = mass;
+        r.volume = f.volume;
+        r.sieveSize = f.shape->descriptors().sieveSize;
+        r.reason = "fines";
+        world.recordRemoval(r, kinetic);
+        finesMass_ += mass;
+        ev.finesVolumes.push_back(f.volume);
+      } else {
+        adds_.push_back(std::move(def));
+        addEvent.push_back(events_.size());
+        ev.childVolumes.push_back(f.volume);
+      }
+    }
+    ledger.addedEnergy -= ev.parentKineticEnergy;
+    parents_.push_back(i);
+    events_.push_back(std::move(ev));
+  }
+  if (parents_.empty()) return;
+
+  // Parents leave the store, highest index first (swap-removal keeps the others valid).
+  std::sort(parents_.begin(), parents_.end(), std::greater<>());
+  for (std::size_t i : parents_) p.remove(i);
+
+  // Fragments enter it in the order of their parents' ids.
+  for (std::size_t k = 0; k < adds_.size(); ++k) {
+    const std::size_t i = p.add(adds_[k]);
+    events_[addEvent[k]].children.push_back(p.id[i]);
+    ledger.addedEnergy += p.kineticEnergy(i);
+  }
+  world.particlesChanged();
+}
+
+template class Breakage<2>;
+template class Breakage<3>;
+
+}  // namespace lsdem::breakage
