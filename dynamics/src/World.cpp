@@ -75,10 +75,14 @@ World<D>::World(const WorldDef<D>& def) : def_(def), broad_(def.broadPhase), con
 // ---------------------------------------------------------------- building --
 
 template <int D>
-double World<D>::shapeStiffness(const geometry::Shape<D>& shape) {
-  for (const auto& [s, k] : shapeStiffness_) {
-    if (s == &shape) return k;
+double World<D>::shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>& shapePtr) {
+  // A hit needs the cached shape alive: an expired entry's address may now
+  // hold another shape. Expired entries are dropped on a miss.
+  for (const CachedStiffness& c : shapeStiffness_) {
+    if (c.shape == shapePtr.get() && !c.alive.expired()) return c.stiffness;
   }
+  std::erase_if(shapeStiffness_, [](const CachedStiffness& c) { return c.alive.expired(); });
+  const geometry::Shape<D>& shape = *shapePtr;
   const ContactLawDef& law = def_.contact;
   double k = 0.0;
   if (law.normal == NormalModel::Hertz) {
@@ -92,7 +96,7 @@ double World<D>::shapeStiffness(const geometry::Shape<D>& shape) {
     ns.tangentialRatio = law.hasFriction ? law.ks / law.kn : 0.0;
     k = stiffestContact(shape, ns).stiffness;
   }
-  shapeStiffness_.emplace_back(&shape, k);
+  shapeStiffness_.push_back({shapePtr.get(), shapePtr, k});
   return k;
 }
 
@@ -114,7 +118,7 @@ void World<D>::updateTimeStep() {
 template <int D>
 std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
   const std::size_t i = particles_.add(def);
-  stiffness_.push_back(shapeStiffness(*def.shape));
+  stiffness_.push_back(shapeStiffness(def.shape));
   updateTimeStep();
   broad_.invalidate();
   forcesValid_ = false;
@@ -185,7 +189,7 @@ void World<D>::particlesChanged() {
   broad_.invalidate();
   forcesValid_ = false;
   stiffness_.resize(particles_.size());
-  for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(*particles_.shape[i]);
+  for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(particles_.shape[i]);
   updateTimeStep();
 }
 

@@ -167,7 +167,13 @@ class World {
   void moveKinematicBodies(double t);
   void updateTimeStep();
   void checkFinite() const;
-  double shapeStiffness(const geometry::Shape<D>& shape);
+  /// The effective contact stiffness of a shape (N/m), from the cache when the
+  /// shape is one it still holds. Entries are keyed by the live shape, not by
+  /// its address alone: a fragment shape freed by breakage or removal can have
+  /// its address reused by a new shape, and a stale hit would give the new
+  /// shape the old one's stiffness (so the time step would depend on the
+  /// allocator, and with it on which thread freed what).
+  double shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>& shape);
   void refreshEnergy();
 
   WorldDef<D> def_;
@@ -186,7 +192,12 @@ class World {
 
   // Time step: per particle effective contact stiffness (N/m), cached per shape.
   std::vector<double> stiffness_;
-  std::vector<std::pair<const geometry::Shape<D>*, double>> shapeStiffness_;
+  struct CachedStiffness {
+    const geometry::Shape<D>* shape = nullptr;      ///< address, compared only while `alive`
+    std::weak_ptr<const geometry::Shape<D>> alive;  ///< expired once the shape is freed
+    double stiffness = 0.0;                         ///< N/m
+  };
+  std::vector<CachedStiffness> shapeStiffness_;
   double dt_ = 0.0;
   double dtCritical_ = 0.0;
 
