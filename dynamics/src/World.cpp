@@ -101,9 +101,16 @@ double World<D>::shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>&
 }
 
 template <int D>
-void World<D>::updateTimeStep() {
+void World<D>::updateTimeStep(bool lastAddedOnly) {
   const double zeta = def_.contact.hasDamping ? def_.contact.dampingRatio : 0.0;
-  dtCritical_ = criticalTimeStep(particles_.mass, stiffness_, zeta);
+  if (lastAddedOnly) {
+    // One particle more: the minimum over particles takes one more term (O(1)
+    // per add, so building a world of N particles stays O(N)).
+    const double last = criticalTimeStep({particles_.mass.back()}, {stiffness_.back()}, zeta);
+    dtCritical_ = std::min(dtCritical_, last);
+  } else {
+    dtCritical_ = criticalTimeStep(particles_.mass, stiffness_, zeta);
+  }
   if (!std::isfinite(dtCritical_)) return;  // no contacts possible yet
   if (def_.dt > 0.0) {
     checkUserTimeStep(def_.dt, dtCritical_, def_.forceDt, def_.dtSafety);
@@ -119,7 +126,7 @@ template <int D>
 std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
   const std::size_t i = particles_.add(def);
   stiffness_.push_back(shapeStiffness(def.shape));
-  updateTimeStep();
+  updateTimeStep(true);
   broad_.invalidate();
   forcesValid_ = false;
   if (steps_ > 0) energy_.addedEnergy += particles_.kineticEnergy(i);
@@ -190,7 +197,7 @@ void World<D>::particlesChanged() {
   forcesValid_ = false;
   stiffness_.resize(particles_.size());
   for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(particles_.shape[i]);
-  updateTimeStep();
+  updateTimeStep(false);
 }
 
 template <int D>

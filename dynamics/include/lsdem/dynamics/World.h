@@ -25,6 +25,7 @@
 #include "lsdem/dynamics/Wall.h"
 
 #include <array>
+#include <limits>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -165,7 +166,9 @@ class World {
  private:
   void computeForces(double dtClosing);
   void moveKinematicBodies(double t);
-  void updateTimeStep();
+  /// Re-estimates the critical step: over all particles, or folding in only
+  /// the particle just added.
+  void updateTimeStep(bool lastAddedOnly);
   void checkFinite() const;
   /// The effective contact stiffness of a shape (N/m), from the cache when the
   /// shape is one it still holds. Entries are keyed by the live shape, not by
@@ -199,7 +202,7 @@ class World {
   };
   std::vector<CachedStiffness> shapeStiffness_;
   double dt_ = 0.0;
-  double dtCritical_ = 0.0;
+  double dtCritical_ = std::numeric_limits<double>::infinity();
 
   // Scratch for the broad phase.
   std::vector<double> radii_;
