@@ -104,40 +104,6 @@ NodeSet<D> planeNodes(const Grid<D>& parentGrid, const HalfSpace<D>& planeGrid, 
   return out;
 }
 
-/// Moves a node that a fragment's new rim left off its zero level set (the
-/// multilinear interpolant rounds the max() kink of eq. 14-15 by up to ~h/4)
-/// back onto phi = 0 of the piece's grid: damped Newton steps along the
-/// gradient, at most half a cell each, halved until |phi| decreases, so |phi|
-/// never grows. Nodes already on the surface (|phi| <= 1e-4 h) are not moved.
-template <int D>
-Vec<D> snapToSurface(const Grid<D>& grid, Vec<D> x) {
-  const double h = grid.spacing();
-  Vec<D> grad;
-  double phi = grid.valueAndGradient(x, grad);
-  for (int iteration = 0; iteration < 10 && std::abs(phi) > 1e-4 * h; ++iteration) {
-    // Newton step, capped at half a cell.
-    const double gradSquared = grad.squaredNorm();
-    if (gradSquared < 1e-12) break;
-    Vec<D> step = (phi / gradSquared) * grad;
-    const double length = step.norm();
-    if (length > 0.5 * h) step *= 0.5 * h / length;
-    // Backtracking: the first of 1, 1/2, 1/4, ... of the step that lowers |phi|.
-    bool accepted = false;
-    for (double t = 1.0; t > 1.0 / 64.0 && !accepted; t *= 0.5) {
-      Vec<D> trialGrad;
-      const Vec<D> trial = x - t * step;
-      const double trialPhi = grid.valueAndGradient(trial, trialGrad);
-      if (std::abs(trialPhi) < std::abs(phi)) {
-        x = trial;
-        phi = trialPhi;
-        grad = trialGrad;
-        accepted = true;
-      }
-    }
-    if (!accepted) break;
-  }
-  return x;
-}
 
 /// eq. 15 and eq. 14 in one pass over the parent's grid: minus = max(phi,
 /// phi_f) (the phi_f < 0 side), plus = max(phi, -phi_f) (the phi_f > 0 side),
@@ -299,7 +265,9 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
   for (Side<D>& side : sides) {
     for (std::size_t k = 0; k < side.pieces.size(); ++k) {
       NodeSet<D> nodes = std::move(side.nodes[k]);
-      for (Vec<D>& x : nodes.positions) x = snapToSurface(side.pieces[k], x);
+      // Back onto the piece's own phi = 0: the multilinear interpolant rounds the
+      // max() kink of eq. 14-15 at the new rim by up to ~h/4.
+      for (Vec<D>& x : nodes.positions) x = geometry::projectOntoZero(side.pieces[k], x, 1e-4, 10);
       if (nodes.empty()) {
         if constexpr (D == 2) {
           nodes = geometry::surfaceNodes(side.pieces[k], nodesPerCell);

@@ -26,40 +26,6 @@ void checkDensity(double nodesPerCell) {
   }
 }
 
-// Moves x onto phi = 0 of the grid's interpolant by damped Newton steps along
-// the gradient (x -= t phi grad / |grad|^2, step at most half a cell): a step is
-// halved until |phi| decreases, so |phi| never grows, even where the gradient
-// is small or jumps between cells. Where the interpolant has no zero nearby the
-// node stops at its closest approach.
-template <int D>
-Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x) {
-  const double h = grid.spacing();
-  Vec<D> grad;
-  double phi = grid.valueAndGradient(x, grad);
-  for (int iteration = 0; iteration < 8 && std::abs(phi) > 1e-9 * h; ++iteration) {
-    // Full Newton step, capped.
-    const double gradSquared = grad.squaredNorm();
-    if (gradSquared < 1e-12) break;
-    Vec<D> step = (phi / gradSquared) * grad;
-    const double length = step.norm();
-    if (length > 0.5 * h) step *= 0.5 * h / length;
-    // Backtracking: accept the first of 1, 1/2, 1/4, ... of it that lowers |phi|.
-    bool accepted = false;
-    for (double t = 1.0; t > 1.0 / 64.0 && !accepted; t *= 0.5) {
-      Vec<D> trialGrad;
-      const Vec<D> trial = x - t * step;
-      const double trialPhi = grid.valueAndGradient(trial, trialGrad);
-      if (std::abs(trialPhi) < std::abs(phi)) {
-        x = trial;
-        phi = trialPhi;
-        grad = trialGrad;
-        accepted = true;
-      }
-    }
-    if (!accepted) break;
-  }
-  return x;
-}
 
 }  // namespace
 
@@ -149,5 +115,38 @@ NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* 
   if (meshOut) *meshOut = std::move(mesh);
   return nodes;
 }
+
+template <int D>
+Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int maxIterations) {
+  const double h = grid.spacing();
+  Vec<D> grad;
+  double phi = grid.valueAndGradient(x, grad);
+  for (int iteration = 0; iteration < maxIterations && std::abs(phi) > toleranceCells * h; ++iteration) {
+    // Full Newton step, capped.
+    const double gradSquared = grad.squaredNorm();
+    if (gradSquared < 1e-12) break;
+    Vec<D> step = (phi / gradSquared) * grad;
+    const double length = step.norm();
+    if (length > 0.5 * h) step *= 0.5 * h / length;
+    // Backtracking: accept the first of 1, 1/2, 1/4, ... of it that lowers |phi|.
+    bool accepted = false;
+    for (double t = 1.0; t > 1.0 / 64.0 && !accepted; t *= 0.5) {
+      Vec<D> trialGrad;
+      const Vec<D> trial = x - t * step;
+      const double trialPhi = grid.valueAndGradient(trial, trialGrad);
+      if (std::abs(trialPhi) < std::abs(phi)) {
+        x = trial;
+        phi = trialPhi;
+        grad = trialGrad;
+        accepted = true;
+      }
+    }
+    if (!accepted) break;
+  }
+  return x;
+}
+
+template Vec<2> projectOntoZero<2>(const Grid<2>&, Vec<2>, double, int);
+template Vec<3> projectOntoZero<3>(const Grid<3>&, Vec<3>, double, int);
 
 }  // namespace lsdem::geometry

@@ -118,7 +118,7 @@ TEST(Components, DumbbellCutThroughNeck3D) {
   const double whole = massProperties(cut).volume;
   EXPECT_NEAR(v[0], 0.5 * whole, 1e-3 * whole);
   EXPECT_NEAR(v[1], 0.5 * whole, 1e-3 * whole);
-  // Analytic: a ball plus the neck stub outside it, from x = 0.0605 to the ball's
+  // Analytic: a ball plus the neck piece outside it, from x = 0.0605 to the ball's
   // surface at x = 0.5 - sqrt(0.09 - rho^2), integrated over the neck's disc.
   const double pi = std::numbers::pi;
   const double half = 4.0 / 3.0 * pi * 0.027 + pi * 0.01 * (0.5 - 0.0605) - 2.0 * pi / 3.0 * (std::pow(0.09, 1.5) - std::pow(0.08, 1.5));

@@ -45,4 +45,18 @@ NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell);
 /// @note Throws std::invalid_argument when nodesPerCell is not finite or <= 0.
 NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* meshOut = nullptr);
 
+/// @brief Moves the point x (world units, grid frame) onto phi = 0 of the
+/// grid's multilinear interpolant by damped Newton steps along the gradient
+/// (x -= t phi grad / |grad|^2, each step at most half a cell, halved until
+/// |phi| decreases, so |phi| never grows, even where the gradient is small or
+/// jumps between cells). Where the interpolant has no zero nearby the point
+/// stops at its closest approach.
+/// @param toleranceCells stop once |phi| <= toleranceCells x spacing.
+/// @param maxIterations Newton steps at most.
+template <int D>
+Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells = 1e-9, int maxIterations = 8);
+
+extern template Vec<2> projectOntoZero<2>(const Grid<2>&, Vec<2>, double, int);
+extern template Vec<3> projectOntoZero<3>(const Grid<3>&, Vec<3>, double, int);
+
 }  // namespace lsdem::geometry
