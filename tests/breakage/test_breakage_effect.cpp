@@ -1,3 +1,4 @@
+#include "support/Shapes.h"
 #include "lsdem/breakage/Breakage.h"
 
 #include "lsdem/dynamics/World.h"
@@ -19,16 +20,6 @@ using dynamics::WorldDef;
 using geometry::Vec;
 
 namespace {
-
-template <int D>
-std::shared_ptr<const geometry::Shape<D>> ball(double radius, double cells) {
-  geometry::ShapeDef<D> def;
-  def.kind = geometry::ShapeKind::Sphere;
-  def.radius = radius;
-  def.cellsAcross = cells;
-  def.options.nodesPerCell = 1.0;
-  return geometry::buildShape(def);
-}
 
 template <int D>
 void addPlane(World<D>& w, const Vec<D>& point, const Vec<D>& normal, const Vec<D>& velocity = Vec<D>::Zero()) {
@@ -89,7 +80,7 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
   addPlane<D>(w, Vec<D>::Unit(1) * top, -Vec<D>::Unit(1), -speed * Vec<D>::Unit(1));
 
   // Grains on a lattice, slightly jittered so the stress states differ.
-  const auto s = ball<D>(r, cells);
+  const auto s = test::sphereShape<D>(r, cells);
   const int depth = D == 3 ? perRow : 1;
   for (int k = 0; k < depth; ++k) {
     for (int j = 0; j < rows; ++j) {
@@ -191,7 +182,7 @@ TEST(BreakageEffect, ManualBreakAtGivenTime) {
   WorldDef<2> def;
   def.checkFinite = true;
   World<2> w(def);
-  const auto s = ball<2>(0.01, 16);
+  const auto s = test::sphereShape<2>(0.01, 16);
   ParticleDef<2> a;
   a.shape = s;
   a.position = Vec<2>(0.0, 0.0);

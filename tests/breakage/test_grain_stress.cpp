@@ -5,6 +5,7 @@
 /// the contact solver (particle, plane and tool records) with the strongest
 /// contact point per pair for the fracture-plane rule (eq. 18-20).
 
+#include "support/Shapes.h"
 #include "lsdem/breakage/GrainStress.h"
 #include "lsdem/geometry/ShapeDef.h"
 
@@ -149,22 +150,12 @@ TEST(GrainStress, RejectsBadInput) {
 
 namespace {
 
-template <int D>
-std::shared_ptr<const geometry::Shape<D>> sphere(double radius, double cells) {
-  geometry::ShapeDef<D> def;
-  def.kind = geometry::ShapeKind::Sphere;
-  def.radius = radius;
-  def.cellsAcross = cells;
-  def.options.nodesPerCell = 1.0;
-  return geometry::buildShape(def);
-}
-
 // Particles a (at 0) and b (at 0.97 x) of radius 0.5 touch; a plane at x = -0.46
 // presses a (4 cm overlap), a spherical tool at 1.96 x presses b (1 cm).
 template <int D>
 void checkGathering() {
   using namespace lsdem::dynamics;
-  const auto shape = sphere<D>(0.5, 16);
+  const auto shape = test::sphereShape<D>(0.5, 16);
   Particles<D> p;
   ParticleDef<D> def;
   def.shape = shape;

@@ -4,6 +4,7 @@
 /// law and the balance of moments, shear history keyed by global ids, input
 /// checks, and bitwise-identical results for 1 and 2 threads.
 
+#include "support/Shapes.h"
 #include "lsdem/dynamics/Integrator.h"
 #include "lsdem/dynamics/NarrowPhase.h"
 #include "lsdem/geometry/ShapeDef.h"
@@ -25,16 +26,6 @@ namespace {
 
 using PairList = std::vector<std::array<std::uint32_t, 2>>;
 using ShapePtr2 = std::shared_ptr<const geometry::Shape<2>>;
-
-template <int D>
-std::shared_ptr<const geometry::Shape<D>> sphere(double radius, double cells) {
-  geometry::ShapeDef<D> def;
-  def.kind = geometry::ShapeKind::Sphere;
-  def.radius = radius;
-  def.cellsAcross = cells;
-  def.options.nodesPerCell = 1.0;
-  return geometry::buildShape(def);
-}
 
 template <int D>
 std::shared_ptr<const geometry::Shape<D>> grain(std::uint64_t seed) {
@@ -109,7 +100,7 @@ double spinNorm(const Vec<3>& s) { return s.norm(); }
 // is the other sphere's radial direction (pointing from b towards a).
 template <int D>
 void checkSphereGeometry() {
-  const auto shape = sphere<D>(0.5, 20);
+  const auto shape = test::sphereShape<D>(0.5, 20);
   Particles<D> p;
   ParticleDef<D> def;
   def.shape = shape;
@@ -231,7 +222,7 @@ std::vector<unsigned char> clusterRun(int threads, std::size_t count) {
 #endif
   std::mt19937_64 rng(5);
   const auto shapes = std::array{grain<D>(1), grain<D>(2), grain<D>(3)};
-  const auto toolShape = sphere<D>(1.5, 15);
+  const auto toolShape = test::sphereShape<D>(1.5, 15);
   Particles<D> p;
   const int perRow = D == 2 ? int(std::ceil(std::sqrt(double(count)))) : int(std::ceil(std::cbrt(double(count))));
   for (std::size_t i = 0; i < count; ++i) {
@@ -381,7 +372,7 @@ TEST(NarrowPhase, ToolFaceActsLikeAPlane) {
   const std::vector<Plane<2>> planes{Plane<2>{Vec<2>::Zero(), Vec<2>::UnitY(), tool.velocity}};
   Particles<2> p;
   ParticleDef<2> def;
-  def.shape = sphere<2>(0.5, 10);
+  def.shape = test::sphereShape<2>(0.5, 10);
   def.position = Vec<2>(0.0, 0.49);
   def.velocity = tool.velocity;  // at rest relative to the tool
   p.add(def);
@@ -415,7 +406,7 @@ TEST(NarrowPhase, ToolFaceActsLikeAPlane) {
 // Shear history is keyed by global ids: removing another particle (which
 // moves the last particle into its slot) does not lose it.
 TEST(NarrowPhase, HistorySurvivesReindexing) {
-  const auto shape = sphere<2>(0.5, 10);
+  const auto shape = test::sphereShape<2>(0.5, 10);
   Particles<2> p;
   ParticleDef<2> def;
   def.shape = shape;

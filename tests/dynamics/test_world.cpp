@@ -1,3 +1,4 @@
+#include "support/Shapes.h"
 #include "lsdem/dynamics/World.h"
 #include "lsdem/geometry/ShapeDef.h"
 
@@ -17,16 +18,6 @@ using namespace lsdem;
 using namespace lsdem::dynamics;
 
 namespace {
-
-template <int D>
-std::shared_ptr<const geometry::Shape<D>> sphere(double radius, double cells = 10) {
-  geometry::ShapeDef<D> def;
-  def.kind = geometry::ShapeKind::Sphere;
-  def.radius = radius;
-  def.cellsAcross = cells;
-  def.options.nodesPerCell = 1.0;
-  return geometry::buildShape(def);
-}
 
 template <int D>
 std::shared_ptr<const geometry::Shape<D>> grain(std::uint64_t seed, double d) {
@@ -97,7 +88,7 @@ TEST(World, SettledColumnFloorCarriesTheWeight) {
   def.contact.friction = 0.5;
   World<2> w(def);
   addBox(w, 0.12);
-  const auto s = sphere<2>(0.05);
+  const auto s = test::sphereShape<2>(0.05);
   for (int k = 0; k < 4; ++k) {
     ParticleDef<2> p;
     p.shape = s;
@@ -193,7 +184,7 @@ TEST(World, OutflowRemovesAndRecords) {
   def.outflow = geometry::Box<2>{Vec<2>(-1.0, -0.5), Vec<2>(1.0, 1.0)};
   World<2> w(def);
   ParticleDef<2> p;
-  p.shape = sphere<2>(0.05);
+  p.shape = test::sphereShape<2>(0.05);
   p.position = Vec<2>(0.0, 0.0);
   w.addParticle(p);
   const double m = w.particles().mass[0];
@@ -211,7 +202,7 @@ TEST(World, UserTimeStepIsCheckedAgainstTheCriticalOne) {
   def.dt = 1.0;
   World<2> w(def);
   ParticleDef<2> p;
-  p.shape = sphere<2>(0.05);
+  p.shape = test::sphereShape<2>(0.05);
   EXPECT_THROW(w.addParticle(p), std::invalid_argument);
   def.forceDt = true;
   World<2> forced(def);
@@ -237,8 +228,8 @@ TEST(World, TimeStepIgnoresTheStiffnessOfAFreedShapeAtTheSameAddress) {
   using Shape2 = geometry::Shape<2>;
   // Declared first so it outlives every shape built in it.
   alignas(Shape2) unsigned char storage[sizeof(Shape2)];
-  const auto soft = sphere<2>(0.05, 6);
-  const auto stiff = sphere<2>(0.05, 24);
+  const auto soft = test::sphereShape<2>(0.05, 6);
+  const auto stiff = test::sphereShape<2>(0.05, 24);
   ParticleDef<2> p;
   p.position = Vec<2>(0.5, 0.5);
   // Automatic steps of a world holding one particle of each shape alone.
