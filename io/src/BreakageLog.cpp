@@ -1,0 +1,58 @@
+#include "lsdem/io/BreakageLog.h"
+
+#include <charconv>
+#include <string>
+
+namespace lsdem::io {
+namespace {
+
+// Shortest round-trip text of a double.
+std::string number(double v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+
+// Values joined by ';' in one CSV cell.
+template <class T>
+std::string joined(const std::vector<T>& values) {
+  std::string s;
+  for (std::size_t k = 0; k < values.size(); ++k) {
+    if (k) s += ';';
+    if constexpr (std::is_floating_point_v<T>) {
+      s += number(values[k]);
+    } else {
+      s += std::to_string(values[k]);
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+template <int D>
+void writeBreakageLogHeader(std::ostream& out) {
+  const std::string unit = D == 2 ? "m2" : "m3";
+  out << "time_s,parent_id,child_ids,criterion_value_Pa,strength_Pa,manual,buckling,normal_x,normal_y";
+  if (D == 3) out << ",normal_z";
+  out << ",plane_offset_m,child_volumes_" << unit << ",fines_volumes_" << unit
+      << ",raw_volume_error,parent_mass_kg,fragment_mass_kg\n";
+}
+
+template <int D>
+void writeBreakageLogRows(std::span<const breakage::BreakageEvent<D>> events, std::ostream& out) {
+  for (const breakage::BreakageEvent<D>& e : events) {
+    out << number(e.time) << ',' << e.parent << ',' << joined(e.children) << ',' << number(e.criterionValue) << ','
+        << number(e.strength) << ',' << int(e.manual) << ',' << int(e.buckling);
+    for (int a = 0; a < D; ++a) out << ',' << number(e.planeNormal[a]);
+    out << ',' << number(e.planeOffset) << ',' << joined(e.childVolumes) << ',' << joined(e.finesVolumes) << ','
+        << number(e.rawVolumeError) << ',' << number(e.parentMass) << ',' << number(e.fragmentMass) << '\n';
+  }
+}
+
+template void writeBreakageLogHeader<2>(std::ostream&);
+template void writeBreakageLogHeader<3>(std::ostream&);
+template void writeBreakageLogRows<2>(std::span<const breakage::BreakageEvent<2>>, std::ostream&);
+template void writeBreakageLogRows<3>(std::span<const breakage::BreakageEvent<3>>, std::ostream&);
+
+}  // namespace lsdem::io
