@@ -34,19 +34,32 @@ void freeRotation(Eigen::Quaterniond& q, const Vec<3>& L, const Vec<3>& inertia,
   q.normalize();
 }
 
+// Half kick of particle i by its force and torque. In 3D the torque kicks the
+// world angular momentum, which is returned for the caller to turn into the
+// angular velocity (after the free rotation, when drifting); in 2D the spin is
+// kicked directly.
+template <int D>
+auto halfKick(Particles<D>& p, std::ptrdiff_t i, double half) {
+  p.velocity[i] += half * p.invMass[i] * p.force[i];
+  if constexpr (D == 2) {
+    p.angularVelocity[i] += half * p.invInertia[i] * p.torque[i];
+    return 0;
+  } else {
+    return Vec<3>(angularMomentum(p.orientation[i], p.inertia[i], p.angularVelocity[i]) + half * p.torque[i]);
+  }
+}
+
 template <int D>
 void kickDrift(Particles<D>& p, double dt) {
   const double half = 0.5 * dt;
   const std::ptrdiff_t n = std::ptrdiff_t(p.size());
 #pragma omp parallel for schedule(static) if (n > 512)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
-    p.velocity[i] += half * p.invMass[i] * p.force[i];
+    const auto L = halfKick(p, i, half);
     p.position[i] += dt * p.velocity[i];
     if constexpr (D == 2) {
-      p.angularVelocity[i] += half * p.invInertia[i] * p.torque[i];
       p.orientation[i] += dt * p.angularVelocity[i];
     } else {
-      Vec<3> L = angularMomentum(p.orientation[i], p.inertia[i], p.angularVelocity[i]) + half * p.torque[i];
       freeRotation(p.orientation[i], L, p.inertia[i], dt);
       p.angularVelocity[i] = angularVelocity(p.orientation[i], p.invInertia[i], L);
     }
@@ -59,13 +72,8 @@ void kick(Particles<D>& p, double dt) {
   const std::ptrdiff_t n = std::ptrdiff_t(p.size());
 #pragma omp parallel for schedule(static) if (n > 512)
   for (std::ptrdiff_t i = 0; i < n; ++i) {
-    p.velocity[i] += half * p.invMass[i] * p.force[i];
-    if constexpr (D == 2) {
-      p.angularVelocity[i] += half * p.invInertia[i] * p.torque[i];
-    } else {
-      const Vec<3> L = angularMomentum(p.orientation[i], p.inertia[i], p.angularVelocity[i]) + half * p.torque[i];
-      p.angularVelocity[i] = angularVelocity(p.orientation[i], p.invInertia[i], L);
-    }
+    [[maybe_unused]] const auto L = halfKick(p, i, half);
+    if constexpr (D == 3) p.angularVelocity[i] = angularVelocity(p.orientation[i], p.invInertia[i], L);
   }
 }
 

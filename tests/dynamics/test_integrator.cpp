@@ -1,5 +1,5 @@
+#include "support/Shapes.h"
 #include "lsdem/dynamics/Integrator.h"
-#include "lsdem/geometry/ShapeDef.h"
 
 #include <gtest/gtest.h>
 
@@ -12,12 +12,19 @@ namespace {
 
 template <int D>
 std::shared_ptr<const geometry::Shape<D>> smallSphere() {
-  geometry::ShapeDef<D> def;
-  def.kind = geometry::ShapeKind::Sphere;
-  def.radius = 0.5;
-  def.cellsAcross = 8;
-  def.options.nodesPerCell = 1.0;
-  return geometry::buildShape(def);
+  return test::sphereShape<D>(0.5, 8);
+}
+
+// One free 3D body with principal moments (1, 2, 3) spinning at w (world frame).
+Particles<3> asymmetricTop(const Vec<3>& w) {
+  Particles<3> p;
+  ParticleDef<3> def;
+  def.shape = smallSphere<3>();
+  p.add(def);
+  p.inertia[0] = Vec<3>(1.0, 2.0, 3.0);
+  p.invInertia[0] = p.inertia[0].cwiseInverse();
+  p.angularVelocity[0] = w;
+  return p;
 }
 
 // Kinetic energy and world angular momentum of a torque-free 3D body.
@@ -55,13 +62,7 @@ TEST(Integrator, ConstantForceIsExact) {
 // tumbles; energy and |L| stay constant to 1e-4 relative, and L keeps its
 // direction in the world frame.
 TEST(Integrator, FreeAsymmetricTopConservesEnergyAndAngularMomentum) {
-  Particles<3> p;
-  ParticleDef<3> def;
-  def.shape = smallSphere<3>();
-  p.add(def);
-  p.inertia[0] = Vec<3>(1.0, 2.0, 3.0);
-  p.invInertia[0] = p.inertia[0].cwiseInverse();
-  p.angularVelocity[0] = Vec<3>(0.05, 2.0, 0.05);
+  Particles<3> p = asymmetricTop(Vec<3>(0.05, 2.0, 0.05));
   const double E0 = rotationalEnergy(p);
   const Vec<3> L0 = angularMomentum(p);
   const double dt = 1e-3;
@@ -86,13 +87,7 @@ TEST(Integrator, FreeAsymmetricTopConservesEnergyAndAngularMomentum) {
 // Second order: halving dt quarters the error of a spinning, precessing top.
 TEST(Integrator, RotationIsSecondOrder) {
   auto run = [](double dt) {
-    Particles<3> p;
-    ParticleDef<3> def;
-    def.shape = smallSphere<3>();
-    p.add(def);
-    p.inertia[0] = Vec<3>(1.0, 2.0, 3.0);
-    p.invInertia[0] = p.inertia[0].cwiseInverse();
-    p.angularVelocity[0] = Vec<3>(0.3, 1.0, 0.7);
+    Particles<3> p = asymmetricTop(Vec<3>(0.3, 1.0, 0.7));
     const int steps = int(std::lround(2.0 / dt));
     for (int s = 0; s < steps; ++s) {
       kickDrift(p, dt);
