@@ -67,6 +67,50 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromGridAndNodes(Grid<D> grid, NodeSet
 }
 
 template <int D>
+std::shared_ptr<const Shape<D>> Shape<D>::fromParts(Parts parts) {
+  // Validate what a consumer of the shape relies on; the values themselves are trusted.
+  if (parts.grid.size() == 0) throw std::invalid_argument("shape parts: the grid is empty");
+  if (parts.nodes.empty() || parts.nodes.positions.size() != parts.nodes.weights.size()) {
+    throw std::invalid_argument("shape parts: need surface nodes with one weight each (" +
+                                std::to_string(parts.nodes.positions.size()) + " positions, " +
+                                std::to_string(parts.nodes.weights.size()) + " weights)");
+  }
+  if (!(parts.mass.volume > 0.0) || !std::isfinite(parts.mass.volume)) {
+    throw std::invalid_argument("shape parts: volume must be positive, got " + std::to_string(parts.mass.volume));
+  }
+  if (!(parts.boundingRadius > 0.0) || !std::isfinite(parts.boundingRadius)) {
+    throw std::invalid_argument("shape parts: bounding radius must be positive, got " +
+                                std::to_string(parts.boundingRadius));
+  }
+  for (std::size_t n = 0; n < parts.grid.size(); ++n) {
+    if (!std::isfinite(parts.grid[n])) throw std::invalid_argument("shape parts: grid value " + std::to_string(n) + " is not finite");
+  }
+  for (std::size_t i = 0; i < parts.nodes.size(); ++i) {
+    if (!parts.nodes.positions[i].allFinite() || !std::isfinite(parts.nodes.weights[i]) || parts.nodes.weights[i] < 0.0) {
+      throw std::invalid_argument("shape parts: node " + std::to_string(i) + " has a non-finite position or a bad weight");
+    }
+  }
+  if (!parts.mass.secondMoment.allFinite() || !parts.bodyToGrid.rotation.allFinite() ||
+      !parts.bodyToGrid.translation.allFinite()) {
+    throw std::invalid_argument("shape parts: mass properties or body-to-grid map not finite");
+  }
+  std::shared_ptr<Shape> shape(new Shape());
+  shape->grid_ = std::move(parts.grid);
+  shape->bodyToGrid_ = parts.bodyToGrid;
+  shape->nodes_ = std::move(parts.nodes);
+  shape->mass_ = parts.mass;
+  shape->descriptors_ = parts.descriptors;
+  shape->boundingRadius_ = parts.boundingRadius;
+  shape->options_ = parts.options;
+  return shape;
+}
+
+template <int D>
+typename Shape<D>::Parts Shape<D>::parts() const {
+  return Parts{grid_, bodyToGrid_, nodes_, mass_, descriptors_, boundingRadius_, options_};
+}
+
+template <int D>
 std::size_t Shape<D>::bytes() const {
   return sizeof(Shape) + grid_.bytes() + nodes_.positions.size() * sizeof(Vec<D>) + nodes_.weights.size() * sizeof(double);
 }

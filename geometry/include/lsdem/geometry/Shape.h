@@ -52,6 +52,27 @@ class Shape {
   static std::shared_ptr<const Shape> fromGridAndNodes(Grid<D> grid, NodeSet<D> nodesInGridFrame,
                                                       const ShapeOptions& options = {});
 
+  /// The stored parts of a shape, exactly as a shape holds them (grain files
+  /// and checkpoints write these and read them back bit for bit).
+  struct Parts {
+    Grid<D> grid;                 ///< level set, grid frame
+    Rigid<D> bodyToGrid;          ///< body frame -> grid frame
+    NodeSet<D> nodes;             ///< surface nodes, body frame
+    MassProperties<D> mass;       ///< per unit density, body frame (centroid 0, diagonal second moment)
+    Descriptors<D> descriptors;   ///< frame-independent descriptors
+    double boundingRadius = 0.0;  ///< world units
+    ShapeOptions options;         ///< how the shape was made
+  };
+
+  /// @brief Restores a shape from its stored parts without recomputing
+  /// anything (so a restored shape equals the written one bit for bit).
+  /// @note Throws std::invalid_argument when the parts are inconsistent: an
+  /// empty grid or node set, positions and weights of different counts, a
+  /// volume or bounding radius not > 0, or a value that is not finite.
+  static std::shared_ptr<const Shape> fromParts(Parts parts);
+  /// @brief The stored parts (a copy), the inverse of fromParts.
+  Parts parts() const;
+
   /// The level set, in the grid frame (world units).
   const Grid<D>& grid() const { return grid_; }
   /// Map from body-frame points to grid-frame points: x_grid = bodyToGrid().apply(x_body).
