@@ -259,6 +259,79 @@ void Breakage<D>::applyQueue(World<D>& world) {
   world.particlesChanged();
 }
 
+template <int D>
+void Breakage<D>::saveState(dynamics::StateWriter& out) const {
+  out.putTag("breakage");
+  std::vector<std::uint8_t> done(manualDone_.begin(), manualDone_.end());
+  out.putVector(done);
+  out.put(rawVolumeError_);
+  out.put(finesMass_);
+  out.put(std::uint64_t(unsplit_));
+  out.put(std::uint64_t(skipped_));
+  out.put(std::uint64_t(removedSeen_));
+  out.put(std::uint64_t(events_.size()));
+  for (const BreakageEvent<D>& e : events_) {
+    out.put(e.time);
+    out.put(e.parent);
+    out.putVector(e.children);
+    out.put(e.criterionValue);
+    out.put(e.strength);
+    out.put(e.manual);
+    out.put(e.buckling);
+    out.put(e.planeNormal);
+    out.put(e.planeOffset);
+    out.putVector(e.childVolumes);
+    out.putVector(e.finesVolumes);
+    out.put(e.rawVolumeError);
+    out.put(e.inertiaRelativeError);
+    out.put(e.parentMass);
+    out.put(e.parentMomentum);
+    out.put(e.fragmentMomentum);
+    out.put(e.fragmentMass);
+    out.put(e.parentKineticEnergy);
+    out.put(e.fragmentKineticEnergy);
+  }
+}
+
+template <int D>
+void Breakage<D>::loadState(dynamics::StateReader& in) {
+  in.expectTag("breakage");
+  std::vector<std::uint8_t> done;
+  in.getVector(done);
+  if (done.size() != manualDone_.size()) {
+    throw std::runtime_error("checkpoint does not fit this scene: " + std::to_string(done.size()) +
+                             " manual breaks in the checkpoint, " + std::to_string(manualDone_.size()) + " in the scene");
+  }
+  for (std::size_t m = 0; m < done.size(); ++m) manualDone_[m] = done[m] != 0;
+  rawVolumeError_ = in.get<double>();
+  finesMass_ = in.get<double>();
+  unsplit_ = std::size_t(in.get<std::uint64_t>());
+  skipped_ = std::size_t(in.get<std::uint64_t>());
+  removedSeen_ = std::size_t(in.get<std::uint64_t>());
+  events_.resize(std::size_t(in.get<std::uint64_t>()));
+  for (BreakageEvent<D>& e : events_) {
+    e.time = in.get<double>();
+    e.parent = in.get<std::uint64_t>();
+    in.getVector(e.children);
+    e.criterionValue = in.get<double>();
+    e.strength = in.get<double>();
+    e.manual = in.get<bool>();
+    e.buckling = in.get<bool>();
+    e.planeNormal = in.get<geometry::Vec<D>>();
+    e.planeOffset = in.get<double>();
+    in.getVector(e.childVolumes);
+    in.getVector(e.finesVolumes);
+    e.rawVolumeError = in.get<double>();
+    e.inertiaRelativeError = in.get<double>();
+    e.parentMass = in.get<double>();
+    e.parentMomentum = in.get<geometry::Vec<D>>();
+    e.fragmentMomentum = in.get<geometry::Vec<D>>();
+    e.fragmentMass = in.get<double>();
+    e.parentKineticEnergy = in.get<double>();
+    e.fragmentKineticEnergy = in.get<double>();
+  }
+}
+
 template class Breakage<2>;
 template class Breakage<3>;
 

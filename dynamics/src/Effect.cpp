@@ -3,6 +3,7 @@
 #include "lsdem/dynamics/World.h"
 
 #include <cmath>
+#include <utility>
 #include <stdexcept>
 #include <string>
 
@@ -86,6 +87,76 @@ void Outflow<D>::afterStep(World<D>& world) {
   }
 }
 
+template <int D>
+Feed<D>::Feed(FeedDef<D> def) : def_(std::move(def)) {
+  if (def_.shapes.empty()) throw std::invalid_argument("feed: needs at least one shape");
+  for (const auto& s : def_.shapes) {
+    if (!s) throw std::invalid_argument("feed: a shape is missing");
+  }
+  if (!(def_.density > 0.0) || !std::isfinite(def_.density)) {
+    throw std::invalid_argument("feed: density must be positive, got " + std::to_string(def_.density));
+  }
+  if (!(def_.interval >= 0.0) || !std::isfinite(def_.interval)) {
+    throw std::invalid_argument("feed: interval must be >= 0 s, got " + std::to_string(def_.interval));
+  }
+  if (def_.interval == 0.0 && !(def_.clearance > 0.0 && std::isfinite(def_.clearance))) {
+    throw std::invalid_argument("feed: give an interval > 0 or a clearance > 0, got clearance " +
+                                std::to_string(def_.clearance));
+  }
+  if (!def_.point.allFinite() || !def_.velocity.allFinite()) throw std::invalid_argument("feed: point and velocity must be finite");
+}
+
+template <int D>
+bool Feed<D>::due(const World<D>& world) const {
+  if (def_.count > 0 && dropped_ >= def_.count) return false;
+  if (world.time() < def_.startTime) return false;
+  if (dropped_ == 0) return true;
+  if (def_.interval > 0.0) return world.time() >= lastDropTime_ + def_.interval;
+  // Cleared: the last grain is gone or has moved away from the drop point.
+  const Particles<D>& p = world.particles();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.id[i] == lastId_) return (p.position[i] - def_.point).norm() > def_.clearance;
+  }
+  return true;
+}
+
+template <int D>
+void Feed<D>::afterStep(World<D>& world) {
+  if (!due(world)) return;
+  ParticleDef<D> g;
+  g.shape = def_.shapes[std::size_t(dropped_ % def_.shapes.size())];
+  g.density = def_.density;
+  g.material = def_.material;
+  g.position = def_.point;
+  g.velocity = def_.velocity;
+  g.birthTime = world.time();
+  const std::size_t i = world.addParticle(g);
+  lastId_ = world.particles().id[i];
+  droppedMass_ += world.particles().mass[i];
+  lastDropTime_ = world.time();
+  ++dropped_;
+}
+
+template <int D>
+void Feed<D>::saveState(StateWriter& out) const {
+  out.putTag("feed");
+  out.put(dropped_);
+  out.put(lastDropTime_);
+  out.put(lastId_);
+  out.put(droppedMass_);
+}
+
+template <int D>
+void Feed<D>::loadState(StateReader& in) {
+  in.expectTag("feed");
+  dropped_ = in.get<std::uint64_t>();
+  lastDropTime_ = in.get<double>();
+  lastId_ = in.get<std::uint64_t>();
+  droppedMass_ = in.get<double>();
+}
+
+template class Feed<2>;
+template class Feed<3>;
 template class Gravity<2>;
 template class Gravity<3>;
 template class GlobalDamping<2>;

@@ -642,6 +642,52 @@ const BoundaryLoads<D>& ContactSolver<D>::accumulate(Particles<D>& particles) {
   return loads_;
 }
 
+template <int D>
+void ContactSolver<D>::saveState(StateWriter& out) const {
+  out.putTag("contacts");
+  out.putVector(pairs_);
+  out.putVector(nodes_);
+  out.putVector(shear_);
+  out.putVector(history_);
+  for (std::size_t v : {particlePairCount_, planePairCount_, particleCount_, planeCount_, toolCount_}) {
+    out.put(std::uint64_t(v));
+  }
+  out.put(elasticEnergy_);
+  out.put(dissipatedPower_);
+  out.put(nodeChecks_);
+  out.putVector(loads_.planeForce);
+  out.putVector(loads_.planeTorque);
+  out.putVector(loads_.toolForce);
+  out.putVector(loads_.toolTorque);
+}
+
+template <int D>
+void ContactSolver<D>::loadState(StateReader& in) {
+  in.expectTag("contacts");
+  in.getVector(pairs_);
+  in.getVector(nodes_);
+  in.getVector(shear_);
+  in.getVector(history_);
+  for (std::size_t* v : {&particlePairCount_, &planePairCount_, &particleCount_, &planeCount_, &toolCount_}) {
+    *v = std::size_t(in.get<std::uint64_t>());
+  }
+  elasticEnergy_ = in.get<double>();
+  dissipatedPower_ = in.get<double>();
+  nodeChecks_ = in.get<std::uint64_t>();
+  in.getVector(loads_.planeForce);
+  in.getVector(loads_.planeTorque);
+  in.getVector(loads_.toolForce);
+  in.getVector(loads_.toolTorque);
+  if (particlePairCount_ + planePairCount_ > pairs_.size()) {
+    throw std::runtime_error("checkpoint state: contact record counts exceed the records");
+  }
+  for (const PairContact<D>& rec : pairs_) {
+    if (std::size_t(rec.firstNode) + rec.nodeCount > nodes_.size()) {
+      throw std::runtime_error("checkpoint state: a contact record points past the node contacts");
+    }
+  }
+}
+
 template class ContactSolver<2>;
 template class ContactSolver<3>;
 

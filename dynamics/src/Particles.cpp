@@ -91,6 +91,66 @@ double Particles<D>::kineticEnergy(std::size_t i) const {
   }
 }
 
+template <int D>
+void Particles<D>::saveState(
+    StateWriter& out, const std::function<std::uint32_t(const std::shared_ptr<const geometry::Shape<D>>&)>& shapeIndex) const {
+  out.putTag("particles");
+  out.putVector(position);
+  out.putVector(orientation);
+  out.putVector(velocity);
+  out.putVector(angularVelocity);
+  out.putVector(force);
+  out.putVector(torque);
+  out.putVector(mass);
+  out.putVector(invMass);
+  out.putVector(inertia);
+  out.putVector(invInertia);
+  std::vector<std::uint32_t> shapes(shape.size());
+  for (std::size_t i = 0; i < shape.size(); ++i) shapes[i] = shapeIndex(shape[i]);
+  out.putVector(shapes);
+  out.putVector(material);
+  out.putVector(strength);
+  out.putVector(id);
+  out.putVector(parentId);
+  out.putVector(generation);
+  out.putVector(birthTime);
+  out.put(nextId_);
+}
+
+template <int D>
+void Particles<D>::loadState(StateReader& in,
+                             const std::function<std::shared_ptr<const geometry::Shape<D>>(std::uint32_t)>& shapeAt) {
+  in.expectTag("particles");
+  in.getVector(position);
+  in.getVector(orientation);
+  in.getVector(velocity);
+  in.getVector(angularVelocity);
+  in.getVector(force);
+  in.getVector(torque);
+  in.getVector(mass);
+  in.getVector(invMass);
+  in.getVector(inertia);
+  in.getVector(invInertia);
+  std::vector<std::uint32_t> shapes;
+  in.getVector(shapes);
+  shape.resize(shapes.size());
+  for (std::size_t i = 0; i < shapes.size(); ++i) shape[i] = shapeAt(shapes[i]);
+  in.getVector(material);
+  in.getVector(strength);
+  in.getVector(id);
+  in.getVector(parentId);
+  in.getVector(generation);
+  in.getVector(birthTime);
+  nextId_ = in.get<ParticleId>();
+  // Every field must describe the same particles.
+  const std::size_t n = position.size();
+  for (std::size_t m : {orientation.size(), velocity.size(), angularVelocity.size(), force.size(), torque.size(),
+                        mass.size(), invMass.size(), inertia.size(), invInertia.size(), shape.size(), material.size(),
+                        strength.size(), id.size(), parentId.size(), generation.size(), birthTime.size()}) {
+    if (m != n) throw std::runtime_error("checkpoint state: particle fields of different lengths");
+  }
+}
+
 template class Particles<2>;
 template class Particles<3>;
 

@@ -150,7 +150,7 @@ void World<D>::removeParticle(std::size_t index, const std::string& reason) {
     stiffness_.pop_back();
   }
   broad_.invalidate();
-  forcesValid_ = false;
+  forcesValid_ = true;
 }
 
 template <int D>
@@ -325,6 +325,117 @@ void World<D>::step() {
 template <int D>
 void World<D>::run(std::uint64_t n) {
   for (std::uint64_t s = 0; s < n; ++s) step();
+}
+
+// ------------------------------------------------------------- checkpoints --
+
+template <int D>
+void World<D>::saveState(
+    StateWriter& out, const std::function<std::uint32_t(const std::shared_ptr<const geometry::Shape<D>>&)>& shapeIndex) const {
+  out.putTag("world");
+  out.put(std::int32_t(D));
+  out.put(std::uint64_t(planes_.size()));
+  out.put(std::uint64_t(tools_.size()));
+  out.put(std::uint64_t(effects_.size()));
+  out.put(time_);
+  out.put(steps_);
+  out.put(dt_);
+  out.put(dtCritical_);
+  out.put(energy_);
+  out.put(stageSeconds_);
+  out.putVector(effectSeconds_);
+  out.put(std::uint64_t(removed_.size()));
+  for (const RemovedParticle& r : removed_) {
+    out.put(r.id);
+    out.put(r.time);
+    out.put(r.mass);
+    out.put(r.volume);
+    out.put(r.sieveSize);
+    out.putString(r.reason);
+  }
+  particles_.saveState(out, shapeIndex);
+  contacts_.saveState(out);
+  out.putVector(loads_.planeForce);
+  out.putVector(loads_.planeTorque);
+  out.putVector(loads_.toolForce);
+  out.putVector(loads_.toolTorque);
+  // Servo platens carry state; every other motion is a function of time.
+  for (const ToolDef<D>& tool : tools_) {
+    if (const auto* servo = std::get_if<ServoPlaten<D>>(&tool.motion)) {
+      out.put(servo->displacement());
+      out.put(servo->speed());
+      out.put(servo->def().targetForce);
+    }
+  }
+  for (const auto& e : effects_) {
+    out.putString(e->name());
+    e->saveState(out);
+  }
+  out.putTag("end of world");
+}
+
+template <int D>
+void World<D>::loadState(StateReader& in,
+                         const std::function<std::shared_ptr<const geometry::Shape<D>>(std::uint32_t)>& shapeAt) {
+  in.expectTag("world");
+  const auto mismatch = [](const std::string& what, std::uint64_t saved, std::uint64_t here) {
+    throw std::runtime_error("checkpoint does not fit this scene: " + what + " " + std::to_string(saved) +
+                             " in the checkpoint, " + std::to_string(here) + " in the scene");
+  };
+  const std::int32_t dim = in.get<std::int32_t>();
+  if (dim != D) mismatch("dimension", std::uint64_t(dim), D);
+  const std::uint64_t planes = in.get<std::uint64_t>(), tools = in.get<std::uint64_t>(), effects = in.get<std::uint64_t>();
+  if (planes != planes_.size()) mismatch("planes", planes, planes_.size());
+  if (tools != tools_.size()) mismatch("tools", tools, tools_.size());
+  if (effects != effects_.size()) mismatch("effects", effects, effects_.size());
+  time_ = in.get<double>();
+  steps_ = in.get<std::uint64_t>();
+  dt_ = in.get<double>();
+  dtCritical_ = in.get<double>();
+  energy_ = in.get<EnergyLedger>();
+  stageSeconds_ = in.get<std::array<double, std::size_t(Stage::Count)>>();
+  in.getVector(effectSeconds_);
+  effectSeconds_.resize(effects_.size(), 0.0);
+  removed_.resize(std::size_t(in.get<std::uint64_t>()));
+  for (RemovedParticle& r : removed_) {
+    r.id = in.get<std::uint64_t>();
+    r.time = in.get<double>();
+    r.mass = in.get<double>();
+    r.volume = in.get<double>();
+    r.sieveSize = in.get<double>();
+    r.reason = in.getString();
+  }
+  particles_.loadState(in, shapeAt);
+  contacts_.loadState(in);
+  in.getVector(loads_.planeForce);
+  in.getVector(loads_.planeTorque);
+  in.getVector(loads_.toolForce);
+  in.getVector(loads_.toolTorque);
+  for (ToolDef<D>& tool : tools_) {
+    if (auto* servo = std::get_if<ServoPlaten<D>>(&tool.motion)) {
+      const double displacement = in.get<double>(), speed = in.get<double>(), target = in.get<double>();
+      servo->setTargetForce(target);
+      servo->restore(displacement, speed);
+    }
+  }
+  for (auto& e : effects_) {
+    const std::string name = in.getString();
+    if (name != e->name()) {
+      throw std::runtime_error("checkpoint does not fit this scene: effect '" + name + "' in the checkpoint, '" +
+                               e->name() + "' in the scene");
+    }
+    e->loadState(in);
+  }
+  in.expectTag("end of world");
+
+  // Derived state: per-particle stiffness, poses at the current time, a fresh
+  // broad phase (its output is sorted by id, so a rebuild finds the same
+  // contacts), and the forces of this state, which were saved.
+  stiffness_.resize(particles_.size());
+  for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(particles_.shape[i]);
+  moveKinematicBodies(time_);
+  broad_.invalidate();
+  forcesValid_ = true;
 }
 
 template <int D>

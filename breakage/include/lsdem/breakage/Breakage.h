@@ -120,6 +120,9 @@ class Breakage final : public dynamics::Effect<D> {
   std::string name() const override { return "breakage"; }
   /// @brief Strengths, stresses, failures and splits of this step (file comment).
   void afterStep(dynamics::World<D>& world) override;
+  /// @brief Writes the log, totals and which manual breaks are done (checkpoints).
+  void saveState(dynamics::StateWriter& out) const override;
+  void loadState(dynamics::StateReader& in) override;
 
   const BreakageDef<D>& def() const { return def_; }
   const Criterion& criterion() const { return *criterion_; }

@@ -43,6 +43,7 @@
 #include "lsdem/dynamics/Contact.h"
 #include "lsdem/dynamics/ContactLaw.h"
 #include "lsdem/dynamics/Particles.h"
+#include "lsdem/dynamics/State.h"
 #include "lsdem/dynamics/Wall.h"
 
 #include <array>
@@ -188,6 +189,12 @@ class ContactSolver {
   std::size_t historySize() const { return history_.empty() ? 0 : shear_.size(); }
   /// @brief Forgets every shear history (e.g. after a restart without it).
   void clearHistory() { history_.clear(); }
+
+  /// @brief Writes the output of the last compute() (records, shear history,
+  /// totals, loads): what the next compute() and the readers of this step need.
+  void saveState(StateWriter& out) const;
+  /// @brief Reads back what saveState wrote (same law; particles restored alike).
+  void loadState(StateReader& in);
 
  private:
   template <NormalModel Normal, ForceFormulation Formulation, bool Friction, bool Damping>

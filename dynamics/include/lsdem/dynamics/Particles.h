@@ -19,9 +19,11 @@
 /// which keeps runs deterministic.
 
 #include "lsdem/dynamics/Rotation.h"
+#include "lsdem/dynamics/State.h"
 #include "lsdem/geometry/Shape.h"
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -96,6 +98,14 @@ class Particles {
   }
   /// @brief Translational plus rotational kinetic energy of particle i, J.
   double kineticEnergy(std::size_t i) const;
+
+  /// @brief Writes every field and the id counter; each shape as the number
+  /// `shapeIndex` gives it (the caller stores the shapes themselves).
+  void saveState(StateWriter& out,
+                 const std::function<std::uint32_t(const std::shared_ptr<const geometry::Shape<D>>&)>& shapeIndex) const;
+  /// @brief Replaces the store by what saveState wrote; `shapeAt` turns the
+  /// numbers back into shapes (and throws for an unknown one).
+  void loadState(StateReader& in, const std::function<std::shared_ptr<const geometry::Shape<D>>(std::uint32_t)>& shapeAt);
 
  private:
   ParticleId nextId_ = 0;

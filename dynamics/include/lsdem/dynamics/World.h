@@ -22,9 +22,11 @@
 #include "lsdem/dynamics/Motion.h"
 #include "lsdem/dynamics/NarrowPhase.h"
 #include "lsdem/dynamics/Particles.h"
+#include "lsdem/dynamics/State.h"
 #include "lsdem/dynamics/Wall.h"
 
 #include <array>
+#include <functional>
 #include <limits>
 #include <cstdint>
 #include <memory>
@@ -131,6 +133,21 @@ class World {
   void step();
   /// @brief Advances n steps.
   void run(std::uint64_t n);
+
+  // ---- checkpoints ----
+  /// @brief Writes the state between steps: particles (each shape as the number
+  /// `shapeIndex` gives it), contact records and shear history, boundary loads,
+  /// servo states, time, step count, time step, energy ledger, removals, stage
+  /// times and every effect's state, in order.
+  void saveState(StateWriter& out,
+                 const std::function<std::uint32_t(const std::shared_ptr<const geometry::Shape<D>>&)>& shapeIndex) const;
+  /// @brief Restores what saveState wrote into a world built from the same
+  /// definition, planes, tools and effects (same order). The next step then
+  /// equals the saved world's next step bit for bit.
+  /// @note Throws std::runtime_error when the state does not fit this world
+  /// (other effects, tools or planes) or is truncated.
+  void loadState(StateReader& in,
+                 const std::function<std::shared_ptr<const geometry::Shape<D>>(std::uint32_t)>& shapeAt);
 
   // ---- state ----
   Particles<D>& particles() { return particles_; }

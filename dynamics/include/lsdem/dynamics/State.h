@@ -1,0 +1,99 @@
+#pragma once
+/// @file State.h
+/// @brief A byte archive for the state of a world between steps (checkpoints).
+///
+/// The world, its contact solver and its effects write their state into a
+/// StateWriter and read it back from a StateReader in the same order. Values
+/// are copied byte for byte (native little-endian doubles), so a restored world
+/// continues bit for bit like the one that was saved. The archive is memory
+/// only: io/ writes it to disk (DESIGN: only io reads or writes files).
+///
+/// Only plain values go through put()/get(): arithmetic types, enums and
+/// fixed-size Eigen vectors, matrices and quaternions (arrays of doubles), and
+/// structs made of those.
+
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace lsdem::dynamics {
+
+class StateWriter {
+ public:
+  /// @brief Appends the bytes of one plain value.
+  template <class T>
+  void put(const T& value) {
+    const auto* p = reinterpret_cast<const char*>(&value);
+    bytes_.insert(bytes_.end(), p, p + sizeof(T));
+  }
+  /// @brief Appends a count and the elements of a vector of plain values.
+  template <class T>
+  void putVector(const std::vector<T>& values) {
+    put(std::uint64_t(values.size()));
+    const auto* p = reinterpret_cast<const char*>(values.data());
+    bytes_.insert(bytes_.end(), p, p + values.size() * sizeof(T));
+  }
+  void putString(const std::string& s) {
+    put(std::uint64_t(s.size()));
+    bytes_.insert(bytes_.end(), s.begin(), s.end());
+  }
+  /// @brief Writes a tag that the reader checks, so a misaligned archive fails loudly.
+  void putTag(const char* tag) { putString(tag); }
+
+  const std::vector<char>& bytes() const { return bytes_; }
+
+ private:
+  std::vector<char> bytes_;
+};
+
+class StateReader {
+ public:
+  StateReader(const char* data, std::size_t size) : data_(data), size_(size) {}
+
+  template <class T>
+  T get() {
+    T value;
+    std::memcpy(reinterpret_cast<char*>(&value), take(sizeof(T)), sizeof(T));
+    return value;
+  }
+  template <class T>
+  void getVector(std::vector<T>& values) {
+    const std::uint64_t n = get<std::uint64_t>();
+    if (n > (size_ - pos_) / (sizeof(T) ? sizeof(T) : 1)) fail("vector of " + std::to_string(n) + " elements");
+    values.resize(std::size_t(n));
+    std::memcpy(reinterpret_cast<char*>(values.data()), take(std::size_t(n) * sizeof(T)), std::size_t(n) * sizeof(T));
+  }
+  std::string getString() {
+    const std::uint64_t n = get<std::uint64_t>();
+    if (n > size_ - pos_) fail("string of " + std::to_string(n) + " bytes");
+    const char* p = take(std::size_t(n));
+    return std::string(p, p + n);
+  }
+  /// @brief Reads a tag and checks it (throws std::runtime_error when it differs).
+  void expectTag(const char* tag) {
+    const std::string got = getString();
+    if (got != tag) fail(std::string("section '") + tag + "', found '" + got + "'");
+  }
+  bool atEnd() const { return pos_ == size_; }
+
+ private:
+  const char* take(std::size_t n) {
+    if (n > size_ - pos_) fail(std::to_string(n) + " more bytes");
+    const char* p = data_ + pos_;
+    pos_ += n;
+    return p;
+  }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw std::runtime_error("checkpoint state is truncated or corrupt: expected " + what + " at byte " +
+                             std::to_string(pos_));
+  }
+
+  const char* data_;
+  std::size_t size_;
+  std::size_t pos_ = 0;
+};
+
+}  // namespace lsdem::dynamics
