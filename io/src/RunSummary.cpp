@@ -5,7 +5,8 @@
 namespace lsdem::io {
 
 template <int D>
-void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::ostream& out) {
+void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::ostream& out,
+                     const std::function<void(JsonWriter&)>& extra) {
   using dynamics::Stage;
   JsonWriter w(out);
   const auto& contacts = world.contacts();
@@ -58,10 +59,13 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
     w.field(dynamics::stageName(Stage(s)), world.stageSeconds()[s]);
   }
   w.endObject();
+  if (extra) extra(w);
   w.endObject();
 }
 
-template void writeRunSummary<2>(const dynamics::World<2>&, double, std::ostream&);
-template void writeRunSummary<3>(const dynamics::World<3>&, double, std::ostream&);
+template void writeRunSummary<2>(const dynamics::World<2>&, double, std::ostream&,
+                                 const std::function<void(JsonWriter&)>&);
+template void writeRunSummary<3>(const dynamics::World<3>&, double, std::ostream&,
+                                 const std::function<void(JsonWriter&)>&);
 
 }  // namespace lsdem::io

@@ -111,10 +111,13 @@ ShapeDecl readOfDimension(TomlReader& r, const std::string& file, int line, cons
 
 }  // namespace
 
-ShapeDecl readShapeTable(const toml::table& table, const std::string& file, const std::string& path) {
+ShapeDecl readShapeTable(const toml::table& table, const std::string& file, const std::string& path, int sceneDimension) {
   TomlReader r(table, file, path);
   const int line = int(table.source().begin.line);
-  const std::int64_t dimension = r.integer("dimension");
+  const std::int64_t dimension = sceneDimension == 0 ? r.integer("dimension") : r.integer("dimension", sceneDimension);
+  if (sceneDimension != 0 && dimension != sceneDimension) {
+    r.fail("dimension", "is " + std::to_string(dimension) + " in a " + std::to_string(sceneDimension) + "D scene");
+  }
   if (dimension == 2) return readOfDimension<2>(r, file, line, path);
   if (dimension == 3) return readOfDimension<3>(r, file, line, path);
   r.fail("dimension", "must be 2 or 3, got " + std::to_string(dimension));

@@ -14,6 +14,8 @@ namespace lsdem::io::detail {
 /// @param table  the shape's table
 /// @param file   the file it came from (messages, and the folder for relative mesh paths)
 /// @param path   dotted path of the table in the file ("shape", "shapes.grain")
-ShapeDecl readShapeTable(const toml::table& table, const std::string& file, const std::string& path);
+/// @param dimension  0: the table must give `dimension`; 2 or 3: the scene's
+///   dimension (the table may repeat it, and must then agree)
+ShapeDecl readShapeTable(const toml::table& table, const std::string& file, const std::string& path, int dimension = 0);
 
 }  // namespace lsdem::io::detail

@@ -113,6 +113,56 @@ class TomlReader {
     return rows;
   }
 
+  /// @brief A boolean; `fallback` when absent.
+  bool boolean(const std::string& key, bool fallback) {
+    const toml::node* n = take(key);
+    if (!n) return fallback;
+    if (!n->is_boolean()) fail(key, "expected true or false, got " + typeName(*n));
+    return *n->value<bool>();
+  }
+
+  /// @brief A sub-table; nullptr when absent.
+  const toml::table* optionalTable(const std::string& key) {
+    const toml::node* n = take(key);
+    if (!n) return nullptr;
+    if (!n->is_table()) fail(key, "expected a table, got " + typeName(*n));
+    return n->as_table();
+  }
+  /// @brief An array of tables (`[[key]]`); empty when absent.
+  std::vector<const toml::table*> tables(const std::string& key) {
+    std::vector<const toml::table*> out;
+    const toml::node* n = take(key);
+    if (!n) return out;
+    const toml::array* a = n->as_array();
+    if (!a) fail(key, "expected an array of tables ([[" + key + "]]), got " + typeName(*n));
+    for (const toml::node& e : *a) {
+      if (!e.is_table()) fail(key, "expected tables ([[" + key + "]]), got " + typeName(e));
+      out.push_back(e.as_table());
+    }
+    return out;
+  }
+  /// @brief An array of strings (a single string is accepted as a list of one).
+  std::vector<std::string> strings(const std::string& key) {
+    std::vector<std::string> out;
+    const toml::node* n = take(key);
+    if (!n) return out;
+    if (n->is_string()) return {*n->value<std::string>()};
+    const toml::array* a = n->as_array();
+    if (!a) fail(key, "expected a string or an array of strings, got " + typeName(*n));
+    for (const toml::node& e : *a) {
+      if (!e.is_string()) fail(key, "expected strings, got " + typeName(e));
+      out.push_back(*e.value<std::string>());
+    }
+    return out;
+  }
+  /// @brief The line of `key` (the table's line when absent).
+  int lineOf(const std::string& key) const {
+    const toml::node* n = table_.get(key);
+    return n ? int(n->source().begin.line) : int(table_.source().begin.line);
+  }
+  /// @brief The dotted path of a key of this table.
+  std::string pathOf(const std::string& key) const { return dotted(key); }
+
   /// @brief Rejects any key of the table that was not read: catches typos.
   void finish() const {
     for (const auto& [k, v] : table_) {

@@ -1,0 +1,62 @@
+#pragma once
+/// @file Run.h
+/// @brief Running a scene: the step loop with its outputs (docs/outputs.md),
+/// written between steps and never inside one: ParaView series, CSV
+/// histories, size and shape distributions, the breakage and removal logs,
+/// `summary.json` (kept current), and checkpoints from which `resume`
+/// continues bit for bit.
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+
+namespace lsdem::io {
+
+/// Where a run stands (for progress lines).
+struct RunProgress {
+  std::uint64_t steps = 0;        ///< steps done
+  double time = 0.0;              ///< simulated time, s
+  double endTime = 0.0;           ///< simulated time at the end, s (estimate for step-count runs)
+  double fraction = 0.0;          ///< done, in [0, 1]
+  double stepsPerSecond = 0.0;    ///< over the last report interval
+  double wallSeconds = 0.0;       ///< since the run (or the resumed part) started
+  double etaSeconds = 0.0;        ///< estimate of the wall time left
+  std::size_t particles = 0;
+  std::size_t contacts = 0;
+  std::size_t breakages = 0;
+  bool done = false;              ///< the last report
+};
+
+struct RunOptions {
+  std::string scene;                        ///< scene file (a resumed run uses the checkpoint's)
+  std::string outDir;                       ///< output folder; empty: the scene's [output] dir
+  std::optional<std::uint64_t> steps;       ///< run this many steps (from the start or the checkpoint) instead of the scene's end
+  int threads = -1;                         ///< OpenMP threads; < 0: the scene's; 0: all cores
+  std::string resumeDir;                    ///< non-empty: continue the run whose outputs are in this folder
+  const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by Ctrl-C) to stop after the current step
+  std::function<void(const RunProgress&)> progress;  ///< called every [output] progress_seconds and at the end
+};
+
+struct RunResult {
+  std::string outDir;
+  int dimension = 0;
+  std::uint64_t steps = 0;
+  double time = 0.0;              ///< simulated, s
+  double wallSeconds = 0.0;
+  bool stopped = false;           ///< stopped early by `stop`
+  std::size_t particles = 0;
+  std::size_t breakages = 0;
+  double massIn = 0.0;            ///< initial + fed mass, kg
+  double massOut = 0.0;           ///< particles + removed (outflow, fines), kg
+  double massBalanceError = 0.0;  ///< (massOut - massIn) / massIn
+};
+
+/// @brief Runs (or resumes) a scene and writes its outputs.
+/// @note Throws InputError for a bad scene or checkpoint, std::runtime_error
+/// when an output cannot be written. A run that stops early (stop flag)
+/// writes a final frame, summary and checkpoint first.
+RunResult runScene(const RunOptions& options);
+
+}  // namespace lsdem::io

@@ -1,0 +1,127 @@
+#pragma once
+/// @file Scene.h
+/// @brief Scene files (TOML): what a run simulates and writes. Every key is
+/// documented in docs/scenes.md. readScene() checks the whole file and builds
+/// its shapes; buildWorld() places the particles and assembles a world from the
+/// effects the scene declares, and nothing else.
+
+#include "lsdem/breakage/Breakage.h"
+#include "lsdem/dynamics/World.h"
+#include "lsdem/geometry/Shape.h"
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace lsdem::io {
+
+/// How a particle group is placed.
+enum class Placement {
+  List,   ///< explicit positions
+  Cloud,  ///< random, non-overlapping (bounding spheres) in a region
+  Grid,   ///< on a lattice filling a region
+  Feed,   ///< dropped one at a time from a point during the run
+};
+
+/// One `[[particles]]` group.
+template <int D>
+struct ParticleGroupDef {
+  int line = 0;                          ///< line of the group in the file (messages)
+  std::vector<std::size_t> shapes;       ///< indices into SceneDef::shapes, cycled in order
+  double density = 2650.0;               ///< kg/m^3 (kg/m^2 per unit thickness in 2D)
+  int material = 0;                      ///< index into SceneDef::materials
+  Placement placement = Placement::List;
+  std::vector<geometry::Vec<D>> positions;  ///< List: centroids, m
+  std::vector<double> angles;               ///< List, 2D: orientation angles, rad (empty: 0)
+  geometry::Box<D> region;                  ///< Cloud, Grid: centroids stay in here, bodies inside it, m
+  std::uint64_t count = 0;                  ///< Cloud, Grid: particles; Feed: grains in all (0 = no limit)
+  double gridSpacing = 0.0;                 ///< Grid: lattice spacing, m (0: the largest bounding diameter)
+  bool randomOrientation = false;           ///< Cloud, Grid: uniformly random orientations
+  /// Scale each particle's shape to a random equivalent diameter, uniform in
+  /// [min, max] (m); {0, 0}: shapes as defined.
+  double diameterMin = 0.0, diameterMax = 0.0;
+  geometry::Vec<D> velocity = geometry::Vec<D>::Zero();  ///< initial velocity, m/s
+  std::uint64_t seed = 1;                   ///< random placement, orientations and sizes
+  // Feed
+  geometry::Vec<D> feedPoint = geometry::Vec<D>::Zero();  ///< m
+  double feedInterval = 0.0;                ///< s; 0: when the last grain has cleared
+  double feedClearance = 0.0;               ///< m
+  double feedStart = 0.0;                   ///< s
+};
+
+/// What the run writes and how often (`[output]`).
+struct OutputDef {
+  std::string dir = "lsdem-out";        ///< output folder (the command line's --out wins)
+  std::uint64_t frames = 50;            ///< ParaView frames over the run (0: none), including the first and the last
+  bool particles = true, surfaces = true, boundaries = true, contacts = false;  ///< ParaView series written
+  bool ascii = false;                   ///< ASCII instead of base64 binary VTP
+  std::uint64_t historyRows = 500;      ///< rows of history.csv over the run
+  std::uint64_t distributions = 5;      ///< PSD and shape-statistics snapshots over the run (including the first and last)
+  double checkpointEvery = 0.0;         ///< s of simulated time between checkpoints (0: only at the end)
+  double progressSeconds = 2.0;         ///< wall seconds between progress reports
+};
+
+/// A specimen whose stress, strain and void ratio the history records
+/// (`[output.specimen]`): the space between two boundaries.
+struct SpecimenDef {
+  std::string top;       ///< plane or tool that loads the specimen
+  std::string bottom;    ///< plane it is loaded against
+  double width = 0.0;    ///< 2D: specimen width, m; 3D: cross-section area, m^2
+};
+
+/// A whole scene of dimension D.
+template <int D>
+struct SceneDef {
+  std::string file;                      ///< the scene file
+  double duration = 0.0;                 ///< s (exactly one of duration and steps is > 0)
+  std::uint64_t steps = 0;
+  int threads = 0;                       ///< OpenMP threads, 0: all cores
+  std::uint64_t seed = 1;
+  dynamics::WorldDef<D> world;           ///< contact law, time step, gravity, damping, outflow, finite checks
+  std::vector<std::string> shapeNames;   ///< `[shapes.NAME]`, in file order; a folder adds NAME/FILE
+  std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes;
+  std::vector<std::string> materials;    ///< names, index = material id
+  std::vector<ParticleGroupDef<D>> groups;
+  std::vector<dynamics::PlaneDef<D>> planes;
+  std::vector<dynamics::ToolDef<D>> tools;
+  std::optional<breakage::BreakageDef<D>> breakage;
+  OutputDef output;
+  std::optional<SpecimenDef> specimen;
+  /// The region drawn for planes in ParaView and used for the default output
+  /// extent, m (from `[simulation] domain`, or the particles' and tools' box).
+  std::optional<geometry::Box<D>> domain;
+};
+
+using AnySceneDef = std::variant<SceneDef<2>, SceneDef<3>>;
+
+/// @brief Reads and checks a scene file and builds its shapes.
+/// @note Throws InputError ("file:line: key: problem") for any bad input:
+/// syntax, unknown keys, wrong types, out-of-range values, unknown names.
+AnySceneDef readScene(const std::string& path);
+
+/// A world assembled from a scene, with handles on the effects a run reports.
+template <int D>
+struct SceneWorld {
+  std::unique_ptr<dynamics::World<D>> world;
+  breakage::Breakage<D>* breakage = nullptr;     ///< null when the scene has no breakage
+  std::vector<dynamics::Feed<D>*> feeds;         ///< one per feed group
+  double initialMass = 0.0;                      ///< kg of the particles placed at the start
+};
+
+/// @brief Places the scene's particles (deterministic for its seeds) and
+/// assembles the world: planes, tools, then effects in this order: gravity,
+/// global damping, local damping, breakage, outflow, feeds.
+/// @note Throws InputError when a group cannot be placed (a region too small
+/// for its count, a particle outside it).
+template <int D>
+SceneWorld<D> buildWorld(const SceneDef<D>& scene);
+
+/// @brief A shape scaled by `factor` about its centroid: grid, nodes, mass
+/// properties and descriptors scaled exactly (no resampling).
+template <int D>
+std::shared_ptr<const geometry::Shape<D>> scaledShape(const geometry::Shape<D>& shape, double factor);
+
+}  // namespace lsdem::io

@@ -1,0 +1,701 @@
+/// @file Run.cpp
+/// @brief The run loop of `lsdem run`: steps, outputs between steps,
+/// checkpoints and resume (Run.h, docs/outputs.md).
+
+#include "lsdem/io/Run.h"
+
+#include "lsdem/breakage/Criteria.h"
+#include "lsdem/breakage/GrainStress.h"
+#include "lsdem/io/BreakageLog.h"
+#include "lsdem/io/GrainFile.h"
+#include "lsdem/io/InputError.h"
+#include "lsdem/io/RunSummary.h"
+#include "lsdem/io/Scene.h"
+#include "lsdem/io/Vtk.h"
+
+#include <algorithm>
+#include <charconv>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <cstring>
+#include <sstream>
+
+#ifdef LSDEM_HAVE_OPENMP
+#include <omp.h>
+#endif
+
+namespace lsdem::io {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+using geometry::Vec;
+
+constexpr char kCheckpointMagic[8] = {'L', 'S', 'D', 'E', 'M', 'C', 'K', 'P'};
+constexpr std::uint32_t kCheckpointVersion = 1;
+constexpr const char* kCheckpointFile = "checkpoint.lsc";
+
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// Shortest text that reads back to the same double.
+std::string num(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, r.ptr);
+}
+
+std::uint64_t fnv1a(const std::string& bytes) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+std::string readWholeFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, "", "cannot read the file");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// One CSV file of the run, appended row by row and flushed, so a run that
+// stops keeps every row written. A resumed run cuts it back to the size it had
+// at the checkpoint.
+class CsvFile {
+ public:
+  void open(const fs::path& path, const std::string& header, std::optional<std::uint64_t> resumeSize) {
+    path_ = path;
+    if (resumeSize) {
+      if (!fs::exists(path)) throw std::runtime_error("resume: " + path.string() + " is missing");
+      fs::resize_file(path, *resumeSize);
+      out_.open(path, std::ios::app | std::ios::binary);
+    } else {
+      out_.open(path, std::ios::trunc | std::ios::binary);
+      out_ << header << '\n';
+    }
+    if (!out_) throw std::runtime_error("cannot write " + path.string());
+    out_.flush();
+  }
+  std::ofstream& stream() { return out_; }
+  void row(const std::string& line) {
+    out_ << line << '\n';
+    out_.flush();
+  }
+  void flush() { out_.flush(); }
+  std::uint64_t size() {
+    out_.flush();
+    return std::uint64_t(fs::file_size(path_));
+  }
+
+ private:
+  fs::path path_;
+  std::ofstream out_;
+};
+
+// Output times: every `interval` of a clock (simulated time, or steps).
+struct Schedule {
+  double interval = 0.0;  // <= 0: never
+  double next = 0.0;
+  bool due(double clock) const { return interval > 0.0 && clock >= next - 1e-9 * interval; }
+  void advance(double clock) {
+    while (next <= clock + 1e-9 * interval) next += interval;
+  }
+};
+
+template <int D>
+class Runner {
+ public:
+  Runner(SceneDef<D> scene, const RunOptions& options, const std::string& outDir)
+      : scene_(std::move(scene)), options_(options), out_(outDir) {}
+
+  RunResult run(bool resume) {
+    const Clock::time_point start = Clock::now();
+    fs::create_directories(out_);
+    sw_ = buildWorld(scene_);
+    World& world = *sw_.world;
+    std::optional<std::map<std::string, std::uint64_t>> sizes;
+    if (resume) {
+      sizes = loadCheckpoint();
+    } else {
+      fs::copy_file(scene_.file, out_ / "scene.toml", fs::copy_options::overwrite_existing);
+      initialMass_ = sw_.initialMass;
+      h0_ = specimenHeight();
+    }
+    setEnd(world);
+    openOutputs(sizes);
+
+    // Frames at the start of a new run (a resumed run has them already).
+    if (!resume) {
+      writeFrame();
+      writeDistributions();
+      writeHistoryRow();
+      advanceSchedules();
+    }
+
+    // The loop: one step, then whatever output is due.
+    Clock::time_point lastReport = Clock::now();
+    std::uint64_t stepsAtReport = world.steps();
+    bool stopped = false;
+    while (!finished(world)) {
+      if (options_.stop && options_.stop->load()) {
+        stopped = true;
+        break;
+      }
+      world.step();
+      const double clock = clockValue();
+      appendLogs();
+      if (history_.due(clock)) writeHistoryRow();
+      if (frames_.due(clock)) writeFrame();
+      if (distributions_.due(clock)) writeDistributions();
+      if (checkpoints_.due(clock)) writeCheckpoint();
+      advanceSchedules();
+      if (options_.progress && secondsSince(lastReport) >= scene_.output.progressSeconds) {
+        const double dtWall = secondsSince(lastReport);
+        report(start, double(world.steps() - stepsAtReport) / dtWall, false);
+        lastReport = Clock::now();
+        stepsAtReport = world.steps();
+      }
+    }
+
+    // The end (or an early stop): final frame, logs, summary, checkpoint.
+    const double clock = clockValue();
+    if (lastHistoryClock_ != clock) writeHistoryRow();
+    if (lastFrameClock_ != clock) writeFrame();
+    if (lastDistributionClock_ != clock) writeDistributions();
+    wallSeconds_ = secondsSince(start);
+    writeCheckpoint();
+    writeProductPsd();
+    writeSummary(stopped);
+    if (options_.progress) report(start, double(world.steps()) / std::max(wallSeconds_, 1e-9), true);
+
+    RunResult r;
+    r.outDir = out_.string();
+    r.dimension = D;
+    r.steps = world.steps();
+    r.time = world.time();
+    r.wallSeconds = wallSeconds_;
+    r.stopped = stopped;
+    r.particles = world.particles().size();
+    r.breakages = sw_.breakage ? sw_.breakage->breakages() : 0;
+    r.massIn = massIn();
+    r.massOut = world.particleMass() + world.removedMass();
+    r.massBalanceError = r.massIn > 0.0 ? (r.massOut - r.massIn) / r.massIn : 0.0;
+    return r;
+  }
+
+ private:
+  using World = dynamics::World<D>;
+
+  double massIn() const {
+    double fed = 0.0;
+    for (const auto* f : sw_.feeds) fed += f->droppedMass();
+    return initialMass_ + fed;
+  }
+
+  // ---- the end of the run and the output clocks ----
+  void setEnd(const World& world) {
+    byTime_ = scene_.duration > 0.0 && !options_.steps;
+    if (options_.steps) {
+      endStep_ = world.steps() + *options_.steps;
+    } else if (!byTime_) {
+      endStep_ = scene_.steps;
+    }
+    endTime_ = scene_.duration;
+    const double span = byTime_ ? scene_.duration : double(options_.steps ? endStep_ : scene_.steps);
+    const auto every = [&](std::uint64_t n) { return n > 0 ? span / double(n) : 0.0; };
+    const auto roundSteps = [&](double v) { return byTime_ || v <= 0.0 ? v : std::max(1.0, std::floor(v)); };
+    frames_.interval = roundSteps(every(scene_.output.frames));
+    history_.interval = roundSteps(every(scene_.output.historyRows));
+    distributions_.interval = roundSteps(every(scene_.output.distributions > 1 ? scene_.output.distributions - 1 : 0));
+    checkpoints_.interval = scene_.output.checkpointEvery > 0.0
+                                ? (byTime_ ? scene_.output.checkpointEvery
+                                           : std::max(1.0, std::floor(scene_.output.checkpointEvery / std::max(world.dt(), 1e-300))))
+                                : 0.0;
+    if (!resumed_) {
+      frames_.next = distributions_.next = history_.next = 0.0;
+      checkpoints_.next = checkpoints_.interval;
+    }
+  }
+  bool finished(const World& world) const {
+    if (byTime_) return world.time() >= endTime_ * (1.0 - 1e-12);
+    return world.steps() >= endStep_;
+  }
+  double clockValue() const { return byTime_ ? sw_.world->time() : double(sw_.world->steps()); }
+  void advanceSchedules() {
+    const double clock = clockValue();
+    for (Schedule* s : {&frames_, &history_, &distributions_, &checkpoints_}) {
+      if (s->interval > 0.0) s->advance(clock);
+    }
+  }
+
+  // ---- outputs ----
+  void openOutputs(const std::optional<std::map<std::string, std::uint64_t>>& sizes) {
+    const auto size = [&](const std::string& name) -> std::optional<std::uint64_t> {
+      if (!sizes) return std::nullopt;
+      const auto it = sizes->find(name);
+      if (it == sizes->end()) throw InputError((out_ / kCheckpointFile).string(), 0, name, "missing in the checkpoint");
+      return it->second;
+    };
+    // history.csv
+    std::string header =
+        "step,time_s,dt_s,particles,contacts,breakages,removed_mass_kg,kinetic_J,elastic_J,gravity_work_J,"
+        "boundary_work_J,damping_loss_J,contact_loss_J,energy_error_J";
+    const char* axes[3] = {"x", "y", "z"};
+    for (const std::string& name : sw_.world->planeNames()) {
+      for (int a = 0; a < D; ++a) header += "," + name + "_force_" + axes[a] + "_N";
+    }
+    for (const auto& tool : sw_.world->tools()) {
+      for (int a = 0; a < D; ++a) header += "," + tool.name + "_force_" + axes[a] + "_N";
+      header += "," + tool.name + "_power_W";
+    }
+    if (scene_.specimen) header += ",height_m,stress_Pa,strain,void_ratio";
+    csv_["history.csv"].open(out_ / "history.csv", header, size("history.csv"));
+    csv_["psd.csv"].open(out_ / "psd.csv", "time_s,sieve_size_m,percent_passing", size("psd.csv"));
+    csv_["shape_stats.csv"].open(out_ / "shape_stats.csv",
+                                 "time_s,strain,particles,mean_circularity,mean_aspect_ratio,mean_sieve_size_m",
+                                 size("shape_stats.csv"));
+    csv_["shape_histograms.csv"].open(out_ / "shape_histograms.csv", "time_s,strain,quantity,bin_low,bin_high,count",
+                                      size("shape_histograms.csv"));
+    csv_["removed.csv"].open(out_ / "removed.csv", "id,time_s,mass_kg,volume,sieve_size_m,reason", size("removed.csv"));
+    {
+      std::ostringstream h;
+      writeBreakageLogHeader<D>(h);
+      std::string s = h.str();
+      if (!s.empty() && s.back() == '\n') s.pop_back();
+      csv_["breakage_log.csv"].open(out_ / "breakage_log.csv", s, size("breakage_log.csv"));
+    }
+    // ParaView series.
+    FrameWriterDef<D> def;
+    def.directory = out_;
+    def.encoding = scene_.output.ascii ? VtkEncoding::Ascii : VtkEncoding::Binary;
+    def.particles = scene_.output.particles;
+    def.surfaces = scene_.output.surfaces;
+    def.boundaries = scene_.output.boundaries;
+    def.contacts = scene_.output.contacts;
+    if (scene_.domain) def.extent = *scene_.domain;
+    def.resume = resumed_;
+    if (scene_.output.frames > 0) {
+      frameWriter_.emplace(def);
+      if (resumed_) frameWriter_->truncateAfter(sw_.world->time());
+    }
+  }
+
+  void writeHistoryRow() {
+    const World& w = *sw_.world;
+    const dynamics::EnergyLedger& e = w.energy();
+    std::string row = std::to_string(w.steps()) + "," + num(w.time()) + "," + num(w.dt()) + "," +
+                      std::to_string(w.particles().size()) + "," + std::to_string(w.contacts().pairContacts().size()) +
+                      "," + std::to_string(sw_.breakage ? sw_.breakage->breakages() : 0) + "," + num(w.removedMass()) +
+                      "," + num(e.kineticTranslational + e.kineticRotational) + "," + num(e.elastic) + "," +
+                      num(e.gravityWork) + "," + num(e.boundaryWork) + "," + num(e.dampingLoss) + "," +
+                      num(e.contactLoss) + "," + num(e.balanceError());
+    const auto& loads = w.boundaryLoads();
+    for (std::size_t k = 0; k < w.planes().size(); ++k) {
+      for (int a = 0; a < D; ++a) row += "," + num(k < loads.planeForce.size() ? loads.planeForce[k][a] : 0.0);
+    }
+    for (std::size_t k = 0; k < w.tools().size(); ++k) {
+      const bool have = k < loads.toolForce.size();
+      for (int a = 0; a < D; ++a) row += "," + num(have ? loads.toolForce[k][a] : 0.0);
+      // Power the tool delivers to the particles (drawn from its drive), W.
+      double power = 0.0;
+      if (have) {
+        power = -loads.toolForce[k].dot(w.toolPoses()[k].velocity) -
+                dynamics::Rotation<D>::dot(loads.toolTorque[k], w.toolPoses()[k].angularVelocity);
+      }
+      row += "," + num(power);
+    }
+    if (scene_.specimen) {
+      const double h = specimenHeight();
+      const double stress = specimenStress();
+      const double solid = solidVolume();
+      const double total = h * scene_.specimen->width;
+      row += "," + num(h) + "," + num(stress) + "," + num(h0_ > 0.0 ? (h0_ - h) / h0_ : 0.0) + "," +
+             num(solid > 0.0 ? (total - solid) / solid : 0.0);
+    }
+    csv_["history.csv"].row(row);
+    lastHistoryClock_ = clockValue();
+  }
+
+  // Specimen height: from the bottom plane to the face of the top boundary (m).
+  double specimenHeight() const {
+    if (!scene_.specimen) return 0.0;
+    const World& w = *sw_.world;
+    const auto& names = w.planeNames();
+    const auto bottomIt = std::find(names.begin(), names.end(), scene_.specimen->bottom);
+    if (bottomIt == names.end()) return 0.0;
+    const dynamics::Plane<D>& bottom = w.planes()[std::size_t(bottomIt - names.begin())];
+    const auto topIt = std::find(names.begin(), names.end(), scene_.specimen->top);
+    if (topIt != names.end()) return bottom.signedDistance(w.planes()[std::size_t(topIt - names.begin())].point);
+    for (std::size_t k = 0; k < w.tools().size(); ++k) {
+      if (w.tools()[k].name != scene_.specimen->top) continue;
+      const dynamics::ToolPose<D>& pose = w.toolPoses()[k];
+      const geometry::Mat<D> r = dynamics::Rotation<D>::matrix(pose.orientation);
+      double lowest = std::numeric_limits<double>::infinity();
+      for (const Vec<D>& x : pose.shape->nodes().positions) lowest = std::min(lowest, bottom.normal.dot(r * x));
+      return bottom.signedDistance(pose.position) + lowest;
+    }
+    return 0.0;
+  }
+  // Vertical stress: the top boundary's load along the bottom's normal over the width/area (Pa).
+  double specimenStress() const {
+    const World& w = *sw_.world;
+    const auto& names = w.planeNames();
+    const auto bottomIt = std::find(names.begin(), names.end(), scene_.specimen->bottom);
+    if (bottomIt == names.end()) return 0.0;
+    const Vec<D> n = w.planes()[std::size_t(bottomIt - names.begin())].normal;
+    const auto& loads = w.boundaryLoads();
+    const auto topIt = std::find(names.begin(), names.end(), scene_.specimen->top);
+    Vec<D> f = Vec<D>::Zero();
+    if (topIt != names.end()) {
+      const std::size_t k = std::size_t(topIt - names.begin());
+      if (k < loads.planeForce.size()) f = loads.planeForce[k];
+    } else {
+      for (std::size_t k = 0; k < w.tools().size(); ++k) {
+        if (w.tools()[k].name == scene_.specimen->top && k < loads.toolForce.size()) f = loads.toolForce[k];
+      }
+    }
+    return f.dot(n) / scene_.specimen->width;
+  }
+  double solidVolume() const {
+    const auto& p = sw_.world->particles();
+    double v = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) v += p.shape[i]->volume();
+    return v;
+  }
+
+  void appendLogs() {
+    const World& w = *sw_.world;
+    for (; removedWritten_ < w.removed().size(); ++removedWritten_) {
+      const dynamics::RemovedParticle& r = w.removed()[removedWritten_];
+      csv_["removed.csv"].row(std::to_string(r.id) + "," + num(r.time) + "," + num(r.mass) + "," + num(r.volume) + "," +
+                              num(r.sieveSize) + "," + r.reason);
+    }
+    if (sw_.breakage && eventsWritten_ < sw_.breakage->events().size()) {
+      const auto& events = sw_.breakage->events();
+      writeBreakageLogRows<D>(std::span(events).subspan(eventsWritten_), csv_["breakage_log.csv"].stream());
+      csv_["breakage_log.csv"].flush();
+      eventsWritten_ = events.size();
+    }
+  }
+
+  void writeDistributions() {
+    const World& w = *sw_.world;
+    const auto& p = w.particles();
+    const std::string t = num(w.time());
+    const std::string strain = scene_.specimen && h0_ > 0.0 ? num((h0_ - specimenHeight()) / h0_) : "";
+    // Particle size distribution by mass against sieve size (eq. 21).
+    std::vector<std::pair<double, double>> sizes;
+    double total = 0.0, circ = 0.0, aspect = 0.0, sieve = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const auto& d = p.shape[i]->descriptors();
+      sizes.emplace_back(d.sieveSize, p.mass[i]);
+      total += p.mass[i];
+      circ += d.circularity;
+      aspect += d.aspectRatio;
+      sieve += d.sieveSize;
+    }
+    std::sort(sizes.begin(), sizes.end());
+    double passing = 0.0;
+    std::string rows;
+    for (const auto& [size, mass] : sizes) {
+      passing += mass;
+      rows += t + "," + num(size) + "," + num(100.0 * passing / total) + "\n";
+    }
+    csv_["psd.csv"].stream() << rows;
+    csv_["psd.csv"].flush();
+    const double n = double(std::max<std::size_t>(p.size(), 1));
+    csv_["shape_stats.csv"].row(t + "," + strain + "," + std::to_string(p.size()) + "," + num(circ / n) + "," +
+                                num(aspect / n) + "," + num(sieve / n));
+    // Histograms of circularity (sphericity) and aspect ratio, 10 bins on [0, 1].
+    for (const char* quantity : {"circularity", "aspect_ratio"}) {
+      std::array<std::size_t, 10> bins{};
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        const auto& d = p.shape[i]->descriptors();
+        const double v = std::string(quantity) == "circularity" ? d.circularity : d.aspectRatio;
+        bins[std::size_t(std::clamp(int(v * 10.0), 0, 9))]++;
+      }
+      std::string out;
+      for (std::size_t b = 0; b < bins.size(); ++b) {
+        out += t + "," + strain + "," + quantity + "," + num(0.1 * double(b)) + "," + num(0.1 * double(b + 1)) + "," +
+               std::to_string(bins[b]) + "\n";
+      }
+      csv_["shape_histograms.csv"].stream() << out;
+    }
+    csv_["shape_histograms.csv"].flush();
+    lastDistributionClock_ = clockValue();
+  }
+
+  // The size distribution of the particles that left through the outflow (a crusher's product).
+  void writeProductPsd() const {
+    std::vector<std::pair<double, double>> sizes;
+    double total = 0.0;
+    for (const auto& r : sw_.world->removed()) {
+      if (r.reason != "outflow") continue;
+      sizes.emplace_back(r.sieveSize, r.mass);
+      total += r.mass;
+    }
+    if (sizes.empty()) return;
+    std::sort(sizes.begin(), sizes.end());
+    std::string text = "sieve_size_m,percent_passing,mass_kg\n";
+    double passing = 0.0;
+    for (const auto& [size, mass] : sizes) {
+      passing += mass;
+      text += num(size) + "," + num(100.0 * passing / total) + "," + num(mass) + "\n";
+    }
+    writeFileAtomically(out_ / "product_psd.csv", text);
+  }
+
+  void writeFrame() {
+    if (!frameWriter_) return;
+    const World& w = *sw_.world;
+    // Stress measure per particle: the breakage criterion's characteristic
+    // stress, von Mises without breakage (Pa).
+    if (!criterion_) {
+      breakage::CriterionDef def;
+      if (scene_.breakage) def = scene_.breakage->criterion;
+      criterion_ = breakage::makeCriterion(def);
+    }
+    breakage::grainStresses(w.particles(), w.contacts(), stress_);
+    stressMeasure_.assign(w.particles().size(), 0.0);
+    for (std::size_t i = 0; i < stressMeasure_.size() && i < stress_.size(); ++i) {
+      stressMeasure_[i] = criterion_->characteristicStress(breakage::principalStressTriple<D>(stress_[i]));
+    }
+    frameWriter_->write(w, stressMeasure_);
+    lastFrameClock_ = clockValue();
+  }
+
+  void writeSummary(bool stopped) const {
+    const World& w = *sw_.world;
+    std::ostringstream s;
+    writeRunSummary<D>(w, wallSeconds_, s, [&](JsonWriter& j) {
+      const double in = massIn(), outMass = w.particleMass() + w.removedMass();
+      j.field("scene", scene_.file);
+      j.field("stopped_early", stopped);
+      j.key("mass_balance").beginObject()
+          .field("initial", initialMass_)
+          .field("fed", in - initialMass_)
+          .field("particles", w.particleMass())
+          .field("removed", w.removedMass())
+          .field("relative_error", in > 0.0 ? (outMass - in) / in : 0.0)
+          .endObject();
+      if (sw_.breakage) {
+        const auto& b = *sw_.breakage;
+        j.key("breakage").beginObject()
+            .field("breakages", b.breakages())
+            .field("fines_mass", b.finesMass())
+            .field("raw_volume_error", b.rawVolumeError())
+            .field("unsplit_failures", b.unsplitFailures())
+            .field("skipped_steps", b.skippedSteps())
+            .endObject();
+      }
+    });
+    writeFileAtomically(out_ / "summary.json", s.str());
+  }
+
+  void report(Clock::time_point start, double rate, bool done) {
+    const World& w = *sw_.world;
+    RunProgress p;
+    p.steps = w.steps();
+    p.time = w.time();
+    p.endTime = byTime_ ? endTime_ : double(endStep_) * w.dt();
+    p.fraction = byTime_ ? w.time() / endTime_ : double(w.steps()) / double(std::max<std::uint64_t>(endStep_, 1));
+    p.fraction = std::clamp(p.fraction, 0.0, 1.0);
+    p.stepsPerSecond = rate;
+    p.wallSeconds = secondsSince(start);
+    p.etaSeconds = p.fraction > 0.0 ? p.wallSeconds * (1.0 - p.fraction) / p.fraction : 0.0;
+    p.particles = w.particles().size();
+    p.contacts = w.contacts().pairContacts().size();
+    p.breakages = sw_.breakage ? sw_.breakage->breakages() : 0;
+    p.done = done;
+    options_.progress(p);
+  }
+
+  // ---- checkpoints ----
+  void writeCheckpoint() {
+    const World& w = *sw_.world;
+    // World state, numbering the particles' shapes as they come.
+    std::map<const geometry::Shape<D>*, std::uint32_t> index;
+    std::vector<const geometry::Shape<D>*> shapes;
+    dynamics::StateWriter state;
+    w.saveState(state, [&](const std::shared_ptr<const geometry::Shape<D>>& s) {
+      const auto [it, added] = index.emplace(s.get(), std::uint32_t(shapes.size()));
+      if (added) shapes.push_back(s.get());
+      return it->second;
+    });
+    // Runner state: clocks, log positions, CSV sizes.
+    dynamics::StateWriter runner;
+    runner.putTag("runner");
+    runner.put(initialMass_);
+    runner.put(h0_);
+    for (const Schedule* s : {&frames_, &history_, &distributions_, &checkpoints_}) runner.put(s->next);
+    runner.put(lastHistoryClock_);
+    runner.put(lastFrameClock_);
+    runner.put(lastDistributionClock_);
+    runner.put(std::uint64_t(removedWritten_));
+    runner.put(std::uint64_t(eventsWritten_));
+    runner.put(std::uint64_t(csv_.size()));
+    for (auto& [name, file] : csv_) {
+      runner.putString(name);
+      runner.put(file.size());
+    }
+
+    std::ostringstream out(std::ios::binary);
+    out.write(kCheckpointMagic, 8);
+    const auto put = [&](const auto& v) { out.write(reinterpret_cast<const char*>(&v), sizeof(v)); };
+    const auto putBytes = [&](const std::string& b) {
+      put(std::uint64_t(b.size()));
+      out.write(b.data(), std::streamsize(b.size()));
+    };
+    put(kCheckpointVersion);
+    put(std::int32_t(D));
+    putBytes(fs::absolute(scene_.file).string());
+    put(fnv1a(readWholeFile(scene_.file)));
+    put(std::uint64_t(shapes.size()));
+    for (const geometry::Shape<D>* s : shapes) {
+      std::ostringstream g(std::ios::binary);
+      writeGrain<D>(g, *s, GrainFormat::Binary);
+      putBytes(g.str());
+    }
+    putBytes(std::string(state.bytes().begin(), state.bytes().end()));
+    putBytes(std::string(runner.bytes().begin(), runner.bytes().end()));
+    writeFileAtomically(out_ / kCheckpointFile, out.str());
+    writeSummary(false);
+  }
+
+  std::map<std::string, std::uint64_t> loadCheckpoint() {
+    const std::string path = (out_ / kCheckpointFile).string();
+    const std::string bytes = readWholeFile(path);
+    std::size_t pos = 0;
+    const auto fail = [&](const std::string& what) { throw InputError(path, 0, "", what); };
+    const auto take = [&](std::size_t n) {
+      if (n > bytes.size() - pos) fail("truncated checkpoint");
+      const char* p = bytes.data() + pos;
+      pos += n;
+      return p;
+    };
+    const auto get = [&]<class T>(T) {
+      T v;
+      std::memcpy(&v, take(sizeof(T)), sizeof(T));
+      return v;
+    };
+    const auto getBytes = [&]() {
+      const std::uint64_t n = get(std::uint64_t{});
+      const char* p = take(std::size_t(n));
+      return std::string(p, std::size_t(n));
+    };
+    if (bytes.size() < 8 || std::memcmp(bytes.data(), kCheckpointMagic, 8) != 0) fail("not an lsdem checkpoint");
+    take(8);
+    if (get(std::uint32_t{}) != kCheckpointVersion) fail("checkpoint of another lsdem version");
+    if (get(std::int32_t{}) != D) fail("checkpoint of another dimension");
+    getBytes();  // scene path, read by runScene
+    get(std::uint64_t{});
+    std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes(std::size_t(get(std::uint64_t{})));
+    for (auto& s : shapes) {
+      std::istringstream g(getBytes(), std::ios::binary);
+      s = readGrain<D>(g, path);
+    }
+    const std::string state = getBytes();
+    const std::string runner = getBytes();
+    try {
+      dynamics::StateReader in(state.data(), state.size());
+      sw_.world->loadState(in, [&](std::uint32_t k) {
+        if (k >= shapes.size()) throw std::runtime_error("shape " + std::to_string(k) + " is not in the checkpoint");
+        return shapes[k];
+      });
+      dynamics::StateReader r(runner.data(), runner.size());
+      r.expectTag("runner");
+      initialMass_ = r.get<double>();
+      h0_ = r.get<double>();
+      for (Schedule* s : {&frames_, &history_, &distributions_, &checkpoints_}) s->next = r.get<double>();
+      lastHistoryClock_ = r.get<double>();
+      lastFrameClock_ = r.get<double>();
+      lastDistributionClock_ = r.get<double>();
+      removedWritten_ = std::size_t(r.get<std::uint64_t>());
+      eventsWritten_ = std::size_t(r.get<std::uint64_t>());
+      std::map<std::string, std::uint64_t> sizes;
+      const std::uint64_t n = r.get<std::uint64_t>();
+      for (std::uint64_t k = 0; k < n; ++k) {
+        const std::string name = r.getString();
+        sizes[name] = r.get<std::uint64_t>();
+      }
+      resumed_ = true;
+      return sizes;
+    } catch (const std::runtime_error& e) {
+      if (dynamic_cast<const InputError*>(&e)) throw;
+      fail(e.what());
+    }
+    return {};
+  }
+
+  SceneDef<D> scene_;
+  RunOptions options_;
+  fs::path out_;
+  SceneWorld<D> sw_;
+  bool resumed_ = false;
+  bool byTime_ = true;
+  double endTime_ = 0.0;
+  std::uint64_t endStep_ = 0;
+  Schedule frames_, history_, distributions_, checkpoints_;
+  double lastHistoryClock_ = -1.0, lastFrameClock_ = -1.0, lastDistributionClock_ = -1.0;
+  std::map<std::string, CsvFile> csv_;
+  std::optional<FrameWriter<D>> frameWriter_;
+  std::unique_ptr<breakage::Criterion> criterion_;
+  std::vector<geometry::Mat<D>> stress_;
+  std::vector<double> stressMeasure_;
+  std::size_t removedWritten_ = 0, eventsWritten_ = 0;
+  double initialMass_ = 0.0;
+  double h0_ = 0.0;
+  double wallSeconds_ = 0.0;
+};
+
+// The scene path stored in a checkpoint, checked against the file's content now.
+std::string checkpointScene(const std::string& dir) {
+  const std::string path = (fs::path(dir) / kCheckpointFile).string();
+  if (!fs::exists(path)) throw InputError(path, 0, "", "no checkpoint to resume from (is this a run's output folder?)");
+  const std::string bytes = readWholeFile(path);
+  std::size_t pos = 8 + 4 + 4;
+  if (bytes.size() < pos + 8 || std::memcmp(bytes.data(), kCheckpointMagic, 8) != 0) {
+    throw InputError(path, 0, "", "not an lsdem checkpoint");
+  }
+  std::uint64_t n = 0;
+  std::memcpy(&n, bytes.data() + pos, 8);
+  pos += 8;
+  if (n > bytes.size() - pos - 8) throw InputError(path, 0, "", "truncated checkpoint");
+  const std::string scene(bytes.data() + pos, std::size_t(n));
+  pos += std::size_t(n);
+  std::uint64_t hash = 0;
+  std::memcpy(&hash, bytes.data() + pos, 8);
+  if (!fs::exists(scene)) throw InputError(path, 0, "", "its scene file " + scene + " no longer exists");
+  if (fnv1a(readWholeFile(scene)) != hash) {
+    throw InputError(scene, 0, "", "the scene file changed since the checkpoint in " + dir + " was written");
+  }
+  return scene;
+}
+
+template <int D>
+RunResult runOf(SceneDef<D> scene, const RunOptions& options) {
+  const std::string out =
+      !options.resumeDir.empty() ? options.resumeDir : (!options.outDir.empty() ? options.outDir : scene.output.dir);
+#ifdef LSDEM_HAVE_OPENMP
+  const int threads = options.threads >= 0 ? options.threads : scene.threads;
+  if (threads > 0) omp_set_num_threads(threads);
+#endif
+  Runner<D> runner(std::move(scene), options, out);
+  return runner.run(!options.resumeDir.empty());
+}
+
+}  // namespace
+
+RunResult runScene(const RunOptions& options) {
+  const std::string scenePath = options.resumeDir.empty() ? options.scene : checkpointScene(options.resumeDir);
+  AnySceneDef scene = readScene(scenePath);
+  if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) return runOf<2>(std::move(*s2), options);
+  return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), options);
+}
+
+}  // namespace lsdem::io

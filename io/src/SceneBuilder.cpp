@@ -1,0 +1,302 @@
+/// @file SceneBuilder.cpp
+/// @brief SceneDef -> World: particle placement and the declared effects.
+
+#include "lsdem/io/InputError.h"
+#include "lsdem/io/Scene.h"
+
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <random>
+#include <unordered_map>
+
+namespace lsdem::io {
+namespace {
+
+using geometry::Vec;
+
+// Uniform doubles in [0, 1) from 53 random bits (the same on every platform,
+// unlike std::uniform_real_distribution).
+struct Random {
+  explicit Random(std::uint64_t seed) : engine(seed) {}
+  double uniform() { return double(engine() >> 11) * 0x1.0p-53; }
+  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+  double normal() {
+    // Box-Muller, one value per call.
+    const double u = 1.0 - uniform(), v = uniform();
+    return std::sqrt(-2.0 * std::log(u)) * std::cos(2.0 * std::numbers::pi * v);
+  }
+  std::mt19937_64 engine;
+};
+
+template <int D>
+dynamics::Orientation<D> randomOrientation(Random& rng) {
+  if constexpr (D == 2) {
+    return rng.uniform(-std::numbers::pi, std::numbers::pi);
+  } else {
+    // A normalised 4D Gaussian is uniform on the rotations.
+    Eigen::Quaterniond q(rng.normal(), rng.normal(), rng.normal(), rng.normal());
+    return q.normalized();
+  }
+}
+
+// Bounding spheres placed so far, in cells of a hash grid, for overlap tests.
+template <int D>
+class SphereIndex {
+ public:
+  explicit SphereIndex(double cell) : cell_(cell) {}
+  void add(const Vec<D>& x, double r) {
+    centres_.push_back(x);
+    radii_.push_back(r);
+    cells_[key(x)].push_back(centres_.size() - 1);
+    maxRadius_ = std::max(maxRadius_, r);
+  }
+  bool overlaps(const Vec<D>& x, double r) const {
+    const int reach = int(std::ceil((r + maxRadius_) / cell_));
+    Eigen::Array<std::int64_t, D, 1> c = cellOf(x);
+    Eigen::Array<std::int64_t, D, 1> o = Eigen::Array<std::int64_t, D, 1>::Constant(-reach);
+    // Visit the (2 reach + 1)^D cells around x.
+    while (true) {
+      const auto it = cells_.find(hash(c + o));
+      if (it != cells_.end()) {
+        for (std::size_t k : it->second) {
+          if ((centres_[k] - x).norm() < radii_[k] + r) return true;
+        }
+      }
+      int a = 0;
+      while (a < D && ++o[a] > reach) o[a++] = -reach;
+      if (a == D) break;
+    }
+    return false;
+  }
+
+ private:
+  Eigen::Array<std::int64_t, D, 1> cellOf(const Vec<D>& x) const {
+    return (x.array() / cell_).floor().template cast<std::int64_t>();
+  }
+  static std::uint64_t hash(const Eigen::Array<std::int64_t, D, 1>& c) {
+    std::uint64_t h = 1469598103934665603ull;
+    for (int a = 0; a < D; ++a) h = (h ^ std::uint64_t(c[a])) * 1099511628211ull;
+    return h;
+  }
+  std::uint64_t key(const Vec<D>& x) const { return hash(cellOf(x)); }
+
+  double cell_;
+  double maxRadius_ = 0.0;
+  std::vector<Vec<D>> centres_;
+  std::vector<double> radii_;
+  std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
+};
+
+template <int D>
+class Builder {
+ public:
+  explicit Builder(const SceneDef<D>& scene) : scene_(scene) {}
+
+  SceneWorld<D> build() {
+    SceneWorld<D> out;
+    // Outflow runs after breakage (breakage must read contacts that describe
+    // the particles as they are), so it is added by hand below.
+    dynamics::WorldDef<D> def = scene_.world;
+    def.outflow.reset();
+    try {
+      out.world = std::make_unique<dynamics::World<D>>(def);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(scene_.file, 0, "contact", e.what());
+    }
+    world_ = out.world.get();
+    for (const auto& p : scene_.planes) world_->addPlane(p);
+    for (const auto& t : scene_.tools) world_->addTool(t);
+
+    // Particles, group by group (ids count from 0 in this order).
+    double cell = 0.0;
+    for (const auto& s : scene_.shapes) cell = std::max(cell, 2.0 * s->boundingRadius());
+    if (scene_.groups.size() > 0) {
+      for (const auto& g : scene_.groups) cell = std::max(cell, g.diameterMax);
+    }
+    index_ = std::make_unique<SphereIndex<D>>(cell > 0.0 ? cell : 1.0);
+    std::vector<dynamics::FeedDef<D>> feeds;
+    for (const ParticleGroupDef<D>& g : scene_.groups) {
+      Random rng(g.seed);
+      switch (g.placement) {
+        case Placement::List: placeList(g, rng); break;
+        case Placement::Cloud: placeCloud(g, rng); break;
+        case Placement::Grid: placeGrid(g, rng); break;
+        case Placement::Feed: {
+          dynamics::FeedDef<D> f;
+          for (std::size_t s : g.shapes) f.shapes.push_back(scene_.shapes[s]);
+          f.point = g.feedPoint;
+          f.velocity = g.velocity;
+          f.density = g.density;
+          f.material = g.material;
+          f.interval = g.feedInterval;
+          f.clearance = g.feedClearance;
+          f.count = g.count;
+          f.startTime = g.feedStart;
+          feeds.push_back(std::move(f));
+          break;
+        }
+      }
+    }
+    out.initialMass = world_->particleMass();
+
+    // Effects after the world's own (gravity, damping): breakage, outflow, feeds.
+    if (scene_.breakage) {
+      try {
+        auto b = std::make_unique<breakage::Breakage<D>>(*scene_.breakage);
+        out.breakage = b.get();
+        world_->addEffect(std::move(b));
+      } catch (const std::invalid_argument& e) {
+        throw InputError(scene_.file, 0, "effects.breakage", e.what());
+      }
+    }
+    if (scene_.world.outflow) world_->addEffect(std::make_unique<dynamics::Outflow<D>>(*scene_.world.outflow));
+    for (auto& f : feeds) {
+      auto feed = std::make_unique<dynamics::Feed<D>>(std::move(f));
+      out.feeds.push_back(feed.get());
+      world_->addEffect(std::move(feed));
+    }
+    return out;
+  }
+
+ private:
+  [[noreturn]] void fail(const ParticleGroupDef<D>& g, const std::string& what) const {
+    throw InputError(scene_.file, g.line, "particles", what);
+  }
+
+  // The shape of the k-th particle of a group: cycled, and scaled to a random
+  // equivalent diameter when the group asks for a size range.
+  std::shared_ptr<const geometry::Shape<D>> shapeFor(const ParticleGroupDef<D>& g, std::size_t k, Random& rng) {
+    const auto& base = scene_.shapes[g.shapes[k % g.shapes.size()]];
+    if (!(g.diameterMax > 0.0)) return base;
+    const double d = rng.uniform(g.diameterMin, g.diameterMax);
+    return scaledShape(*base, d / base->descriptors().equivalentDiameter);
+  }
+
+  void add(const ParticleGroupDef<D>& g, const std::shared_ptr<const geometry::Shape<D>>& shape, const Vec<D>& x,
+           const dynamics::Orientation<D>& q) {
+    dynamics::ParticleDef<D> p;
+    p.shape = shape;
+    p.density = g.density;
+    p.material = g.material;
+    p.position = x;
+    p.orientation = q;
+    p.velocity = g.velocity;
+    world_->addParticle(p);
+    index_->add(x, shape->boundingRadius());
+  }
+
+  void placeList(const ParticleGroupDef<D>& g, Random& rng) {
+    for (std::size_t k = 0; k < g.positions.size(); ++k) {
+      dynamics::Orientation<D> q = dynamics::Rotation<D>::identity();
+      if constexpr (D == 2) {
+        if (!g.angles.empty()) q = g.angles[k];
+      }
+      add(g, shapeFor(g, k, rng), g.positions[k], q);
+    }
+  }
+
+  void placeCloud(const ParticleGroupDef<D>& g, Random& rng) {
+    const std::uint64_t attemptsPerParticle = 20000;
+    for (std::uint64_t k = 0; k < g.count; ++k) {
+      const auto shape = shapeFor(g, std::size_t(k), rng);
+      const double r = shape->boundingRadius();
+      const Vec<D> lo = g.region.lower.array() + r, hi = g.region.upper.array() - r;
+      if (!((hi.array() >= lo.array()).all())) {
+        fail(g, "the cloud region is smaller than a particle (bounding radius " + std::to_string(r) + " m)");
+      }
+      bool placed = false;
+      for (std::uint64_t attempt = 0; attempt < attemptsPerParticle && !placed; ++attempt) {
+        Vec<D> x;
+        for (int a = 0; a < D; ++a) x[a] = rng.uniform(lo[a], hi[a]);
+        if (index_->overlaps(x, r)) continue;
+        add(g, shape, x, g.randomOrientation ? randomOrientation<D>(rng) : dynamics::Rotation<D>::identity());
+        placed = true;
+      }
+      if (!placed) {
+        fail(g, "could place only " + std::to_string(k) + " of " + std::to_string(g.count) +
+                    " particles without overlap in the cloud region; enlarge it or lower the count");
+      }
+    }
+  }
+
+  void placeGrid(const ParticleGroupDef<D>& g, Random& rng) {
+    // Lattice spacing: the largest bounding diameter of the group's shapes.
+    double spacing = g.gridSpacing;
+    if (!(spacing > 0.0)) {
+      for (std::size_t s : g.shapes) spacing = std::max(spacing, 2.0 * scene_.shapes[s]->boundingRadius());
+      if (g.diameterMax > 0.0) {
+        double ratio = 0.0;
+        for (std::size_t s : g.shapes) {
+          ratio = std::max(ratio, scene_.shapes[s]->boundingRadius() / scene_.shapes[s]->descriptors().equivalentDiameter);
+        }
+        spacing = 2.0 * ratio * g.diameterMax;
+      }
+      spacing *= 1.0001;
+    }
+    // Nodes of the lattice inside the region (a half spacing from its faces).
+    Eigen::Array<std::int64_t, D, 1> n;
+    for (int a = 0; a < D; ++a) n[a] = std::int64_t(std::floor(g.region.size()[a] / spacing));
+    if ((n <= 0).any()) fail(g, "the grid region is smaller than one lattice spacing (" + std::to_string(spacing) + " m)");
+    const std::uint64_t capacity = std::uint64_t(n.prod());
+    const std::uint64_t count = g.count > 0 ? g.count : capacity;
+    if (count > capacity) {
+      fail(g, "the grid region holds " + std::to_string(capacity) + " particles at spacing " + std::to_string(spacing) +
+                  " m, asked for " + std::to_string(count));
+    }
+    for (std::uint64_t k = 0; k < count; ++k) {
+      Vec<D> x;
+      std::uint64_t rest = k;
+      for (int a = 0; a < D; ++a) {
+        x[a] = g.region.lower[a] + (double(rest % std::uint64_t(n[a])) + 0.5) * spacing;
+        rest /= std::uint64_t(n[a]);
+      }
+      add(g, shapeFor(g, std::size_t(k), rng), x,
+          g.randomOrientation ? randomOrientation<D>(rng) : dynamics::Rotation<D>::identity());
+    }
+  }
+
+  const SceneDef<D>& scene_;
+  dynamics::World<D>* world_ = nullptr;
+  std::unique_ptr<SphereIndex<D>> index_;
+};
+
+}  // namespace
+
+template <int D>
+SceneWorld<D> buildWorld(const SceneDef<D>& scene) {
+  return Builder<D>(scene).build();
+}
+
+template <int D>
+std::shared_ptr<const geometry::Shape<D>> scaledShape(const geometry::Shape<D>& shape, double f) {
+  if (!(f > 0.0) || !std::isfinite(f)) throw std::invalid_argument("shape scale factor must be positive, got " + std::to_string(f));
+  typename geometry::Shape<D>::Parts p = shape.parts();
+  // Grid: same nodes, origin and spacing scaled, distances scaled.
+  geometry::Grid<D> grid(p.grid.dims(), p.grid.origin() * f, p.grid.spacing() * f);
+  for (std::size_t n = 0; n < grid.size(); ++n) grid[n] = float(double(p.grid[n]) * f);
+  p.grid = std::move(grid);
+  p.bodyToGrid.translation *= f;
+  for (auto& x : p.nodes.positions) x *= f;
+  for (double& w : p.nodes.weights) w *= std::pow(f, D - 1);
+  // Mass properties per unit density: volume ~ f^D, second moments ~ f^(D+2).
+  p.mass.volume *= std::pow(f, D);
+  p.mass.centroid *= f;
+  p.mass.secondMoment *= std::pow(f, D + 2);
+  // Descriptors: lengths ~ f, areas ~ f^(D-1), volume ~ f^D, ratios unchanged.
+  p.descriptors.volume *= std::pow(f, D);
+  p.descriptors.surfaceArea *= std::pow(f, D - 1);
+  p.descriptors.bestFitSemiAxes *= f;
+  p.descriptors.equivalentDiameter *= f;
+  p.descriptors.sieveSize *= f;
+  p.descriptors.intermediateAxis *= f;
+  p.boundingRadius *= f;
+  return geometry::Shape<D>::fromParts(std::move(p));
+}
+
+template SceneWorld<2> buildWorld<2>(const SceneDef<2>&);
+template SceneWorld<3> buildWorld<3>(const SceneDef<3>&);
+template std::shared_ptr<const geometry::Shape<2>> scaledShape<2>(const geometry::Shape<2>&, double);
+template std::shared_ptr<const geometry::Shape<3>> scaledShape<3>(const geometry::Shape<3>&, double);
+
+}  // namespace lsdem::io

@@ -1,0 +1,615 @@
+/// @file SceneReader.cpp
+/// @brief TOML scene file -> SceneDef (docs/scenes.md lists every key).
+
+#include "lsdem/io/Scene.h"
+
+#include "ShapeTable.h"
+#include "TomlReader.h"
+
+#include "lsdem/io/GrainFile.h"
+#include "lsdem/io/ShapeFile.h"
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <filesystem>
+#include <map>
+#include <numbers>
+
+namespace lsdem::io {
+namespace {
+
+using detail::TomlReader;
+using geometry::Box;
+using geometry::Vec;
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+template <int D>
+Vec<D> vec(TomlReader& r, const std::string& key) {
+  const std::vector<double> v = r.numbers(key, D);
+  Vec<D> out;
+  for (int a = 0; a < D; ++a) out[a] = v[std::size_t(a)];
+  return out;
+}
+template <int D>
+Vec<D> vec(TomlReader& r, const std::string& key, const Vec<D>& fallback) {
+  return r.has(key) ? vec<D>(r, key) : fallback;
+}
+template <int D>
+Vec<D> unitVec(TomlReader& r, const std::string& key, const Vec<D>& fallback) {
+  const Vec<D> v = vec<D>(r, key, fallback);
+  if (!(v.norm() > 0.0)) r.fail(key, "must not be the zero vector");
+  return v.normalized();
+}
+
+// A region {min = [...], max = [...]}.
+template <int D>
+Box<D> box(TomlReader& parent, const std::string& key) {
+  const toml::table* t = parent.optionalTable(key);
+  if (!t) parent.fail("", "missing table '" + key + "' ({ min = [...], max = [...] })");
+  TomlReader r(*t, parent.file(), parent.pathOf(key));
+  Box<D> b;
+  b.lower = vec<D>(r, "min");
+  b.upper = vec<D>(r, "max");
+  if (!((b.upper.array() > b.lower.array()).all())) r.fail("max", "every component must exceed min's");
+  r.finish();
+  return b;
+}
+
+// Orientation keys: 2D `angle_deg` (counter-clockwise), 3D `rotation_deg` =
+// [rx, ry, rz], applied about x, then y, then z (world axes).
+template <int D>
+geometry::Mat<D> rotation(TomlReader& r) {
+  if constexpr (D == 2) {
+    const double a = r.number("angle_deg", 0.0) * kDegree;
+    return dynamics::Rotation<2>::matrix(a);
+  } else {
+    const Vec<3> e = vec<3>(r, "rotation_deg", Vec<3>::Zero()) * kDegree;
+    return (Eigen::AngleAxisd(e.z(), Vec<3>::UnitZ()) * Eigen::AngleAxisd(e.y(), Vec<3>::UnitY()) *
+            Eigen::AngleAxisd(e.x(), Vec<3>::UnitX()))
+        .toRotationMatrix();
+  }
+}
+
+template <int D>
+dynamics::Orientation<D> orientationOf(const geometry::Mat<D>& m) {
+  if constexpr (D == 2) {
+    return std::atan2(m(1, 0), m(0, 0));
+  } else {
+    return Eigen::Quaterniond(m).normalized();
+  }
+}
+
+// A body placed by the pose of its shape's build frame: x_world = R x_build + p.
+// The motion poses the body frame (centroid, principal axes): compose with the
+// shape's fixed body-to-grid map.
+template <int D>
+void placeBody(const geometry::Shape<D>& shape, const Vec<D>& p, const geometry::Mat<D>& r, Vec<D>& position,
+               dynamics::Orientation<D>& orientation) {
+  position = p + r * shape.bodyToGrid().translation;
+  orientation = orientationOf<D>(r * shape.bodyToGrid().rotation);
+}
+
+template <int D>
+dynamics::Spin<D> spinDeg(TomlReader& r, const std::string& key) {
+  if constexpr (D == 2) {
+    return r.number(key, 0.0) * kDegree;
+  } else {
+    return vec<3>(r, key, Vec<3>::Zero()) * kDegree;
+  }
+}
+
+template <int D>
+class SceneReader {
+ public:
+  SceneReader(const toml::table& root, const std::string& file) : root_(root), file_(file) {}
+
+  SceneDef<D> read() {
+    TomlReader top(root_, file_, "");
+    scene_.file = file_;
+    readSimulation(top);
+    readContact(top);
+    readMaterials(top);
+    readShapes(top);
+    readPlanes(top);
+    readTools(top);
+    readEffects(top);
+    readGroups(top);
+    readOutput(top);
+    top.finish();
+    return std::move(scene_);
+  }
+
+ private:
+  std::string relative(const std::string& path) const {
+    std::filesystem::path p(path);
+    if (p.is_relative()) p = std::filesystem::path(file_).parent_path() / p;
+    return p.string();
+  }
+
+  void readSimulation(TomlReader& top) {
+    const toml::table* t = top.optionalTable("simulation");
+    TomlReader r(*t, file_, "simulation");
+    r.skip("dimension");
+    if (r.has("duration") == r.has("steps")) {
+      r.fail(r.has("steps") ? "steps" : "", "give exactly one of 'duration' (s) and 'steps'");
+    }
+    if (r.has("duration")) scene_.duration = r.positive("duration");
+    if (r.has("steps")) {
+      const std::int64_t n = r.integer("steps");
+      if (n <= 0) r.fail("steps", "must be positive, got " + std::to_string(n));
+      scene_.steps = std::uint64_t(n);
+    }
+    // dt: a number > 0, or "auto" (default).
+    if (r.has("dt")) {
+      const toml::node* n = root_["simulation"]["dt"].node();
+      if (n->is_string()) {
+        if (r.string("dt") != "auto") r.fail("dt", "must be a number of seconds or \"auto\"");
+      } else {
+        scene_.world.dt = r.positive("dt");
+      }
+    }
+    scene_.world.dtSafety = r.inRange("dt_safety", 1e-6, 1.0, 0.2);
+    if (!(scene_.world.dtSafety > 0.0)) r.fail("dt_safety", "must be in (0, 1]");
+    scene_.world.forceDt = r.boolean("force_dt", false);
+    const std::int64_t threads = r.integer("threads", 0);
+    if (threads < 0 || threads > 4096) r.fail("threads", "must be in [0, 4096] (0: all cores), got " + std::to_string(threads));
+    scene_.threads = int(threads);
+    const std::int64_t seed = r.integer("seed", 1);
+    if (seed < 0) r.fail("seed", "must be >= 0");
+    scene_.seed = std::uint64_t(seed);
+    scene_.world.checkFinite = r.boolean("check_finite", false);
+    if (r.has("skin")) {
+      scene_.world.broadPhase.skin = r.number("skin");
+      if (scene_.world.broadPhase.skin < 0.0) r.fail("skin", "must be >= 0 m");
+    }
+    if (r.has("domain")) scene_.domain = box<D>(r, "domain");
+    r.finish();
+  }
+
+  void readContact(TomlReader& top) {
+    dynamics::ContactLawDef& law = scene_.world.contact;
+    const toml::table* t = top.optionalTable("contact");
+    if (!t) top.fail("", "missing table [contact] (at least kn)");
+    TomlReader r(*t, file_, "contact");
+    const std::string model = r.string("model", "linear");
+    if (model == "linear") {
+      law.normal = dynamics::NormalModel::Linear;
+    } else if (model == "hertz") {
+      law.normal = dynamics::NormalModel::Hertz;
+    } else {
+      r.fail("model", "must be \"linear\" or \"hertz\", got \"" + model + "\"");
+    }
+    const std::string formulation = r.string("formulation", "per_node");
+    if (formulation == "per_node") {
+      law.formulation = dynamics::ForceFormulation::PerNode;
+    } else if (formulation == "area_weighted") {
+      law.formulation = dynamics::ForceFormulation::AreaWeighted;
+    } else {
+      r.fail("formulation", "must be \"per_node\" or \"area_weighted\", got \"" + formulation + "\"");
+    }
+    if (law.normal == dynamics::NormalModel::Linear) {
+      law.kn = r.positive("kn");
+    } else {
+      law.youngsModulus = r.positive("youngs_modulus");
+      law.poissonRatio = r.inRange("poisson_ratio", 0.0, 0.499, 0.25);
+      law.kn = r.positive("kn", 1.0);
+    }
+    // Friction and damping exist only when declared.
+    law.hasFriction = r.has("friction");
+    law.friction = r.number("friction", 0.0);
+    if (law.friction < 0.0) r.fail("friction", "must be >= 0, got " + std::to_string(law.friction));
+    law.ks = r.number("ks", 0.8 * law.kn);
+    if (law.ks < 0.0) r.fail("ks", "must be >= 0 N/m, got " + std::to_string(law.ks));
+    law.hasDamping = r.has("damping_ratio");
+    law.dampingRatio = r.number("damping_ratio", 0.0);
+    if (law.dampingRatio < 0.0 || law.dampingRatio >= 1.0) {
+      r.fail("damping_ratio", "must be in [0, 1), got " + std::to_string(law.dampingRatio));
+    }
+    r.finish();
+  }
+
+  void readMaterials(TomlReader& top) {
+    const toml::table* t = top.optionalTable("materials");
+    if (!t) return;
+    TomlReader all(*t, file_, "materials");
+    for (const auto& [k, v] : *t) {
+      const std::string name(k.str());
+      const toml::table* m = all.optionalTable(name);
+      TomlReader r(*m, file_, "materials." + name);
+      materialIndex_[name] = scene_.materials.size();
+      scene_.materials.push_back(name);
+      densities_.push_back(r.positive("density"));
+      r.finish();
+    }
+  }
+
+  void readShapes(TomlReader& top) {
+    const toml::table* t = top.optionalTable("shapes");
+    if (!t) top.fail("", "missing table [shapes]: a scene needs at least one shape");
+    TomlReader all(*t, file_, "shapes");
+    for (const auto& [k, v] : *t) {
+      const std::string name(k.str());
+      const std::string path = "shapes." + name;
+      const toml::table* s = all.optionalTable(name);
+      const toml::node* kind = s->get("kind");
+      const int line = int(s->source().begin.line);
+      std::vector<std::size_t>& indices = shapeIndex_[name];
+      if (kind && kind->is_string() && (*kind->value<std::string>() == "grain_file" || *kind->value<std::string>() == "grain_folder")) {
+        // Grain files written by lsdem (or any grid in the minimal form).
+        TomlReader r(*s, file_, path);
+        const bool folder = r.string("kind") == "grain_folder";
+        const std::string where = relative(r.string("path"));
+        const double scale = r.positive("scale", 1.0);
+        r.finish();
+        std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes;
+        if (folder) {
+          shapes = readGrainFolder<D>(where);
+          if (shapes.empty()) r.fail("path", "no grain files (*.lsg) in '" + where + "'");
+        } else {
+          shapes.push_back(readGrainFile<D>(where));
+        }
+        for (std::size_t g = 0; g < shapes.size(); ++g) {
+          indices.push_back(scene_.shapes.size());
+          scene_.shapeNames.push_back(folder ? name + "/" + std::to_string(g) : name);
+          scene_.shapes.push_back(scale == 1.0 ? shapes[g] : scaledShape(*shapes[g], scale));
+        }
+        continue;
+      }
+      const ShapeDecl decl = detail::readShapeTable(*s, file_, path, D);
+      (void)line;
+      indices.push_back(scene_.shapes.size());
+      scene_.shapeNames.push_back(name);
+      scene_.shapes.push_back(buildDeclaredShape<D>(decl));
+    }
+  }
+
+  // The shapes a key names ("grain", or a list of names; a folder counts as all its grains).
+  std::vector<std::size_t> shapeList(TomlReader& r, const std::string& key) {
+    std::vector<std::size_t> out;
+    for (const std::string& name : r.strings(key)) {
+      const auto it = shapeIndex_.find(name);
+      if (it == shapeIndex_.end()) r.fail(key, "no shape named '" + name + "' in [shapes]");
+      out.insert(out.end(), it->second.begin(), it->second.end());
+    }
+    if (out.empty()) r.fail(key.empty() ? "" : key, "names no shape");
+    return out;
+  }
+
+  void readPlanes(TomlReader& top) {
+    for (const toml::table* t : top.tables("planes")) {
+      TomlReader r(*t, file_, "planes[" + std::to_string(scene_.planes.size()) + "]");
+      dynamics::PlaneDef<D> p;
+      p.name = r.string("name", "plane" + std::to_string(scene_.planes.size()));
+      p.plane.point = vec<D>(r, "point");
+      p.plane.normal = unitVec<D>(r, "normal", Vec<D>::UnitY());
+      p.plane.velocity = vec<D>(r, "velocity", Vec<D>::Zero());
+      r.finish();
+      checkName(r, p.name);
+      scene_.planes.push_back(p);
+    }
+  }
+
+  void checkName(TomlReader& r, const std::string& name) {
+    if (!boundaryNames_.insert(name).second) r.fail("name", "another plane or tool is named '" + name + "'");
+  }
+
+  void readTools(TomlReader& top) {
+    for (const toml::table* t : top.tables("tools")) {
+      TomlReader r(*t, file_, "tools[" + std::to_string(scene_.tools.size()) + "]");
+      dynamics::ToolDef<D> tool;
+      tool.name = r.string("name", "tool" + std::to_string(scene_.tools.size()));
+      checkName(r, tool.name);
+      const std::vector<std::size_t> shapes = shapeList(r, "shape");
+      if (shapes.size() != 1) r.fail("shape", "a tool has exactly one shape");
+      tool.shape = scene_.shapes[shapes[0]];
+      const toml::table* m = r.optionalTable("motion");
+      const std::string type = m ? std::string(m->get("type") && m->get("type")->is_string()
+                                                    ? *m->get("type")->value<std::string>()
+                                                    : std::string("?"))
+                                 : std::string("fixed");
+      // Where the shape's build frame sits at the start (not for the jaw crusher,
+      // whose motion defines its pose).
+      Vec<D> p0 = Vec<D>::Zero();
+      dynamics::Orientation<D> q0 = dynamics::Rotation<D>::identity();
+      geometry::Mat<D> r0 = geometry::Mat<D>::Identity();
+      if (type != "jaw_crusher") {
+        r0 = rotation<D>(r);
+        placeBody(*tool.shape, vec<D>(r, "position", Vec<D>::Zero()), r0, p0, q0);
+      }
+      r.finish();
+      tool.motion = readMotion(m, r.pathOf("motion"), type, *tool.shape, p0, q0);
+      scene_.tools.push_back(std::move(tool));
+    }
+  }
+
+  dynamics::Motion<D> readMotion(const toml::table* t, const std::string& path, const std::string& type,
+                                 const geometry::Shape<D>& shape, const Vec<D>& p0, const dynamics::Orientation<D>& q0) {
+    if (!t) return dynamics::ConstantVelocity<D>{p0, q0, Vec<D>::Zero(), dynamics::Rotation<D>::zeroSpin()};
+    TomlReader r(*t, file_, path);
+    r.skip("type");
+    dynamics::Motion<D> motion;
+    if (type == "fixed") {
+      motion = dynamics::ConstantVelocity<D>{p0, q0, Vec<D>::Zero(), dynamics::Rotation<D>::zeroSpin()};
+    } else if (type == "constant_velocity") {
+      motion = dynamics::ConstantVelocity<D>{p0, q0, vec<D>(r, "velocity", Vec<D>::Zero()),
+                                             spinDeg<D>(r, "angular_velocity_deg")};
+    } else if (type == "swing") {
+      dynamics::Swing<D> s;
+      s.pivot = vec<D>(r, "pivot");
+      if constexpr (D == 3) s.axis = unitVec<3>(r, "axis", Vec<3>::UnitZ());
+      s.position = p0;
+      s.orientation = q0;
+      s.meanAngle = r.number("mean_angle_deg", 0.0) * kDegree;
+      s.amplitude = r.number("amplitude_deg") * kDegree;
+      s.frequency = r.positive("frequency");
+      s.phase = r.number("phase_deg", 0.0) * kDegree;
+      motion = s;
+    } else if (type == "jaw_crusher") {
+      dynamics::JawCrusher<D> j;
+      j.rpm = r.positive("rpm", j.rpm);
+      j.eccentricThrow = r.positive("eccentric_throw", j.eccentricThrow);
+      j.nipAngleDegrees = r.inRange("nip_angle_deg", 1.0, 60.0, j.nipAngleDegrees);
+      j.nipAngleVariationDegrees = r.inRange("nip_angle_variation_deg", 0.0, 10.0, j.nipAngleVariationDegrees);
+      j.closedSideSetting = r.positive("closed_side_setting", j.closedSideSetting);
+      j.jawLength = r.positive("jaw_length", j.jawLength);
+      j.jawThickness = r.positive("jaw_thickness", j.jawThickness);
+      j.stationaryBottom = vec<D>(r, "stationary_bottom", Vec<D>::Zero());
+      j.stationaryAngleDegrees = r.number("stationary_angle_deg", j.stationaryAngleDegrees);
+      j.phase = r.number("phase_deg", 0.0) * kDegree;
+      motion = j;
+    } else if (type == "key_frames") {
+      dynamics::KeyFramed<D> k;
+      const std::vector<const toml::table*> frames = r.tables("frames");
+      if (frames.empty()) r.fail("frames", "key_frames needs at least one [[...frames]] entry");
+      for (std::size_t f = 0; f < frames.size(); ++f) {
+        TomlReader fr(*frames[f], file_, path + ".frames[" + std::to_string(f) + "]");
+        dynamics::KeyFrame<D> frame;
+        frame.time = fr.number("time");
+        if (!k.frames.empty() && !(frame.time > k.frames.back().time)) fr.fail("time", "frame times must increase");
+        const geometry::Mat<D> rf = rotation<D>(fr);
+        placeBody(shape, vec<D>(fr, "position"), rf, frame.position, frame.orientation);
+        fr.finish();
+        k.frames.push_back(frame);
+      }
+      motion = k;
+    } else if (type == "platen") {
+      dynamics::Platen<D> p;
+      p.position = p0;
+      p.orientation = q0;
+      p.direction = unitVec<D>(r, "direction", -Vec<D>::UnitY());
+      p.speed = r.number("speed");
+      if (p.speed < 0.0) r.fail("speed", "must be >= 0 m/s");
+      p.travel = r.positive("travel", std::numeric_limits<double>::infinity());
+      p.startTime = r.number("start", 0.0);
+      motion = p;
+    } else if (type == "servo") {
+      dynamics::ServoPlatenDef<D> s;
+      s.position = p0;
+      s.orientation = q0;
+      s.direction = unitVec<D>(r, "direction", -Vec<D>::UnitY());
+      s.targetForce = r.number("target_force");
+      if (s.targetForce < 0.0) r.fail("target_force", "must be >= 0 N");
+      s.gain = r.positive("gain");
+      s.maxSpeed = r.positive("max_speed");
+      motion = dynamics::ServoPlaten<D>(s);
+    } else {
+      r.fail("type", "unknown motion '" + type +
+                         "' (fixed, constant_velocity, swing, jaw_crusher, key_frames, platen, servo)");
+    }
+    r.finish();
+    return motion;
+  }
+
+  void readEffects(TomlReader& top) {
+    const toml::table* t = top.optionalTable("effects");
+    if (!t) return;
+    TomlReader r(*t, file_, "effects");
+    if (r.has("gravity")) scene_.world.gravity = vec<D>(r, "gravity");
+    if (r.has("global_damping")) {
+      scene_.world.globalDamping = r.number("global_damping");
+      if (*scene_.world.globalDamping < 0.0) r.fail("global_damping", "must be >= 0 (1/s)");
+    }
+    if (r.has("local_damping")) scene_.world.localDamping = r.inRange("local_damping", 0.0, 0.999999, 0.0);
+    if (r.has("outflow")) scene_.world.outflow = box<D>(r, "outflow");
+    if (const toml::table* b = r.optionalTable("breakage")) readBreakage(*b);
+    r.finish();
+  }
+
+  void readBreakage(const toml::table& t) {
+    TomlReader r(t, file_, "effects.breakage");
+    breakage::BreakageDef<D> def;
+    const std::string criterion = r.string("criterion", "von_mises");
+    if (criterion == "von_mises") {
+      def.criterion.kind = breakage::CriterionKind::VonMises;
+    } else if (criterion == "max_principal") {
+      def.criterion.kind = breakage::CriterionKind::MaxPrincipal;
+    } else if (criterion == "tresca") {
+      def.criterion.kind = breakage::CriterionKind::Tresca;
+    } else {
+      r.fail("criterion", "must be \"von_mises\", \"max_principal\" or \"tresca\", got \"" + criterion + "\"");
+    }
+    def.criterion.compressiveStrength = r.positive("compressive_strength", def.criterion.compressiveStrength);
+    def.criterion.tensileStrength = r.positive("tensile_strength", def.criterion.tensileStrength);
+    def.criterion.vonMisesStrength = r.positive("von_mises_strength", def.criterion.vonMisesStrength);
+    def.weibull.referenceStrength = r.positive("reference_strength", def.weibull.referenceStrength);
+    def.weibull.referenceDiameter = r.positive("reference_diameter", def.weibull.referenceDiameter);
+    def.weibull.modulus = r.positive("weibull_modulus", def.weibull.modulus);
+    const std::int64_t seed = r.integer("seed", std::int64_t(scene_.seed));
+    if (seed < 0) r.fail("seed", "must be >= 0");
+    def.seed = std::uint64_t(seed);
+    def.minVolume = r.number("min_volume", 0.0);
+    if (def.minVolume < 0.0) r.fail("min_volume", "must be >= 0");
+    const std::int64_t minNodes = r.integer("min_nodes", 0);
+    if (minNodes < 0 || minNodes > 1000000) r.fail("min_nodes", "must be in [0, 1e6]");
+    def.minNodes = int(minNodes);
+    def.haltBelowMinimum = r.boolean("halt_below_minimum", false);
+    def.buckling = r.boolean("buckling", false);
+    def.bucklingRatio = r.number("buckling_ratio", def.bucklingRatio);
+    if (!(def.bucklingRatio > 1.0)) r.fail("buckling_ratio", "must be > 1");
+    for (const toml::table* m : r.tables("manual")) {
+      TomlReader mr(*m, file_, "effects.breakage.manual[" + std::to_string(def.manual.size()) + "]");
+      breakage::ManualBreak<D> b;
+      const std::int64_t id = mr.integer("particle");
+      if (id < 0) mr.fail("particle", "must be a particle id >= 0");
+      b.particle = std::uint64_t(id);
+      b.time = mr.number("time");
+      b.plane.normal = unitVec<D>(mr, "normal", Vec<D>::UnitX());
+      b.plane.offset = b.plane.normal.dot(vec<D>(mr, "point"));
+      mr.finish();
+      def.manual.push_back(b);
+    }
+    r.finish();
+    scene_.breakage = def;
+  }
+
+  void readGroups(TomlReader& top) {
+    std::size_t g = 0;
+    for (const toml::table* t : top.tables("particles")) {
+      TomlReader r(*t, file_, "particles[" + std::to_string(g++) + "]");
+      ParticleGroupDef<D> group;
+      group.line = int(t->source().begin.line);
+      group.shapes = shapeList(r, r.has("shapes") ? "shapes" : "shape");
+      // Density: a named material's, or the group's own.
+      if (r.has("material")) {
+        const std::string name = r.string("material");
+        const auto it = materialIndex_.find(name);
+        if (it == materialIndex_.end()) r.fail("material", "no material named '" + name + "' in [materials]");
+        group.material = int(it->second);
+        group.density = densities_[it->second];
+      }
+      if (r.has("density")) group.density = r.positive("density");
+      if (!r.has("material") && !r.has("density")) r.fail("", "give 'material' or 'density'");
+      group.velocity = vec<D>(r, "velocity", Vec<D>::Zero());
+      const std::int64_t seed = r.integer("seed", std::int64_t(scene_.seed + g));
+      if (seed < 0) r.fail("seed", "must be >= 0");
+      group.seed = std::uint64_t(seed);
+      if (r.has("diameter_range")) {
+        const std::vector<double> d = r.numbers("diameter_range", 2);
+        if (!(d[0] > 0.0 && d[1] >= d[0])) r.fail("diameter_range", "needs 0 < min <= max");
+        group.diameterMin = d[0];
+        group.diameterMax = d[1];
+      }
+      const std::string placement = r.string("placement", "list");
+      if (placement == "list") {
+        group.placement = Placement::List;
+        for (const std::vector<double>& row : r.numberRows("positions", D)) {
+          Vec<D> x;
+          for (int a = 0; a < D; ++a) x[a] = row[std::size_t(a)];
+          group.positions.push_back(x);
+        }
+        if constexpr (D == 2) {
+          if (r.has("angles_deg")) {
+            group.angles = r.numbers("angles_deg", int(group.positions.size()));
+            for (double& a : group.angles) a *= kDegree;
+          }
+        }
+      } else if (placement == "cloud" || placement == "grid") {
+        group.placement = placement == "cloud" ? Placement::Cloud : Placement::Grid;
+        group.region = box<D>(r, "region");
+        const std::int64_t count = r.integer("count", placement == "grid" ? 0 : -1);
+        if (count < 0 || count > 10000000) r.fail("count", "must be in [1, 1e7] (grid: 0 fills the region)");
+        if (placement == "cloud" && count == 0) r.fail("count", "must be positive");
+        group.count = std::uint64_t(count);
+        group.randomOrientation = r.boolean("random_orientation", false);
+        if (placement == "grid") {
+          group.gridSpacing = r.number("spacing", 0.0);
+          if (group.gridSpacing < 0.0) r.fail("spacing", "must be > 0 m (absent: the largest bounding diameter)");
+        }
+      } else if (placement == "feed") {
+        group.placement = Placement::Feed;
+        group.feedPoint = vec<D>(r, "point");
+        group.feedInterval = r.number("interval", 0.0);
+        if (group.feedInterval < 0.0) r.fail("interval", "must be >= 0 s");
+        group.feedClearance = r.number("clearance", 0.0);
+        if (group.feedInterval == 0.0 && !(group.feedClearance > 0.0)) {
+          r.fail("clearance", "a feed needs an interval > 0 s or a clearance > 0 m");
+        }
+        const std::int64_t count = r.integer("count", 0);
+        if (count < 0) r.fail("count", "must be >= 0 (0: no limit)");
+        group.count = std::uint64_t(count);
+        group.feedStart = r.number("start", 0.0);
+        if (group.diameterMax > 0.0) r.fail("diameter_range", "is not available for feeds (scale the shapes instead)");
+      } else {
+        r.fail("placement", "must be \"list\", \"cloud\", \"grid\" or \"feed\", got \"" + placement + "\"");
+      }
+      r.finish();
+      scene_.groups.push_back(std::move(group));
+    }
+    if (scene_.groups.empty()) top.fail("", "a scene needs at least one [[particles]] group");
+  }
+
+  void readOutput(TomlReader& top) {
+    const toml::table* t = top.optionalTable("output");
+    if (!t) return;
+    TomlReader r(*t, file_, "output");
+    OutputDef& o = scene_.output;
+    o.dir = r.string("dir", o.dir);
+    const auto count = [&](const std::string& key, std::uint64_t fallback) {
+      const std::int64_t v = r.integer(key, std::int64_t(fallback));
+      if (v < 0 || v > 100000000) r.fail(key, "must be in [0, 1e8], got " + std::to_string(v));
+      return std::uint64_t(v);
+    };
+    o.frames = count("frames", o.frames);
+    if (r.has("vtk")) {
+      o.particles = o.surfaces = o.boundaries = o.contacts = false;
+      for (const std::string& s : r.strings("vtk")) {
+        if (s == "particles") o.particles = true;
+        else if (s == "surfaces") o.surfaces = true;
+        else if (s == "boundaries") o.boundaries = true;
+        else if (s == "contacts") o.contacts = true;
+        else r.fail("vtk", "unknown series '" + s + "' (particles, surfaces, boundaries, contacts)");
+      }
+    }
+    o.ascii = r.boolean("ascii", false);
+    o.historyRows = count("history_rows", o.historyRows);
+    o.distributions = count("distributions", o.distributions);
+    o.checkpointEvery = r.number("checkpoint_every", 0.0);
+    if (o.checkpointEvery < 0.0) r.fail("checkpoint_every", "must be >= 0 s");
+    o.progressSeconds = r.positive("progress_seconds", o.progressSeconds);
+    if (const toml::table* s = r.optionalTable("specimen")) {
+      TomlReader sr(*s, file_, "output.specimen");
+      SpecimenDef spec;
+      spec.top = sr.string("top");
+      spec.bottom = sr.string("bottom");
+      spec.width = sr.positive(D == 2 ? "width" : "area");
+      for (const std::string* name : {&spec.top, &spec.bottom}) {
+        if (!boundaryNames_.count(*name)) {
+          sr.fail(name == &spec.top ? "top" : "bottom", "no plane or tool named '" + *name + "'");
+        }
+      }
+      sr.finish();
+      scene_.specimen = spec;
+    }
+    r.finish();
+  }
+
+  const toml::table& root_;
+  std::string file_;
+  SceneDef<D> scene_;
+  std::map<std::string, std::vector<std::size_t>> shapeIndex_;
+  std::map<std::string, std::size_t> materialIndex_;
+  std::vector<double> densities_;
+  std::set<std::string> boundaryNames_;
+};
+
+}  // namespace
+
+AnySceneDef readScene(const std::string& path) {
+  const toml::table root = detail::parseTomlFile(path);
+  const toml::table* sim = root["simulation"].as_table();
+  if (!sim) throw InputError(path, 0, "simulation", "missing table [simulation] (dimension, duration or steps)");
+  detail::TomlReader r(*sim, path, "simulation");
+  const std::int64_t dimension = r.integer("dimension");
+  try {
+    if (dimension == 2) return SceneReader<2>(root, path).read();
+    if (dimension == 3) return SceneReader<3>(root, path).read();
+  } catch (const std::invalid_argument& e) {
+    // A definition the layers refuse (contact law, motion, breakage parameters).
+    throw InputError(path, 0, "", e.what());
+  }
+  r.fail("dimension", "must be 2 or 3, got " + std::to_string(dimension));
+}
+
+}  // namespace lsdem::io
