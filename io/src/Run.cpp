@@ -162,14 +162,17 @@ class Runner {
       }
     }
 
-    // The end (or an early stop): final frame, logs, summary, checkpoint.
+    // The end (or an early stop): the checkpoint first, so that a resumed run
+    // drops what follows (it is not on the output schedule), then a final
+    // frame, history row and distribution, and the summary.
+    wallSeconds_ = secondsSince(start);
+    writeCheckpoint();
     const double clock = clockValue();
     if (lastHistoryClock_ != clock) writeHistoryRow();
     if (lastFrameClock_ != clock) writeFrame();
     if (lastDistributionClock_ != clock) writeDistributions();
-    wallSeconds_ = secondsSince(start);
-    writeCheckpoint();
     writeProductPsd();
+    wallSeconds_ = secondsSince(start);
     writeSummary(stopped);
     if (options_.progress) report(start, double(world.steps()) / std::max(wallSeconds_, 1e-9), true);
 
@@ -281,7 +284,7 @@ class Runner {
     def.resume = resumed_;
     if (scene_.output.frames > 0) {
       frameWriter_.emplace(def);
-      if (resumed_) frameWriter_->truncateAfter(sw_.world->time());
+      if (resumed_) frameWriter_->truncateAfter(lastFrameTime_);
     }
   }
 
@@ -460,13 +463,16 @@ class Runner {
       if (scene_.breakage) def = scene_.breakage->criterion;
       criterion_ = breakage::makeCriterion(def);
     }
-    breakage::grainStresses(w.particles(), w.contacts(), stress_);
+    // (Contacts are read only while they describe the particles: not right
+    // after a breakage or removal, when the frame shows zero stresses.)
     stressMeasure_.assign(w.particles().size(), 0.0);
-    for (std::size_t i = 0; i < stressMeasure_.size() && i < stress_.size(); ++i) {
+    if (w.contactsCurrent()) breakage::grainStresses(w.particles(), w.contacts(), stress_);
+    for (std::size_t i = 0; w.contactsCurrent() && i < stressMeasure_.size() && i < stress_.size(); ++i) {
       stressMeasure_[i] = criterion_->characteristicStress(breakage::principalStressTriple<D>(stress_[i]));
     }
     frameWriter_->write(w, stressMeasure_);
     lastFrameClock_ = clockValue();
+    lastFrameTime_ = w.time();
   }
 
   void writeSummary(bool stopped) const {
@@ -536,6 +542,7 @@ class Runner {
     runner.put(lastHistoryClock_);
     runner.put(lastFrameClock_);
     runner.put(lastDistributionClock_);
+    runner.put(lastFrameTime_);
     runner.put(std::uint64_t(removedWritten_));
     runner.put(std::uint64_t(eventsWritten_));
     runner.put(std::uint64_t(csv_.size()));
@@ -615,6 +622,7 @@ class Runner {
       lastHistoryClock_ = r.get<double>();
       lastFrameClock_ = r.get<double>();
       lastDistributionClock_ = r.get<double>();
+      lastFrameTime_ = r.get<double>();
       removedWritten_ = std::size_t(r.get<std::uint64_t>());
       eventsWritten_ = std::size_t(r.get<std::uint64_t>());
       std::map<std::string, std::uint64_t> sizes;
@@ -642,6 +650,7 @@ class Runner {
   std::uint64_t endStep_ = 0;
   Schedule frames_, history_, distributions_, checkpoints_;
   double lastHistoryClock_ = -1.0, lastFrameClock_ = -1.0, lastDistributionClock_ = -1.0;
+  double lastFrameTime_ = -1.0;  // simulated time of the last frame on the schedule, s
   std::map<std::string, CsvFile> csv_;
   std::optional<FrameWriter<D>> frameWriter_;
   std::unique_ptr<breakage::Criterion> criterion_;

@@ -159,6 +159,11 @@ class World {
   std::uint64_t steps() const { return steps_; }
   const WorldDef<D>& def() const { return def_; }
   const ContactSolver<D>& contacts() const { return contacts_; }
+  /// @brief True when contacts() describes the particles as they are: false
+  /// after particles were added, removed or replaced (breakage) since the last
+  /// force evaluation, until the next step (contact records then hold stale
+  /// particle indices).
+  bool contactsCurrent() const { return forcesValid_; }
   const BroadPhase<D>& broadPhase() const { return broad_; }
   const std::vector<ToolDef<D>>& tools() const { return tools_; }
   const std::vector<ToolPose<D>>& toolPoses() const { return toolPoses_; }

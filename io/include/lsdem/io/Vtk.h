@@ -1,0 +1,293 @@
+#pragma once
+/// @file Vtk.h
+/// @brief ParaView output written by the project itself (no VTK library): VTK
+/// XML PolyData frames (`.vtp`) and ParaView time series (`.pvd`) listing them
+/// (docs/paraview.md).
+///
+/// File format. Every `.vtp` is `<VTKFile type="PolyData" version="1.0"
+/// byte_order="LittleEndian" header_type="UInt64">` with one Piece. Cells use
+/// the version-1.0 layout: an Int64 `connectivity` array and an Int64 `offsets`
+/// array holding the end of each cell. Arrays are written in one of two
+/// encodings (VtkEncoding):
+/// - Binary: `format="binary"`, inline base64 (RFC 4648 alphabet, '=' padding)
+///   of ONE byte stream made of an 8-byte little-endian unsigned byte count of
+///   the data followed by the raw little-endian data (no compression). This is
+///   what VTK's own writer produces for uncompressed inline data.
+/// - Ascii: `format="ascii"`, decimal numbers separated by blanks, in the
+///   shortest form that reads back to the same value (std::to_chars).
+///
+/// 2D worlds are written in the z = 0 plane: points, velocities and forces get
+/// z = 0; angular velocity is (0, 0, w).
+///
+/// Files are written atomically: to `<file>.tmp`, then renamed over `<file>`,
+/// so a run killed at any moment leaves either the old or the new file, never
+/// half of one. All output happens between steps; nothing here is called from
+/// the step's loops.
+
+#include "lsdem/dynamics/World.h"
+#include "lsdem/geometry/Shape.h"
+#include "lsdem/geometry/Types.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <unordered_map>
+#include <variant>
+#include <vector>
+
+namespace lsdem::io {
+
+/// How DataArray values are stored in a `.vtp` file (see the file comment).
+enum class VtkEncoding { Binary, Ascii };
+
+/// One named DataArray: `components` values per tuple, tuples one after the
+/// other (x0 y0 z0 x1 y1 z1 ...). The vector's element type picks the VTK type:
+/// double -> Float64, int64 -> Int64, uint64 -> UInt64, int32 -> Int32.
+struct VtkArray {
+  using Values = std::variant<std::vector<double>, std::vector<std::int64_t>, std::vector<std::uint64_t>,
+                              std::vector<std::int32_t>>;
+  std::string name;    ///< array name shown in ParaView
+  int components = 1;  ///< values per tuple, >= 1
+  Values values;       ///< tuples x components values
+
+  /// @brief Number of values held (tuples x components).
+  std::size_t valueCount() const;
+};
+
+/// Cells of one kind (vertices, polylines or polygons) in VTK's 1.0 layout.
+struct VtkCells {
+  std::vector<std::int64_t> connectivity;  ///< point indices of all cells, one cell after the other
+  std::vector<std::int64_t> offsets;       ///< end of each cell in `connectivity` (exclusive)
+
+  /// @brief Number of cells.
+  std::size_t size() const { return offsets.size(); }
+  /// @brief Appends one cell made of `points` (point indices).
+  void add(std::span<const std::int64_t> points);
+};
+
+/// One PolyData piece: points, cells and the arrays on them. Cell data runs
+/// over all cells in VTK's order: verts, then lines, then polys.
+struct VtpPiece {
+  std::vector<double> points;  ///< 3 coordinates per point, world frame, m
+  VtkCells verts;              ///< vertex cells
+  VtkCells lines;              ///< polyline cells
+  VtkCells polys;              ///< polygon cells
+  std::vector<VtkArray> pointData;  ///< one tuple per point
+  std::vector<VtkArray> cellData;   ///< one tuple per cell (verts + lines + polys)
+
+  /// @brief Number of points (points.size() / 3).
+  std::size_t pointCount() const { return points.size() / 3; }
+  /// @brief Number of cells of all kinds.
+  std::size_t cellCount() const { return verts.size() + lines.size() + polys.size(); }
+};
+
+/// @brief Writes `piece` as a VTK XML PolyData file, atomically (`file.tmp`, then rename).
+/// @note Throws std::invalid_argument when an array's size does not match its
+/// point or cell count, a cell refers to a missing point, or offsets are not
+/// increasing; std::runtime_error naming the path when the file cannot be
+/// written (missing or read-only directory, full disk).
+void writeVtp(const std::filesystem::path& file, const VtpPiece& piece, VtkEncoding encoding);
+
+/// @brief Writes `content` to `file` atomically: to `file.tmp`, then renamed over `file`.
+/// @note Throws std::runtime_error naming the path when it cannot be written.
+void writeFileAtomically(const std::filesystem::path& file, const std::string& content);
+
+/// The zero level set of one shape in its BODY frame (origin at the centroid,
+/// principal axes), world units: closed polylines in 2D (each loop one cell
+/// whose last index repeats the first), triangles in 3D.
+template <int D>
+struct BodyContour {
+  std::vector<geometry::Vec<D>> vertices;  ///< body frame, m
+  std::vector<std::int64_t> connectivity;  ///< vertex indices of all cells
+  std::vector<std::int64_t> offsets;       ///< end of each cell (exclusive)
+
+  /// @brief Number of cells (loops in 2D, triangles in 3D).
+  std::size_t cellCount() const { return offsets.size(); }
+  /// @brief Number of edges in 2D (sum over loops of their vertex count) or
+  /// triangles in 3D.
+  std::size_t pieceCount() const;
+};
+
+/// @brief The zero level set (eq. 2) of `shape` in its body frame: marching
+/// squares (2D) or marching cubes (3D) on its grid, mapped grid frame -> body
+/// frame by the inverse of Shape::bodyToGrid().
+template <int D>
+BodyContour<D> bodyContour(const geometry::Shape<D>& shape);
+
+/// Body-frame contours of shapes, computed once per shape. Many particles share
+/// a shape and breakage makes new ones, so the cache holds a reference to every
+/// shape it has a contour of: a shape's address cannot be reused by a new shape
+/// while it is cached, so the address is a safe key. prune() releases the
+/// shapes nobody else holds any more (freed fragments).
+template <int D>
+class SurfaceCache {
+ public:
+  /// @brief The body-frame contour of `shape`, computed on first use.
+  /// @note Throws std::invalid_argument for a null shape.
+  const BodyContour<D>& contour(const std::shared_ptr<const geometry::Shape<D>>& shape);
+  /// @brief Drops the entries whose shape is held by the cache alone.
+  void prune();
+  /// @brief Number of cached shapes.
+  std::size_t size() const { return entries_.size(); }
+
+ private:
+  struct Entry {
+    std::shared_ptr<const geometry::Shape<D>> shape;  ///< keeps the key's address alive
+    BodyContour<D> contour;
+  };
+  std::unordered_map<const geometry::Shape<D>*, Entry> entries_;
+};
+
+/// @brief Particle frame: one vertex per particle at its centroid (world
+/// frame), with point data (units in docs/paraview.md): id (UInt64),
+/// parent_id (Int64, -1 for none), generation (Int32), radius (bounding radius,
+/// m), equivalent_diameter (m), mass (kg), velocity (3, m/s), angular_velocity
+/// (3, rad/s), orientation (4: quaternion w, x, y, z, body to world; 2D: the
+/// rotation about z), stress (the breakage criterion value, Pa) and strength (Pa).
+/// @param stressMeasure one value per particle in store order, or empty (zeros written).
+/// @note Throws std::invalid_argument when stressMeasure is neither empty nor
+/// one value per particle; std::runtime_error when the file cannot be written.
+template <int D>
+void writeParticleFrame(const std::filesystem::path& file, const dynamics::World<D>& world,
+                        std::span<const double> stressMeasure, VtkEncoding encoding);
+
+/// @brief Surface frame: every particle's surface in world coordinates (body
+/// contour placed at the particle's pose: x = R x_body + position), as closed
+/// polylines in 2D and triangles in 3D. Cell data: id (UInt64), generation (Int32).
+/// @param cache body contours, reused across frames (pruned here).
+template <int D>
+void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
+                       VtkEncoding encoding);
+
+/// @brief Boundary frame: planes clipped to `extent` (a segment in 2D, a
+/// polygon in 3D; a plane that misses the box is drawn as a segment / square
+/// of the box's diagonal centred at the box centre's projection), then the
+/// tools' surfaces at their current pose. Cells are polylines in 2D and
+/// polygons in 3D. Cell data: kind (Int32, 0 plane, 1 tool), index (Int32,
+/// within its kind), force (3, N: the load of the particles on that boundary
+/// from the last step, zeros before the first).
+/// @param extent the scene's domain, world frame, m.
+/// @note Throws std::invalid_argument when the extent is not a box of positive size.
+template <int D>
+void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
+                        const geometry::Box<D>& extent, VtkEncoding encoding);
+
+/// @brief Contact force chain frame: one point per particle (its centroid;
+/// point data id), one line cell per touching particle pair of the last force
+/// computation (centroid of a to centroid of b). Cell data: force (3, N, on a),
+/// force_magnitude (N), normal_force (N, > 0 compressive, along the overlap-weighted mean node
+/// normal from b to a, eq. 4), tangential_force (N), node_contacts (Int32),
+/// id_a and id_b (UInt64).
+/// @note Contacts describe the state of the last force computation: written
+/// right after a step they match the particles. Pairs whose indices are beyond
+/// the particle store (particles removed since) are skipped.
+template <int D>
+void writeContactFrame(const std::filesystem::path& file, const dynamics::World<D>& world, VtkEncoding encoding);
+
+/// A ParaView time series (`.pvd`): a list of (time, file) entries, rewritten
+/// atomically after every change, so a run killed at any moment leaves a valid
+/// `.pvd` listing frames that exist.
+class PvdSeries {
+ public:
+  /// One frame of the series.
+  struct Entry {
+    double time = 0.0;  ///< simulated time, s
+    std::string file;   ///< path relative to the .pvd's directory
+  };
+
+  /// @brief A series written to `pvdFile`.
+  /// @param resume true: read the entries of an existing `pvdFile` (a resumed
+  /// run; follow with truncateAfter(checkpoint time)); false, or no such file:
+  /// start empty. The file is (re)written at once.
+  /// @note Throws io::InputError when a resumed file is not a readable
+  /// series; std::runtime_error when the file cannot be written.
+  explicit PvdSeries(std::filesystem::path pvdFile, bool resume = false);
+
+  /// @brief Appends a frame and rewrites the file.
+  /// @param relativeFile path of the frame relative to the .pvd's directory.
+  void add(double time, const std::string& relativeFile);
+  /// @brief Drops every entry later than `time` (s) and rewrites the file.
+  void truncateAfter(double time);
+  /// @brief The entries, in order of addition.
+  const std::vector<Entry>& entries() const { return entries_; }
+  /// @brief The .pvd file.
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  void save() const;
+
+  std::filesystem::path path_;
+  std::vector<Entry> entries_;
+};
+
+/// What FrameWriter writes, and where.
+template <int D>
+struct FrameWriterDef {
+  std::filesystem::path directory;           ///< output directory (created); frames go to directory/frames/
+  VtkEncoding encoding = VtkEncoding::Binary;
+  bool particles = true;                     ///< particles.pvd
+  bool surfaces = true;                      ///< surfaces.pvd
+  bool boundaries = true;                    ///< boundaries.pvd
+  bool contacts = true;                      ///< contacts.pvd
+  /// Domain the planes are clipped to, world frame, m. A box of zero size:
+  /// the particles' bounding spheres grown by 10% on each side, per frame.
+  geometry::Box<D> extent;
+  bool resume = false;                       ///< keep the entries of existing .pvd files (then call truncateAfter)
+};
+
+/// The four series of a run: `particles.pvd`, `surfaces.pvd`,
+/// `boundaries.pvd`, `contacts.pvd` in the output directory, with frames in
+/// `frames/<series>_NNNNNN.vtp` (NNNNNN the frame number from 0).
+template <int D>
+class FrameWriter {
+ public:
+  /// @brief Creates the directories and the enabled series.
+  /// @note Throws std::runtime_error naming the directory when it cannot be created.
+  explicit FrameWriter(FrameWriterDef<D> def);
+
+  /// @brief Writes one frame of every enabled series at world.time().
+  /// @param stressMeasure per particle criterion value (Pa), or empty.
+  void write(const dynamics::World<D>& world, std::span<const double> stressMeasure = {});
+  /// @brief Drops frames later than `time` (s) from every series (resumed runs).
+  void truncateAfter(double time);
+  /// @brief The number the next frame gets.
+  std::size_t nextFrame() const { return nextFrame_; }
+  /// @brief What the writer was made with.
+  const FrameWriterDef<D>& def() const { return def_; }
+
+ private:
+  void updateNextFrame();
+
+  FrameWriterDef<D> def_;
+  SurfaceCache<D> cache_;
+  std::optional<PvdSeries> particles_, surfaces_, boundaries_, contacts_;
+  std::size_t nextFrame_ = 0;
+};
+
+extern template struct BodyContour<2>;
+extern template struct BodyContour<3>;
+extern template BodyContour<2> bodyContour<2>(const geometry::Shape<2>&);
+extern template BodyContour<3> bodyContour<3>(const geometry::Shape<3>&);
+extern template class SurfaceCache<2>;
+extern template class SurfaceCache<3>;
+extern template void writeParticleFrame<2>(const std::filesystem::path&, const dynamics::World<2>&,
+                                           std::span<const double>, VtkEncoding);
+extern template void writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&,
+                                           std::span<const double>, VtkEncoding);
+extern template void writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
+                                          VtkEncoding);
+extern template void writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
+                                          VtkEncoding);
+extern template void writeBoundaryFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
+                                           const geometry::Box<2>&, VtkEncoding);
+extern template void writeBoundaryFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
+                                           const geometry::Box<3>&, VtkEncoding);
+extern template void writeContactFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, VtkEncoding);
+extern template void writeContactFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, VtkEncoding);
+extern template class FrameWriter<2>;
+extern template class FrameWriter<3>;
+
+}  // namespace lsdem::io

@@ -1,0 +1,837 @@
+#include "lsdem/io/Vtk.h"
+
+#include "lsdem/geometry/Contours.h"
+#include "lsdem/io/InputError.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cctype>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+
+namespace lsdem::io {
+
+static_assert(std::endian::native == std::endian::little,
+              "the VTK writer stores raw little-endian bytes; a big-endian build needs a byte swap here");
+
+namespace {
+
+using geometry::Vec;
+
+// ---------------------------------------------------------------------------
+// Text helpers
+
+// Shortest round-trip text of a number.
+template <class T>
+void appendNumber(std::string& out, T v) {
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
+  out.append(buf, r.ptr);
+}
+
+template <class T>
+std::string numberText(T v) {
+  std::string s;
+  appendNumber(s, v);
+  return s;
+}
+
+// A string safe inside a double-quoted XML attribute.
+std::string xmlEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+// The inverse of xmlEscape for the five predefined entities.
+std::string xmlUnescape(const std::string& s) {
+  static const std::array<std::pair<const char*, char>, 5> entities{
+      {{"&amp;", '&'}, {"&lt;", '<'}, {"&gt;", '>'}, {"&quot;", '"'}, {"&apos;", '\''}}};
+  std::string out;
+  for (std::size_t k = 0; k < s.size();) {
+    bool matched = false;
+    if (s[k] == '&') {
+      for (const auto& [name, c] : entities) {
+        const std::size_t n = std::strlen(name);
+        if (s.compare(k, n, name) == 0) {
+          out += c;
+          k += n;
+          matched = true;
+          break;
+        }
+      }
+    }
+    if (!matched) out += s[k++];
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// Base64 (RFC 4648) of one continuous byte stream, appended to a string.
+
+class Base64Stream {
+ public:
+  explicit Base64Stream(std::string& out) : out_(out) {}
+
+  // Appends `n` bytes to the stream.
+  void put(const void* data, std::size_t n) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    std::size_t k = 0;
+    // Complete a pending triplet first.
+    while (pending_ > 0 && pending_ < 3 && k < n) buffer_[pending_++] = b[k++];
+    if (pending_ == 3) {
+      emit(buffer_[0], buffer_[1], buffer_[2], 3);
+      pending_ = 0;
+    }
+    // Whole triplets straight from the input.
+    for (; k + 3 <= n; k += 3) emit(b[k], b[k + 1], b[k + 2], 3);
+    // Keep the tail for the next put or finish.
+    while (k < n) buffer_[pending_++] = b[k++];
+  }
+
+  // Flushes the last 1-2 bytes with '=' padding.
+  void finish() {
+    if (pending_ == 1) emit(buffer_[0], 0, 0, 1);
+    if (pending_ == 2) emit(buffer_[0], buffer_[1], 0, 2);
+    pending_ = 0;
+  }
+
+ private:
+  void emit(unsigned char a, unsigned char b, unsigned char c, int count) {
+    static constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    const unsigned v = (unsigned(a) << 16) | (unsigned(b) << 8) | unsigned(c);
+    out_ += kAlphabet[(v >> 18) & 63];
+    out_ += kAlphabet[(v >> 12) & 63];
+    out_ += count > 1 ? kAlphabet[(v >> 6) & 63] : '=';
+    out_ += count > 2 ? kAlphabet[v & 63] : '=';
+  }
+
+  std::string& out_;
+  std::array<unsigned char, 3> buffer_{};
+  int pending_ = 0;
+};
+
+// ---------------------------------------------------------------------------
+// DataArray writing
+
+template <class T>
+const char* vtkTypeName() {
+  if constexpr (std::is_same_v<T, double>) return "Float64";
+  if constexpr (std::is_same_v<T, std::int64_t>) return "Int64";
+  if constexpr (std::is_same_v<T, std::uint64_t>) return "UInt64";
+  if constexpr (std::is_same_v<T, std::int32_t>) return "Int32";
+}
+
+// One <DataArray> element with its values in the chosen encoding.
+template <class T>
+void appendDataArray(std::string& out, const std::string& name, int components, std::span<const T> values,
+                     VtkEncoding encoding) {
+  out += "        <DataArray type=\"";
+  out += vtkTypeName<T>();
+  out += "\" Name=\"" + xmlEscape(name) + "\"";
+  if (components > 1) out += " NumberOfComponents=\"" + std::to_string(components) + "\"";
+  out += encoding == VtkEncoding::Binary ? " format=\"binary\">\n          " : " format=\"ascii\">\n";
+  if (encoding == VtkEncoding::Binary) {
+    // One base64 stream: UInt64 byte count, then the raw little-endian values.
+    const std::uint64_t bytes = values.size() * sizeof(T);
+    Base64Stream b64(out);
+    b64.put(&bytes, sizeof(bytes));
+    b64.put(values.data(), bytes);
+    b64.finish();
+    out += '\n';
+  } else {
+    // Blank-separated numbers, one tuple group of up to 12 values per line.
+    for (std::size_t k = 0; k < values.size(); ++k) {
+      out += (k % 12 == 0) ? "          " : " ";
+      appendNumber(out, values[k]);
+      if (k % 12 == 11 || k + 1 == values.size()) out += '\n';
+    }
+  }
+  out += "        </DataArray>\n";
+}
+
+void appendArray(std::string& out, const VtkArray& a, VtkEncoding encoding) {
+  std::visit(
+      [&](const auto& v) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        appendDataArray<T>(out, a.name, a.components, std::span<const T>(v), encoding);
+      },
+      a.values);
+}
+
+// Checks the arrays of one attribute set against their tuple count.
+void checkArrays(const std::vector<VtkArray>& arrays, std::size_t tuples, const char* what) {
+  for (const VtkArray& a : arrays) {
+    if (a.components < 1) {
+      throw std::invalid_argument(std::string(what) + " array '" + a.name + "' has " + std::to_string(a.components) +
+                                  " components");
+    }
+    if (a.valueCount() != tuples * std::size_t(a.components)) {
+      throw std::invalid_argument(std::string(what) + " array '" + a.name + "' has " +
+                                  std::to_string(a.valueCount()) + " values for " + std::to_string(tuples) +
+                                  " tuples of " + std::to_string(a.components));
+    }
+  }
+}
+
+// Checks one cell block: increasing offsets ending at the connectivity size,
+// indices naming existing points.
+void checkCells(const VtkCells& cells, std::size_t points, const char* what) {
+  std::int64_t previous = 0;
+  for (std::int64_t o : cells.offsets) {
+    if (o < previous) throw std::invalid_argument(std::string(what) + " offsets decrease at " + std::to_string(o));
+    previous = o;
+  }
+  if (std::size_t(previous) != cells.connectivity.size()) {
+    throw std::invalid_argument(std::string(what) + " offsets end at " + std::to_string(previous) + " but there are " +
+                                std::to_string(cells.connectivity.size()) + " indices");
+  }
+  for (std::int64_t i : cells.connectivity) {
+    if (i < 0 || std::size_t(i) >= points) {
+      throw std::invalid_argument(std::string(what) + " refer to point " + std::to_string(i) + " of " +
+                                  std::to_string(points));
+    }
+  }
+}
+
+void appendCells(std::string& out, const char* tag, const VtkCells& cells, VtkEncoding encoding) {
+  if (cells.size() == 0) return;
+  out += "      <";
+  out += tag;
+  out += ">\n";
+  appendDataArray<std::int64_t>(out, "connectivity", 1, cells.connectivity, encoding);
+  appendDataArray<std::int64_t>(out, "offsets", 1, cells.offsets, encoding);
+  out += "      </";
+  out += tag;
+  out += ">\n";
+}
+
+// ---------------------------------------------------------------------------
+// Frame helpers
+
+// A D-vector as 3 coordinates (z = 0 in 2D).
+template <int D>
+void push3(std::vector<double>& out, const Vec<D>& v) {
+  out.push_back(v[0]);
+  out.push_back(v[1]);
+  out.push_back(D == 3 ? v[D - 1] : 0.0);
+}
+
+// An angular quantity as 3 components: (0, 0, w) in 2D.
+template <int D>
+void pushSpin(std::vector<double>& out, const dynamics::Spin<D>& w) {
+  if constexpr (D == 2) {
+    out.insert(out.end(), {0.0, 0.0, w});
+  } else {
+    out.insert(out.end(), {w[0], w[1], w[2]});
+  }
+}
+
+// An orientation as a unit quaternion (w, x, y, z); 2D: rotation about z.
+template <int D>
+void pushQuaternion(std::vector<double>& out, const dynamics::Orientation<D>& q) {
+  if constexpr (D == 2) {
+    out.insert(out.end(), {std::cos(0.5 * q), 0.0, 0.0, std::sin(0.5 * q)});
+  } else {
+    out.insert(out.end(), {q.w(), q.x(), q.y(), q.z()});
+  }
+}
+
+// Places a body contour at a pose and appends its points and cells.
+template <int D>
+void appendPlaced(VtpPiece& piece, VtkCells& cells, const BodyContour<D>& contour, const geometry::Mat<D>& rotation,
+                  const Vec<D>& position) {
+  const auto base = std::int64_t(piece.pointCount());
+  for (const Vec<D>& xb : contour.vertices) push3<D>(piece.points, Vec<D>(rotation * xb + position));
+  const auto connectivityBase = std::int64_t(cells.connectivity.size());
+  for (std::int64_t i : contour.connectivity) cells.connectivity.push_back(base + i);
+  for (std::int64_t o : contour.offsets) cells.offsets.push_back(connectivityBase + o);
+}
+
+// Orthonormal tangent basis of a 3D plane with unit normal n.
+void tangentBasis(const Vec<3>& n, Vec<3>& u, Vec<3>& v) {
+  const Vec<3> helper = std::abs(n[0]) < 0.9 ? Vec<3>::UnitX() : Vec<3>::UnitY();
+  u = n.cross(helper).normalized();
+  v = n.cross(u);
+}
+
+// The plane {n.(x - p) = 0} clipped to a box: 2 points in 2D (a segment),
+// 3-6 points in 3D (a convex polygon in order around its normal). A plane that
+// misses the box gives a segment / square of the box's diagonal, centred at
+// the projection of the box centre.
+template <int D>
+std::vector<Vec<D>> clipPlane(const dynamics::Plane<D>& plane, const geometry::Box<D>& box) {
+  const Vec<D> n = plane.normal.normalized();
+  const double diagonal = box.size().norm();
+  const double tol = 1e-12 * diagonal;
+  // Intersections of the plane with the box edges (edges along each axis a).
+  std::vector<Vec<D>> hits;
+  for (int a = 0; a < D; ++a) {
+    for (int corner = 0; corner < (1 << D); ++corner) {
+      if (corner & (1 << a)) continue;
+      Vec<D> p0;
+      for (int c = 0; c < D; ++c) p0[c] = (corner & (1 << c)) ? box.upper[c] : box.lower[c];
+      Vec<D> p1 = p0;
+      p1[a] = box.upper[a];
+      const double s0 = n.dot(p0 - plane.point), s1 = n.dot(p1 - plane.point);
+      if ((s0 > 0.0 && s1 > 0.0) || (s0 < 0.0 && s1 < 0.0) || s0 == s1) continue;
+      const double t = s0 / (s0 - s1);
+      const Vec<D> x = p0 + t * (p1 - p0);
+      // Skip repeats (a plane through a corner meets several edges there).
+      bool repeat = false;
+      for (const Vec<D>& h : hits) repeat = repeat || (h - x).norm() <= tol;
+      if (!repeat) hits.push_back(x);
+    }
+  }
+  // The tangent direction(s) of the plane.
+  const Vec<D> centre = 0.5 * (box.lower + box.upper);
+  const Vec<D> foot = centre - n.dot(centre - plane.point) * n;
+  if constexpr (D == 2) {
+    const Vec<2> t(-n[1], n[0]);
+    if (hits.size() < 2) return {foot - 0.5 * diagonal * t, foot + 0.5 * diagonal * t};
+    // The two extreme hits along the tangent.
+    auto [lo, hi] = std::minmax_element(hits.begin(), hits.end(),
+                                        [&](const Vec<2>& x, const Vec<2>& y) { return t.dot(x) < t.dot(y); });
+    return {*lo, *hi};
+  } else {
+    Vec<3> u, v;
+    tangentBasis(n, u, v);
+    if (hits.size() < 3) {
+      const double h = 0.5 * diagonal;
+      return {foot - h * u - h * v, foot + h * u - h * v, foot + h * u + h * v, foot - h * u + h * v};
+    }
+    // Counter-clockwise around n, by angle about the centroid of the hits.
+    Vec<3> mid = Vec<3>::Zero();
+    for (const Vec<3>& h : hits) mid += h;
+    mid /= double(hits.size());
+    std::sort(hits.begin(), hits.end(), [&](const Vec<3>& x, const Vec<3>& y) {
+      return std::atan2(v.dot(x - mid), u.dot(x - mid)) < std::atan2(v.dot(y - mid), u.dot(y - mid));
+    });
+    return hits;
+  }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Low-level writing
+
+std::size_t VtkArray::valueCount() const {
+  return std::visit([](const auto& v) { return v.size(); }, values);
+}
+
+void VtkCells::add(std::span<const std::int64_t> points) {
+  connectivity.insert(connectivity.end(), points.begin(), points.end());
+  offsets.push_back(std::int64_t(connectivity.size()));
+}
+
+void writeFileAtomically(const std::filesystem::path& file, const std::string& content) {
+  // Write the whole content to a temporary file beside the target.
+  std::filesystem::path tmp = file;
+  tmp += ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) {
+      throw std::runtime_error("cannot write '" + file.string() + "': cannot open '" + tmp.string() +
+                               "': " + std::strerror(errno));
+    }
+    out.write(content.data(), std::streamsize(content.size()));
+    out.flush();
+    if (!out) {
+      const std::string reason = std::strerror(errno);
+      out.close();
+      std::error_code ignored;
+      std::filesystem::remove(tmp, ignored);
+      throw std::runtime_error("cannot write '" + file.string() + "': " + reason);
+    }
+  }
+  // Replace the target in one step.
+  std::error_code ec;
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+    throw std::runtime_error("cannot write '" + file.string() + "': rename failed: " + ec.message());
+  }
+}
+
+void writeVtp(const std::filesystem::path& file, const VtpPiece& piece, VtkEncoding encoding) {
+  // Validate sizes and indices before writing anything.
+  if (piece.points.size() % 3 != 0) {
+    throw std::invalid_argument("VTP points hold " + std::to_string(piece.points.size()) +
+                                " coordinates, not a multiple of 3");
+  }
+  const std::size_t points = piece.pointCount();
+  checkCells(piece.verts, points, "vertex cells");
+  checkCells(piece.lines, points, "line cells");
+  checkCells(piece.polys, points, "polygon cells");
+  checkArrays(piece.pointData, points, "point data");
+  checkArrays(piece.cellData, piece.cellCount(), "cell data");
+
+  // The XML document, built in memory and written in one piece.
+  std::string out;
+  out.reserve(256 + 12 * piece.points.size() + 12 * (piece.verts.connectivity.size() +
+                                                     piece.lines.connectivity.size() + piece.polys.connectivity.size()));
+  out += "<?xml version=\"1.0\"?>\n";
+  out += "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+  out += "  <PolyData>\n";
+  out += "    <Piece NumberOfPoints=\"" + std::to_string(points) + "\" NumberOfVerts=\"" +
+         std::to_string(piece.verts.size()) + "\" NumberOfLines=\"" + std::to_string(piece.lines.size()) +
+         "\" NumberOfStrips=\"0\" NumberOfPolys=\"" + std::to_string(piece.polys.size()) + "\">\n";
+  // Attributes on points and cells.
+  out += "      <PointData>\n";
+  for (const VtkArray& a : piece.pointData) appendArray(out, a, encoding);
+  out += "      </PointData>\n";
+  out += "      <CellData>\n";
+  for (const VtkArray& a : piece.cellData) appendArray(out, a, encoding);
+  out += "      </CellData>\n";
+  // Geometry and topology.
+  out += "      <Points>\n";
+  appendDataArray<double>(out, "Points", 3, piece.points, encoding);
+  out += "      </Points>\n";
+  appendCells(out, "Verts", piece.verts, encoding);
+  appendCells(out, "Lines", piece.lines, encoding);
+  appendCells(out, "Polys", piece.polys, encoding);
+  out += "    </Piece>\n";
+  out += "  </PolyData>\n";
+  out += "</VTKFile>\n";
+  writeFileAtomically(file, out);
+}
+
+// ---------------------------------------------------------------------------
+// Body contours and their cache
+
+template <int D>
+std::size_t BodyContour<D>::pieceCount() const {
+  if constexpr (D == 3) {
+    return offsets.size();
+  } else {
+    // A closed loop of n vertices has n + 1 indices and n edges.
+    return connectivity.size() - offsets.size();
+  }
+}
+
+template <int D>
+BodyContour<D> bodyContour(const geometry::Shape<D>& shape) {
+  BodyContour<D> c;
+  const geometry::Rigid<D>& bodyToGrid = shape.bodyToGrid();
+  if constexpr (D == 2) {
+    // Closed loops: each a polyline whose last index repeats its first.
+    for (const std::vector<Vec<2>>& loop : geometry::marchingSquares(shape.grid())) {
+      const auto first = std::int64_t(c.vertices.size());
+      for (const Vec<2>& x : loop) {
+        c.connectivity.push_back(std::int64_t(c.vertices.size()));
+        c.vertices.push_back(bodyToGrid.applyInverse(x));
+      }
+      c.connectivity.push_back(first);
+      c.offsets.push_back(std::int64_t(c.connectivity.size()));
+    }
+  } else {
+    // Triangles with shared vertices.
+    const geometry::TriangleMesh mesh = geometry::marchingCubes(shape.grid());
+    c.vertices.reserve(mesh.vertices.size());
+    for (const Vec<3>& x : mesh.vertices) c.vertices.push_back(bodyToGrid.applyInverse(x));
+    c.connectivity.reserve(3 * mesh.faces.size());
+    for (const auto& f : mesh.faces) {
+      c.connectivity.insert(c.connectivity.end(), {f[0], f[1], f[2]});
+      c.offsets.push_back(std::int64_t(c.connectivity.size()));
+    }
+  }
+  return c;
+}
+
+template <int D>
+const BodyContour<D>& SurfaceCache<D>::contour(const std::shared_ptr<const geometry::Shape<D>>& shape) {
+  if (!shape) throw std::invalid_argument("surface cache: null shape");
+  // The cache holds every shape it keys, so a hit is the same live shape.
+  auto it = entries_.find(shape.get());
+  if (it == entries_.end()) it = entries_.emplace(shape.get(), Entry{shape, bodyContour(*shape)}).first;
+  return it->second.contour;
+}
+
+template <int D>
+void SurfaceCache<D>::prune() {
+  std::erase_if(entries_, [](const auto& kv) { return kv.second.shape.use_count() == 1; });
+}
+
+// ---------------------------------------------------------------------------
+// Frames
+
+template <int D>
+void writeParticleFrame(const std::filesystem::path& file, const dynamics::World<D>& world,
+                        std::span<const double> stressMeasure, VtkEncoding encoding) {
+  const dynamics::Particles<D>& p = world.particles();
+  const std::size_t n = p.size();
+  if (!stressMeasure.empty() && stressMeasure.size() != n) {
+    throw std::invalid_argument("particle frame: stress measure has " + std::to_string(stressMeasure.size()) +
+                                " values for " + std::to_string(n) + " particles");
+  }
+  // Per-particle columns.
+  VtpPiece piece;
+  std::vector<std::uint64_t> id(n);
+  std::vector<std::int64_t> parent(n);
+  std::vector<std::int32_t> generation(n);
+  std::vector<double> radius(n), diameter(n), mass(n), stress(n, 0.0), strength(n);
+  std::vector<double> velocity, spin, orientation;
+  velocity.reserve(3 * n);
+  spin.reserve(3 * n);
+  orientation.reserve(4 * n);
+  piece.points.reserve(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    push3<D>(piece.points, p.position[i]);
+    const std::int64_t index = std::int64_t(i);
+    piece.verts.add(std::span<const std::int64_t>(&index, 1));
+    id[i] = p.id[i];
+    parent[i] = p.parentId[i] == dynamics::kNoParent ? -1 : std::int64_t(p.parentId[i]);
+    generation[i] = p.generation[i];
+    radius[i] = p.shape[i]->boundingRadius();
+    diameter[i] = p.shape[i]->descriptors().equivalentDiameter;
+    mass[i] = p.mass[i];
+    if (!stressMeasure.empty()) stress[i] = stressMeasure[i];
+    strength[i] = p.strength[i];
+    push3<D>(velocity, p.velocity[i]);
+    pushSpin<D>(spin, p.angularVelocity[i]);
+    pushQuaternion<D>(orientation, p.orientation[i]);
+  }
+  // Point data, in the order ParaView lists them.
+  piece.pointData.push_back({"id", 1, std::move(id)});
+  piece.pointData.push_back({"parent_id", 1, std::move(parent)});
+  piece.pointData.push_back({"generation", 1, std::move(generation)});
+  piece.pointData.push_back({"radius", 1, std::move(radius)});
+  piece.pointData.push_back({"equivalent_diameter", 1, std::move(diameter)});
+  piece.pointData.push_back({"mass", 1, std::move(mass)});
+  piece.pointData.push_back({"velocity", 3, std::move(velocity)});
+  piece.pointData.push_back({"angular_velocity", 3, std::move(spin)});
+  piece.pointData.push_back({"orientation", 4, std::move(orientation)});
+  piece.pointData.push_back({"stress", 1, std::move(stress)});
+  piece.pointData.push_back({"strength", 1, std::move(strength)});
+  writeVtp(file, piece, encoding);
+}
+
+template <int D>
+void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
+                       VtkEncoding encoding) {
+  const dynamics::Particles<D>& p = world.particles();
+  cache.prune();
+  VtpPiece piece;
+  VtkCells& cells = D == 2 ? piece.lines : piece.polys;
+  std::vector<std::uint64_t> id;
+  std::vector<std::int32_t> generation;
+  // Each particle's body contour at its pose.
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const BodyContour<D>& contour = cache.contour(p.shape[i]);
+    appendPlaced<D>(piece, cells, contour, p.rotation(i), p.position[i]);
+    id.insert(id.end(), contour.cellCount(), p.id[i]);
+    generation.insert(generation.end(), contour.cellCount(), std::int32_t(p.generation[i]));
+  }
+  piece.cellData.push_back({"id", 1, std::move(id)});
+  piece.cellData.push_back({"generation", 1, std::move(generation)});
+  writeVtp(file, piece, encoding);
+}
+
+template <int D>
+void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
+                        const geometry::Box<D>& extent, VtkEncoding encoding) {
+  if (!((extent.upper - extent.lower).array() > 0.0).all() || !extent.lower.allFinite() ||
+      !extent.upper.allFinite()) {
+    std::ostringstream msg;
+    msg << "boundary frame: the extent box must have positive size, got lower (" << extent.lower.transpose()
+        << ") upper (" << extent.upper.transpose() << ")";
+    throw std::invalid_argument(msg.str());
+  }
+  VtpPiece piece;
+  VtkCells& cells = D == 2 ? piece.lines : piece.polys;
+  std::vector<std::int32_t> kind, index;
+  std::vector<double> force;
+  const dynamics::BoundaryLoads<D>& loads = world.boundaryLoads();
+  // Planes clipped to the extent.
+  for (std::size_t k = 0; k < world.planes().size(); ++k) {
+    const std::vector<Vec<D>> corners = clipPlane<D>(world.planes()[k], extent);
+    std::vector<std::int64_t> ids;
+    for (const Vec<D>& x : corners) {
+      ids.push_back(std::int64_t(piece.pointCount()));
+      push3<D>(piece.points, x);
+    }
+    cells.add(ids);
+    kind.push_back(0);
+    index.push_back(std::int32_t(k));
+    push3<D>(force, k < loads.planeForce.size() ? loads.planeForce[k] : Vec<D>::Zero().eval());
+  }
+  // Tools at their pose.
+  for (std::size_t k = 0; k < world.tools().size(); ++k) {
+    const BodyContour<D>& contour = cache.contour(world.tools()[k].shape);
+    const dynamics::ToolPose<D>& pose = world.toolPoses()[k];
+    appendPlaced<D>(piece, cells, contour, dynamics::Rotation<D>::matrix(pose.orientation), pose.position);
+    const Vec<D> f = k < loads.toolForce.size() ? loads.toolForce[k] : Vec<D>::Zero().eval();
+    for (std::size_t c = 0; c < contour.cellCount(); ++c) {
+      kind.push_back(1);
+      index.push_back(std::int32_t(k));
+      push3<D>(force, f);
+    }
+  }
+  piece.cellData.push_back({"kind", 1, std::move(kind)});
+  piece.cellData.push_back({"index", 1, std::move(index)});
+  piece.cellData.push_back({"force", 3, std::move(force)});
+  writeVtp(file, piece, encoding);
+}
+
+template <int D>
+void writeContactFrame(const std::filesystem::path& file, const dynamics::World<D>& world, VtkEncoding encoding) {
+  const dynamics::Particles<D>& p = world.particles();
+  const auto& nodes = world.contacts().nodeContacts();
+  VtpPiece piece;
+  // One point per particle, at its centroid.
+  std::vector<std::uint64_t> pointId(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    push3<D>(piece.points, p.position[i]);
+    pointId[i] = p.id[i];
+  }
+  // One line per touching pair.
+  std::vector<double> force, magnitude, normalForce, tangentialForce;
+  std::vector<std::int32_t> nodeCount;
+  std::vector<std::uint64_t> idA, idB;
+  // Right after a breakage or removal the records name old indices: no chains then.
+  const std::span<const dynamics::PairContact<D>> pairs =
+      world.contactsCurrent() ? world.contacts().particleContacts() : std::span<const dynamics::PairContact<D>>();
+  for (const dynamics::PairContact<D>& c : pairs) {
+    if (c.nodeCount == 0 || c.a >= p.size() || c.b >= p.size()) continue;
+    const std::array<std::int64_t, 2> ends{std::int64_t(c.a), std::int64_t(c.b)};
+    piece.lines.add(ends);
+    // The overlap-weighted mean node normal (eq. 4, from b towards a) splits
+    // the force: with per-node springs it is the direction of the total
+    // normal force, so the rest is friction.
+    Vec<D> normal = Vec<D>::Zero();
+    for (std::uint32_t k = c.firstNode; k < c.firstNode + c.nodeCount && k < nodes.size(); ++k) {
+      normal += nodes[k].overlap * nodes[k].normal;
+    }
+    if (normal.norm() > 0.0) normal.normalize();
+    const double fn = c.force.dot(normal);
+    push3<D>(force, c.force);
+    magnitude.push_back(c.force.norm());
+    normalForce.push_back(fn);
+    tangentialForce.push_back((c.force - fn * normal).norm());
+    nodeCount.push_back(std::int32_t(c.nodeCount));
+    idA.push_back(p.id[c.a]);
+    idB.push_back(p.id[c.b]);
+  }
+  piece.pointData.push_back({"id", 1, std::move(pointId)});
+  piece.cellData.push_back({"force", 3, std::move(force)});
+  piece.cellData.push_back({"force_magnitude", 1, std::move(magnitude)});
+  piece.cellData.push_back({"normal_force", 1, std::move(normalForce)});
+  piece.cellData.push_back({"tangential_force", 1, std::move(tangentialForce)});
+  piece.cellData.push_back({"node_contacts", 1, std::move(nodeCount)});
+  piece.cellData.push_back({"id_a", 1, std::move(idA)});
+  piece.cellData.push_back({"id_b", 1, std::move(idB)});
+  writeVtp(file, piece, encoding);
+}
+
+// ---------------------------------------------------------------------------
+// PVD series
+
+namespace {
+
+// The value of attribute `name` in the tag text `tag`, or nullopt.
+std::optional<std::string> attribute(const std::string& tag, const std::string& name) {
+  std::size_t at = 0;
+  while ((at = tag.find(name + "=\"", at)) != std::string::npos) {
+    // Only a whole attribute name (preceded by a blank).
+    if (at > 0 && std::isspace(static_cast<unsigned char>(tag[at - 1]))) {
+      const std::size_t begin = at + name.size() + 2;
+      const std::size_t end = tag.find('"', begin);
+      if (end == std::string::npos) return std::nullopt;
+      return xmlUnescape(tag.substr(begin, end - begin));
+    }
+    at += name.size();
+  }
+  return std::nullopt;
+}
+
+// 1-based line of character offset `at`.
+int lineOf(const std::string& text, std::size_t at) {
+  return 1 + int(std::count(text.begin(), text.begin() + std::ptrdiff_t(std::min(at, text.size())), '\n'));
+}
+
+}  // namespace
+
+PvdSeries::PvdSeries(std::filesystem::path pvdFile, bool resume) : path_(std::move(pvdFile)) {
+  if (resume && std::filesystem::exists(path_)) {
+    // Read the existing series.
+    std::ifstream in(path_, std::ios::binary);
+    if (!in) throw InputError(path_.string(), 0, "", "cannot open the series for reading");
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    const std::string text = buffer.str();
+    if (text.find("<VTKFile") == std::string::npos || text.find("type=\"Collection\"") == std::string::npos) {
+      throw InputError(path_.string(), 1, "", "not a ParaView series (no <VTKFile type=\"Collection\">)");
+    }
+    if (text.find("</VTKFile>") == std::string::npos) {
+      throw InputError(path_.string(), lineOf(text, text.size()), "", "the series ends before </VTKFile>");
+    }
+    // One entry per <DataSet .../>.
+    std::size_t at = 0;
+    while ((at = text.find("<DataSet", at)) != std::string::npos) {
+      const std::size_t end = text.find('>', at);
+      if (end == std::string::npos) throw InputError(path_.string(), lineOf(text, at), "DataSet", "unterminated tag");
+      const std::string tag = text.substr(at, end - at);
+      const auto time = attribute(tag, "timestep");
+      const auto file = attribute(tag, "file");
+      if (!time) throw InputError(path_.string(), lineOf(text, at), "timestep", "missing");
+      if (!file || file->empty()) throw InputError(path_.string(), lineOf(text, at), "file", "missing");
+      Entry e;
+      const auto r = std::from_chars(time->data(), time->data() + time->size(), e.time);
+      if (r.ec != std::errc() || r.ptr != time->data() + time->size() || !std::isfinite(e.time)) {
+        throw InputError(path_.string(), lineOf(text, at), "timestep", "not a number: '" + *time + "'");
+      }
+      e.file = *file;
+      entries_.push_back(std::move(e));
+      at = end;
+    }
+  }
+  save();
+}
+
+void PvdSeries::add(double time, const std::string& relativeFile) {
+  entries_.push_back({time, relativeFile});
+  save();
+}
+
+void PvdSeries::truncateAfter(double time) {
+  std::erase_if(entries_, [&](const Entry& e) { return e.time > time; });
+  save();
+}
+
+void PvdSeries::save() const {
+  std::string out = "<?xml version=\"1.0\"?>\n";
+  out += "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n";
+  out += "  <Collection>\n";
+  for (const Entry& e : entries_) {
+    out += "    <DataSet timestep=\"" + numberText(e.time) + "\" group=\"\" part=\"0\" file=\"" + xmlEscape(e.file) +
+           "\"/>\n";
+  }
+  out += "  </Collection>\n";
+  out += "</VTKFile>\n";
+  writeFileAtomically(path_, out);
+}
+
+// ---------------------------------------------------------------------------
+// Frame writer
+
+template <int D>
+FrameWriter<D>::FrameWriter(FrameWriterDef<D> def) : def_(std::move(def)) {
+  // Directories.
+  const std::filesystem::path frames = def_.directory / "frames";
+  std::error_code ec;
+  std::filesystem::create_directories(frames, ec);
+  if (ec || !std::filesystem::is_directory(frames)) {
+    throw std::runtime_error("cannot create the output directory '" + frames.string() + "': " +
+                             (ec ? ec.message() : std::string("not a directory")));
+  }
+  // Series.
+  if (def_.particles) particles_.emplace(def_.directory / "particles.pvd", def_.resume);
+  if (def_.surfaces) surfaces_.emplace(def_.directory / "surfaces.pvd", def_.resume);
+  if (def_.boundaries) boundaries_.emplace(def_.directory / "boundaries.pvd", def_.resume);
+  if (def_.contacts) contacts_.emplace(def_.directory / "contacts.pvd", def_.resume);
+  updateNextFrame();
+}
+
+template <int D>
+void FrameWriter<D>::updateNextFrame() {
+  nextFrame_ = 0;
+  for (const auto* s : {&particles_, &surfaces_, &boundaries_, &contacts_}) {
+    if (*s) nextFrame_ = std::max(nextFrame_, (*s)->entries().size());
+  }
+}
+
+template <int D>
+void FrameWriter<D>::write(const dynamics::World<D>& world, std::span<const double> stressMeasure) {
+  char number[32];
+  std::snprintf(number, sizeof(number), "%06zu", nextFrame_);
+  const double time = world.time();
+  // One frame of a series: the file, then its entry.
+  auto frame = [&](std::optional<PvdSeries>& series, const char* name, const auto& writeFile) {
+    if (!series) return;
+    const std::string relative = std::string("frames/") + name + "_" + number + ".vtp";
+    writeFile(def_.directory / relative);
+    series->add(time, relative);
+  };
+  frame(particles_, "particles", [&](const std::filesystem::path& f) {
+    writeParticleFrame<D>(f, world, stressMeasure, def_.encoding);
+  });
+  frame(surfaces_, "surfaces",
+        [&](const std::filesystem::path& f) { writeSurfaceFrame<D>(f, world, cache_, def_.encoding); });
+  frame(boundaries_, "boundaries", [&](const std::filesystem::path& f) {
+    // The extent: given, or the particles' bounding spheres grown by 10%.
+    geometry::Box<D> extent = def_.extent;
+    if (!((extent.upper - extent.lower).array() > 0.0).all()) {
+      const auto& p = world.particles();
+      extent.lower = Vec<D>::Constant(-0.5);
+      extent.upper = Vec<D>::Constant(0.5);
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        const Vec<D> r = Vec<D>::Constant(p.shape[i]->boundingRadius());
+        const Vec<D> lo = p.position[i] - r, hi = p.position[i] + r;
+        extent.lower = i == 0 ? lo : extent.lower.cwiseMin(lo).eval();
+        extent.upper = i == 0 ? hi : extent.upper.cwiseMax(hi).eval();
+      }
+      const Vec<D> grow = 0.1 * (extent.upper - extent.lower);
+      extent.lower -= grow;
+      extent.upper += grow;
+    }
+    writeBoundaryFrame<D>(f, world, cache_, extent, def_.encoding);
+  });
+  frame(contacts_, "contacts",
+        [&](const std::filesystem::path& f) { writeContactFrame<D>(f, world, def_.encoding); });
+  ++nextFrame_;
+}
+
+template <int D>
+void FrameWriter<D>::truncateAfter(double time) {
+  for (auto* s : {&particles_, &surfaces_, &boundaries_, &contacts_}) {
+    if (*s) (*s)->truncateAfter(time);
+  }
+  updateNextFrame();
+}
+
+// ---------------------------------------------------------------------------
+// Instantiations
+
+template struct BodyContour<2>;
+template struct BodyContour<3>;
+template BodyContour<2> bodyContour<2>(const geometry::Shape<2>&);
+template BodyContour<3> bodyContour<3>(const geometry::Shape<3>&);
+template class SurfaceCache<2>;
+template class SurfaceCache<3>;
+template void writeParticleFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, std::span<const double>,
+                                    VtkEncoding);
+template void writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, std::span<const double>,
+                                    VtkEncoding);
+template void writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
+                                   VtkEncoding);
+template void writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
+                                   VtkEncoding);
+template void writeBoundaryFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
+                                    const geometry::Box<2>&, VtkEncoding);
+template void writeBoundaryFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
+                                    const geometry::Box<3>&, VtkEncoding);
+template void writeContactFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, VtkEncoding);
+template void writeContactFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, VtkEncoding);
+template class FrameWriter<2>;
+template class FrameWriter<3>;
+
+}  // namespace lsdem::io

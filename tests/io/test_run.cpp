@@ -1,0 +1,234 @@
+// Running scenes: the outputs a run writes (read back and checked), mass
+// balance with breakage, and a resumed run equal to an uninterrupted one.
+
+#include "support/VtpReader.h"
+#include "lsdem/io/InputError.h"
+#include "lsdem/io/Run.h"
+#include "lsdem/io/Scene.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+using namespace lsdem;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A 2D box with a platen crushing eight breakable grains.
+const char* kCrushScene = R"(
+[simulation]
+dimension = 2
+duration = 0.012
+seed = 3
+
+[contact]
+kn = 2e5
+friction = 0.4
+damping_ratio = 0.3
+
+[materials.rock]
+density = 2650.0
+
+[shapes.grain]
+kind = "random_grain"
+equivalent_diameter = 0.002
+elongation = 1.2
+roughness = 0.05
+seed = 4
+cells_across = 24
+node_density = 1.0
+
+[[particles]]
+shape = "grain"
+material = "rock"
+placement = "grid"
+region = { min = [0.0, 0.0], max = [0.0096, 0.0048] }
+random_orientation = true
+
+[[planes]]
+name = "floor"
+point = [0.0, 0.0]
+normal = [0.0, 1.0]
+
+[[planes]]
+name = "left"
+point = [0.0, 0.0]
+normal = [1.0, 0.0]
+
+[[planes]]
+name = "right"
+point = [0.0096, 0.0]
+normal = [-1.0, 0.0]
+
+[[planes]]
+name = "platen"
+point = [0.0, 0.0052]
+normal = [0.0, -1.0]
+velocity = [0.0, -0.15]
+
+[effects]
+gravity = [0.0, -9.81]
+
+[effects.breakage]
+criterion = "von_mises"
+von_mises_strength = 3e4
+reference_strength = 3e4
+reference_diameter = 0.002
+min_volume = 8e-8
+
+[output]
+frames = 6
+history_rows = 30
+distributions = 3
+checkpoint_every = 0.004
+progress_seconds = 1e-9
+
+[output.specimen]
+top = "platen"
+bottom = "floor"
+width = 0.0096
+)";
+
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& name) : path(fs::temp_directory_path() / ("lsdem_test_run_" + name)) {
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+};
+
+std::string readFile(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream s(text);
+  for (std::string l; std::getline(s, l);) out.push_back(l);
+  return out;
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream s(line);
+  for (std::string c; std::getline(s, c, ',');) out.push_back(c);
+  if (!line.empty() && line.back() == ',') out.push_back("");
+  return out;
+}
+
+fs::path writeScene(const fs::path& dir, const std::string& text) {
+  const fs::path p = dir / "scene.toml";
+  std::ofstream(p) << text;
+  return p;
+}
+
+}  // namespace
+
+TEST(Run, WritesEveryOutputWithExactMassBalance) {
+  TempDir dir("outputs");
+  io::RunOptions o;
+  o.scene = writeScene(dir.path, kCrushScene).string();
+  o.outDir = (dir.path / "out").string();
+  const io::RunResult r = io::runScene(o);
+
+  EXPECT_FALSE(r.stopped);
+  EXPECT_GT(r.breakages, 0u) << "the platen must break grains for this test to mean anything";
+  EXPECT_GT(r.particles, 8u);
+  EXPECT_LT(std::abs(r.massBalanceError), 1e-12);
+
+  // history.csv: documented columns, one row per output time, last row at the end.
+  const auto history = lines(readFile(dir.path / "out" / "history.csv"));
+  ASSERT_GE(history.size(), 30u);
+  const auto header = split(history[0]);
+  for (const char* column : {"step", "time_s", "particles", "breakages", "kinetic_J", "energy_error_J",
+                             "platen_force_y_N", "stress_Pa", "strain", "void_ratio"}) {
+    EXPECT_NE(std::find(header.begin(), header.end(), column), header.end()) << column;
+  }
+  const auto last = split(history.back());
+  ASSERT_EQ(last.size(), header.size());
+  EXPECT_NEAR(std::stod(last[1]), 0.012, 1e-5);
+  const std::size_t strainColumn = std::size_t(std::find(header.begin(), header.end(), "strain") - header.begin());
+  // The platen's travel over the initial height.
+  EXPECT_NEAR(std::stod(last[strainColumn]), 0.15 * std::stod(last[1]) / 0.0052, 1e-9);
+
+  // The particles frame at the end: one point per particle, ids match the summary count.
+  const test::VtpFile frame = test::readVtp((dir.path / "out" / "frames" / "particles_000006.vtp").string());
+  EXPECT_EQ(frame.points, r.particles);
+  EXPECT_EQ(frame.pointArray("id").tuples(), r.particles);
+
+  // PSD: percent passing reaches 100 at every snapshot; 3 snapshots plus the end.
+  const auto psd = lines(readFile(dir.path / "out" / "psd.csv"));
+  int full = 0;
+  for (std::size_t k = 1; k < psd.size(); ++k) full += std::abs(std::stod(split(psd[k])[2]) - 100.0) < 1e-9;
+  EXPECT_EQ(full, 3);
+
+  // Breakage log: one row per breakage.
+  EXPECT_EQ(lines(readFile(dir.path / "out" / "breakage_log.csv")).size(), r.breakages + 1);
+  // summary.json names the mass balance.
+  const std::string summary = readFile(dir.path / "out" / "summary.json");
+  EXPECT_NE(summary.find("\"mass_balance\""), std::string::npos);
+  EXPECT_NE(summary.find("\"stopped_early\": false"), std::string::npos);
+}
+
+TEST(Run, ResumedRunEqualsUninterruptedRun) {
+  TempDir dir("resume");
+  const std::string scene = writeScene(dir.path, kCrushScene).string();
+
+  io::RunOptions straight;
+  straight.scene = scene;
+  straight.outDir = (dir.path / "straight").string();
+  const io::RunResult a = io::runScene(straight);
+
+  // Stopped part-way (after breakage has started), then resumed.
+  std::atomic<bool> stop{false};
+  io::RunOptions first;
+  first.scene = scene;
+  first.outDir = (dir.path / "resumed").string();
+  first.stop = &stop;
+  first.progress = [&](const io::RunProgress& p) {
+    if (p.time > 0.0071) stop = true;
+  };
+  const io::RunResult b1 = io::runScene(first);
+  ASSERT_TRUE(b1.stopped);
+  io::RunOptions second;
+  second.resumeDir = first.outDir;
+  const io::RunResult b = io::runScene(second);
+
+  EXPECT_EQ(a.steps, b.steps);
+  EXPECT_EQ(a.particles, b.particles);
+  EXPECT_EQ(a.breakages, b.breakages);
+  for (const char* file : {"history.csv", "psd.csv", "breakage_log.csv", "removed.csv", "shape_stats.csv",
+                           "particles.pvd", "frames/particles_000006.vtp", "frames/surfaces_000006.vtp"}) {
+    EXPECT_EQ(readFile(dir.path / "straight" / file), readFile(dir.path / "resumed" / file)) << file;
+  }
+}
+
+TEST(Run, ResumeRefusesAChangedSceneAndAMissingCheckpoint) {
+  TempDir dir("resume_bad");
+  io::RunOptions o;
+  o.resumeDir = (dir.path / "nothing").string();
+  EXPECT_THROW(io::runScene(o), io::InputError);
+
+  const fs::path scene = writeScene(dir.path, kCrushScene);
+  io::RunOptions run;
+  run.scene = scene.string();
+  run.outDir = (dir.path / "out").string();
+  run.steps = 5;
+  io::runScene(run);
+  std::ofstream(scene, std::ios::app) << "\n# edited\n";
+  io::RunOptions resume;
+  resume.resumeDir = run.outDir;
+  try {
+    io::runScene(resume);
+    FAIL() << "a changed scene must be refused";
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("changed since the checkpoint"), std::string::npos) << e.what();
+  }
+}

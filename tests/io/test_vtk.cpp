@@ -1,0 +1,591 @@
+#include "support/Shapes.h"
+#include "support/VtpReader.h"
+#include "lsdem/dynamics/World.h"
+#include "lsdem/geometry/Contours.h"
+#include "lsdem/geometry/ShapeDef.h"
+#include "lsdem/io/InputError.h"
+#include "lsdem/io/Vtk.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <unistd.h>
+
+using namespace lsdem;
+using namespace lsdem::dynamics;
+namespace fs = std::filesystem;
+using io::VtkEncoding;
+
+namespace {
+
+// A fresh scratch directory per test, removed afterwards.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& name)
+      : path_(fs::temp_directory_path() / ("lsdem_test_vtk_" + std::to_string(::getpid()) + "_" + name)) {
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+  std::string operator/(const std::string& f) const { return (path_ / f).string(); }
+
+ private:
+  fs::path path_;
+};
+
+// An ellipse (2D) / ellipsoid (3D): rotation changes where its surface is.
+template <int D>
+std::shared_ptr<const geometry::Shape<D>> ellipsoid(double a) {
+  geometry::ShapeDef<D> def;
+  def.kind = geometry::ShapeKind::Ellipsoid;
+  def.semiAxes = Vec<D>::Constant(0.6 * a);
+  def.semiAxes[0] = a;
+  def.cellsAcross = 10;
+  def.options.nodesPerCell = 1.0;
+  return geometry::buildShape(def);
+}
+
+template <int D>
+Orientation<D> someRotation(double angle) {
+  if constexpr (D == 2) {
+    return angle;
+  } else {
+    return Eigen::Quaterniond(Eigen::AngleAxisd(angle, Vec<3>(1.0, 2.0, 3.0).normalized()));
+  }
+}
+
+// Three separated grains (two shapes) with distinct poses and motions, and a floor.
+template <int D>
+World<D> smallWorld() {
+  WorldDef<D> def;
+  def.contact.kn = 1e5;
+  def.contact.ks = 0.8e5;
+  World<D> w(def);
+  PlaneDef<D> floor;
+  floor.plane.point = Vec<D>::Zero();
+  floor.plane.normal = Vec<D>::Unit(1);
+  w.addPlane(floor);
+  const auto e = ellipsoid<D>(0.05);
+  const auto s = test::sphereShape<D>(0.03);
+  for (int k = 0; k < 3; ++k) {
+    ParticleDef<D> p;
+    p.shape = k == 1 ? s : e;
+    p.position = Vec<D>::Constant(0.2 + 0.01 * k);
+    p.position[0] = 0.15 * k + 0.1;
+    p.orientation = someRotation<D>(0.4 + 0.9 * k);
+    p.velocity = Vec<D>::Constant(0.1 * k - 0.3);
+    p.velocity[0] = 1.0 / 3.0 + k;
+    if constexpr (D == 2) {
+      p.angularVelocity = 2.5 - k;
+    } else {
+      p.angularVelocity = Vec<3>(1.0 + k, -2.0, 0.1 * k);
+    }
+    p.strength = 1e6 * (k + 1);
+    p.generation = k;
+    if (k == 2) p.parent = 7;
+    w.addParticle(p);
+  }
+  return w;
+}
+
+// The world position of every point of the file, as D-vectors.
+template <int D>
+Vec<D> pointOf(const test::VtpFile& f, std::int64_t i) {
+  Vec<D> x;
+  for (int a = 0; a < D; ++a) x[a] = f.coordinates[3 * std::size_t(i) + std::size_t(a)];
+  return x;
+}
+
+}  // namespace
+
+// The base64 stream is the UInt64 byte count followed by the data: an Int32 {1}
+// is bytes 04 00 00 00 00 00 00 00 01 00 00 00, "BAAAAAAAAAABAAAA" in base64.
+TEST(Vtk, BinaryArrayIsHeaderAndDataInOneBase64Stream) {
+  ScratchDir dir("b64");
+  io::VtpPiece piece;
+  piece.points = {0.0, 0.0, 0.0};
+  piece.verts.add(std::vector<std::int64_t>{0});
+  piece.pointData.push_back({"one", 1, std::vector<std::int32_t>{1}});
+  io::writeVtp(dir / "one.vtp", piece, VtkEncoding::Binary);
+  const std::string text = test::readText(dir / "one.vtp");
+  EXPECT_NE(text.find(">\n          BAAAAAAAAAABAAAA\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("header_type=\"UInt64\""), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "one.vtp.tmp"));
+}
+
+// Every value type reads back bit for bit in both encodings, including
+// extremes and values with no short decimal form.
+TEST(Vtk, ArraysRoundTripExactlyInBothEncodings) {
+  ScratchDir dir("roundtrip");
+  io::VtpPiece piece;
+  const std::vector<double> f{0.1, -0.0, 1e-300, std::numeric_limits<double>::max(), 1.0 / 3.0, -2.5};
+  const std::vector<std::int64_t> i{-1, std::numeric_limits<std::int64_t>::min(), 42, 0, 7, -9};
+  const std::vector<std::uint64_t> u{std::numeric_limits<std::uint64_t>::max(), 0, 1, 2, 3, 1ull << 63};
+  const std::vector<std::int32_t> n{std::numeric_limits<std::int32_t>::min(), -1, 0, 1, 2, 2147483647};
+  for (int k = 0; k < 6; ++k) piece.points.insert(piece.points.end(), {0.1 * k, -0.2 * k, 1.0 / (k + 1)});
+  piece.lines.add(std::vector<std::int64_t>{0, 1, 2});
+  piece.polys.add(std::vector<std::int64_t>{3, 4, 5});
+  piece.pointData.push_back({"f", 1, f});
+  piece.pointData.push_back({"i", 1, i});
+  // Two components per point: the extremes, then small values.
+  piece.pointData.push_back({"u", 2, std::vector<std::uint64_t>{u[0], u[1], u[2], u[3], u[4], u[5], 5, 6, 7, 8, 9, 10}});
+  piece.cellData.push_back({"n", 3, n});
+  for (VtkEncoding e : {VtkEncoding::Binary, VtkEncoding::Ascii}) {
+    const std::string file = dir / (e == VtkEncoding::Binary ? "b.vtp" : "a.vtp");
+    io::writeVtp(file, piece, e);
+    const test::VtpFile r = test::readVtp(file);
+    EXPECT_EQ(r.points, 6u);
+    EXPECT_EQ(r.lines, 1u);
+    EXPECT_EQ(r.polys, 1u);
+    EXPECT_EQ(r.coordinates, piece.points);
+    EXPECT_EQ(r.lineCells.cell(0), (std::vector<std::int64_t>{0, 1, 2}));
+    EXPECT_EQ(r.polyCells.cell(0), (std::vector<std::int64_t>{3, 4, 5}));
+    ASSERT_EQ(r.pointArray("f").f64.size(), f.size());
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      EXPECT_EQ(std::signbit(r.pointArray("f").f64[k]), std::signbit(f[k]));
+      EXPECT_EQ(r.pointArray("f").f64[k], f[k]);
+    }
+    EXPECT_EQ(r.pointArray("i").i64, i);
+    EXPECT_EQ(r.pointArray("u").components, 2);
+    EXPECT_EQ(r.pointArray("u").u64[0], u[0]);
+    EXPECT_EQ(r.pointArray("u").u64[5], u[5]);
+    EXPECT_EQ(r.cellArray("n").i32, n);
+    EXPECT_EQ(r.cellArray("n").format, e == VtkEncoding::Binary ? "binary" : "ascii");
+  }
+}
+
+// Inconsistent pieces are refused before anything is written.
+TEST(Vtk, InconsistentPiecesAreRefused) {
+  ScratchDir dir("refused");
+  io::VtpPiece piece;
+  piece.points = {0, 0, 0, 1, 0, 0};
+  piece.lines.add(std::vector<std::int64_t>{0, 2});
+  EXPECT_THROW(io::writeVtp(dir / "bad.vtp", piece, VtkEncoding::Binary), std::invalid_argument);
+  piece.lines = {};
+  piece.lines.add(std::vector<std::int64_t>{0, 1});
+  piece.pointData.push_back({"v", 3, std::vector<double>{1, 2, 3}});
+  try {
+    io::writeVtp(dir / "bad.vtp", piece, VtkEncoding::Binary);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'v'"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir / "bad.vtp"));
+}
+
+// A missing directory or a file standing where a directory should be: a
+// std::runtime_error that names the path.
+TEST(Vtk, UnwritablePathGivesClearError) {
+  ScratchDir dir("unwritable");
+  io::VtpPiece piece;
+  const std::string missing = dir / "no_such_dir/frame.vtp";
+  try {
+    io::writeVtp(missing, piece, VtkEncoding::Binary);
+    FAIL() << "expected std::runtime_error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
+  }
+  std::ofstream(dir / "plain_file") << "x";
+  io::FrameWriterDef<2> def;
+  def.directory = dir.path() / "plain_file" / "out";
+  try {
+    io::FrameWriter<2> writer(def);
+    FAIL() << "expected std::runtime_error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("plain_file"), std::string::npos) << e.what();
+  }
+}
+
+namespace {
+
+// Particle frame: counts and every field against the particle store.
+template <int D>
+void checkParticleFrame() {
+  ScratchDir dir("particles" + std::to_string(D));
+  World<D> w = smallWorld<D>();
+  const Particles<D>& p = w.particles();
+  const std::vector<double> stress{1.5e5, 0.0, 3.25e6};
+  io::writeParticleFrame<D>(dir / "b.vtp", w, stress, VtkEncoding::Binary);
+  io::writeParticleFrame<D>(dir / "a.vtp", w, stress, VtkEncoding::Ascii);
+  io::writeParticleFrame<D>(dir / "nostress.vtp", w, {}, VtkEncoding::Binary);
+  EXPECT_THROW(io::writeParticleFrame<D>(dir / "x.vtp", w, std::vector<double>{1.0}, VtkEncoding::Binary),
+               std::invalid_argument);
+  const test::VtpFile b = test::readVtp(dir / "b.vtp");
+  const test::VtpFile a = test::readVtp(dir / "a.vtp");
+  ASSERT_EQ(b.points, p.size());
+  ASSERT_EQ(b.verts, p.size());
+  EXPECT_EQ(b.lines + b.polys, 0u);
+  for (const test::VtpFile* f : {&b, &a}) {
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      // Position (z = 0 in 2D), ids, velocity and spin: exact.
+      for (int c = 0; c < 3; ++c) {
+        EXPECT_EQ(f->coordinates[3 * i + c], c < D ? p.position[i][c] : 0.0);
+        EXPECT_EQ(f->pointArray("velocity").f64[3 * i + c], c < D ? p.velocity[i][c] : 0.0);
+      }
+      EXPECT_EQ(f->pointArray("id").u64[i], p.id[i]);
+      EXPECT_EQ(f->pointArray("parent_id").i64[i], i == 2 ? 7 : -1);
+      EXPECT_EQ(f->pointArray("generation").i32[i], int(i));
+      EXPECT_EQ(f->pointArray("radius").f64[i], p.shape[i]->boundingRadius());
+      EXPECT_EQ(f->pointArray("equivalent_diameter").f64[i], p.shape[i]->descriptors().equivalentDiameter);
+      EXPECT_EQ(f->pointArray("mass").f64[i], p.mass[i]);
+      EXPECT_EQ(f->pointArray("stress").f64[i], stress[i]);
+      EXPECT_EQ(f->pointArray("strength").f64[i], p.strength[i]);
+      const auto& spin = f->pointArray("angular_velocity").f64;
+      if constexpr (D == 2) {
+        EXPECT_EQ(spin[3 * i + 2], p.angularVelocity[i]);
+        EXPECT_EQ(spin[3 * i], 0.0);
+      } else {
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(spin[3 * i + c], p.angularVelocity[i][c]);
+      }
+      // The quaternion rotates like the particle's rotation matrix.
+      const auto& q = f->pointArray("orientation").f64;
+      const Eigen::Quaterniond quat(q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]);
+      const Mat<3> r3 = quat.toRotationMatrix();
+      EXPECT_NEAR(quat.norm(), 1.0, 1e-14);
+      EXPECT_LT((r3.template topLeftCorner<D, D>() - p.rotation(i)).norm(), 1e-14);
+    }
+  }
+  // Without a stress measure the column holds zeros.
+  const test::VtpFile n = test::readVtp(dir / "nostress.vtp");
+  for (double s : n.pointArray("stress").f64) EXPECT_EQ(s, 0.0);
+}
+
+// Surface frame: cell counts are the shapes' contours; every point lies on its
+// particle's surface once mapped back through the particle's pose, and back in
+// the grid frame it is the contour's own vertex. |phi| tolerance: 2D vertices
+// sit on grid edges (linear along them, clamped by 1e-3 cells); 3D marching
+// tetrahedra also cut face and cube diagonals, where the trilinear value is
+// not linear, which leaves up to ~0.06 cells.
+template <int D>
+constexpr double surfaceTolerance() {
+  return D == 2 ? 3e-3 : 0.1;
+}
+template <int D>
+void checkSurfaceFrame() {
+  ScratchDir dir("surfaces" + std::to_string(D));
+  World<D> w = smallWorld<D>();
+  Particles<D>& p = w.particles();
+  io::SurfaceCache<D> cache;
+  io::writeSurfaceFrame<D>(dir / "b.vtp", w, cache, VtkEncoding::Binary);
+  io::writeSurfaceFrame<D>(dir / "a.vtp", w, cache, VtkEncoding::Ascii);
+  EXPECT_EQ(cache.size(), 2u);  // two shapes for three particles
+  const test::VtpFile b = test::readVtp(dir / "b.vtp");
+  const test::VtpFile a = test::readVtp(dir / "a.vtp");
+  // Counts: loops (2D, with their edges) or triangles (3D), summed over particles.
+  std::size_t cells = 0, pieces = 0, vertices = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const io::BodyContour<D> c = io::bodyContour(*p.shape[i]);
+    cells += c.cellCount();
+    pieces += c.pieceCount();
+    vertices += c.vertices.size();
+  }
+  const test::VtpCells& cellList = D == 2 ? b.lineCells : b.polyCells;
+  EXPECT_EQ(D == 2 ? b.lines : b.polys, cells);
+  EXPECT_EQ(b.points, vertices);
+  std::size_t counted = 0;
+  for (std::size_t c = 0; c < cells; ++c) counted += cellList.cell(c).size() - (D == 2 ? 1 : 0);
+  EXPECT_EQ(counted, D == 2 ? pieces : 3 * pieces);
+  if constexpr (D == 2) {
+    EXPECT_EQ(cells, 3u);  // one loop per grain
+  } else {
+    EXPECT_GT(cells, 300u);
+  }
+  // Binary and ascii hold the same numbers.
+  EXPECT_EQ(a.coordinates, b.coordinates);
+  EXPECT_EQ(a.cellArray("id").u64, b.cellArray("id").u64);
+  // Points on the surfaces, particle by particle.
+  std::map<std::uint64_t, std::size_t> index;
+  for (std::size_t i = 0; i < p.size(); ++i) index[p.id[i]] = i;
+  double worst = 0.0;
+  std::vector<Vec<D>> mean(p.size(), Vec<D>::Zero());
+  std::vector<double> count(p.size(), 0.0);
+  for (std::size_t c = 0; c < cells; ++c) {
+    const std::size_t i = index.at(b.cellArray("id").u64[c]);
+    EXPECT_EQ(b.cellArray("generation").i32[c], p.generation[i]);
+    const double h = p.shape[i]->grid().spacing();
+    for (std::int64_t k : cellList.cell(c)) {
+      const Vec<D> x = pointOf<D>(b, k);
+      const Vec<D> body = p.rotation(i).transpose() * (x - p.position[i]);
+      worst = std::max(worst, std::abs(p.shape[i]->value(body)) / h);
+      mean[i] += x;
+      count[i] += 1.0;
+    }
+  }
+  EXPECT_LT(worst, surfaceTolerance<D>());
+  // Particle 0's points are its grid-frame contour vertices, placed exactly.
+  std::vector<Vec<D>> gridVertices;
+  if constexpr (D == 2) {
+    for (const auto& loop : geometry::marchingSquares(p.shape[0]->grid())) {
+      gridVertices.insert(gridVertices.end(), loop.begin(), loop.end());
+    }
+  } else {
+    gridVertices = geometry::marchingCubes(p.shape[0]->grid()).vertices;
+  }
+  for (std::size_t k = 0; k < gridVertices.size(); ++k) {
+    const Vec<D> body = p.rotation(0).transpose() * (pointOf<D>(b, std::int64_t(k)) - p.position[0]);
+    ASSERT_LT((p.shape[0]->bodyToGrid().apply(body) - gridVertices[k]).norm(), 1e-14) << k;
+  }
+  // The surfaces sit around the centroids (the shapes are symmetric).
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    EXPECT_LT((mean[i] / count[i] - p.position[i]).norm(), 0.5 * p.shape[i]->grid().spacing());
+  }
+  // Moved and rotated, an ellipse's surface follows: the old points are off it.
+  const Vec<D> old = pointOf<D>(b, cellList.cell(0)[0]);
+  p.position[0] += Vec<D>::Constant(0.01);
+  p.orientation[0] = someRotation<D>(2.0);
+  io::writeSurfaceFrame<D>(dir / "moved.vtp", w, cache, VtkEncoding::Binary);
+  const test::VtpFile m = test::readVtp(dir / "moved.vtp");
+  const Vec<D> moved = pointOf<D>(m, (D == 2 ? m.lineCells : m.polyCells).cell(0)[0]);
+  EXPECT_GT((moved - old).norm(), 0.005);
+  const Vec<D> body = p.rotation(0).transpose() * (moved - p.position[0]);
+  EXPECT_LT(std::abs(p.shape[0]->value(body)), surfaceTolerance<D>() * p.shape[0]->grid().spacing());
+  const Vec<D> oldBody = p.rotation(0).transpose() * (old - p.position[0]);
+  EXPECT_GT(std::abs(p.shape[0]->value(oldBody)), 3.0 * surfaceTolerance<D>() * p.shape[0]->grid().spacing());
+}
+
+// Boundary frame: the floor clipped to the extent box exactly; a tool's
+// surface at its pose; loads as cell data.
+template <int D>
+void checkBoundaryFrame() {
+  ScratchDir dir("boundaries" + std::to_string(D));
+  World<D> w = smallWorld<D>();
+  // A tilted plane through the box and a spherical tool.
+  PlaneDef<D> wall;
+  wall.plane.point = Vec<D>::Constant(0.5);
+  wall.plane.normal = Vec<D>::Constant(-1.0).normalized();
+  w.addPlane(wall);
+  ToolDef<D> tool;
+  tool.shape = test::sphereShape<D>(0.1);
+  tool.motion = Motion<D>{};
+  w.addTool(tool);
+  geometry::Box<D> extent;
+  extent.lower = Vec<D>::Zero();
+  extent.upper = Vec<D>::Ones();
+  io::SurfaceCache<D> cache;
+  io::writeBoundaryFrame<D>(dir / "b.vtp", w, cache, extent, VtkEncoding::Binary);
+  const test::VtpFile b = test::readVtp(dir / "b.vtp");
+  const io::BodyContour<D> toolContour = io::bodyContour(*tool.shape);
+  const std::size_t cells = 2 + toolContour.cellCount();
+  EXPECT_EQ(D == 2 ? b.lines : b.polys, cells);
+  EXPECT_EQ(b.points, (D == 2 ? 4u : 4u + 6u) + toolContour.vertices.size());
+  const test::VtpCells& list = D == 2 ? b.lineCells : b.polyCells;
+  // The floor (y = 0) clipped to the unit box: its edge (2D) or face (3D).
+  const std::vector<std::int64_t> floor = list.cell(0);
+  ASSERT_EQ(floor.size(), D == 2 ? 2u : 4u);
+  double area = 0.0;
+  for (std::size_t k = 0; k < floor.size(); ++k) {
+    const Vec<D> x = pointOf<D>(b, floor[k]);
+    EXPECT_EQ(x[1], 0.0);
+    for (int c = 0; c < D; ++c) EXPECT_TRUE(x[c] == 0.0 || x[c] == 1.0) << x.transpose();
+    if constexpr (D == 3) {
+      const Vec<3> y = pointOf<3>(b, floor[(k + 1) % floor.size()]);
+      area += 0.5 * (x[2] * y[0] - x[0] * y[2]);
+    }
+  }
+  if constexpr (D == 3) {
+    EXPECT_NEAR(std::abs(area), 1.0, 1e-15);
+  }
+  // The tilted wall x + y (+ z) = 1.5 (3D) / 1 (2D) cuts the box in a segment
+  // (2D: corners (0,1), (1,0)) or a regular hexagon (3D).
+  const std::vector<std::int64_t> tilted = list.cell(1);
+  ASSERT_EQ(tilted.size(), D == 2 ? 2u : 6u);
+  for (std::int64_t k : tilted) EXPECT_NEAR(pointOf<D>(b, k).sum(), 0.5 * D, 1e-14);
+  // Tool points on the tool's surface at its pose.
+  const auto& pose = w.toolPoses()[0];
+  double worst = 0.0;
+  for (std::size_t c = 2; c < cells; ++c) {
+    EXPECT_EQ(b.cellArray("kind").i32[c], 1);
+    EXPECT_EQ(b.cellArray("index").i32[c], 0);
+    for (std::int64_t k : list.cell(c)) {
+      const Vec<D> body = Rotation<D>::matrix(pose.orientation).transpose() * (pointOf<D>(b, k) - pose.position);
+      worst = std::max(worst, std::abs(tool.shape->value(body)));
+    }
+  }
+  EXPECT_LT(worst, surfaceTolerance<D>() * tool.shape->grid().spacing());
+  EXPECT_EQ(b.cellArray("kind").i32[0], 0);
+  EXPECT_EQ(b.cellArray("index").i32[1], 1);
+  for (double f : b.cellArray("force").f64) EXPECT_EQ(f, 0.0);  // no step yet
+  // A degenerate extent is refused.
+  extent.upper[0] = 0.0;
+  EXPECT_THROW(io::writeBoundaryFrame<D>(dir / "x.vtp", w, cache, extent, VtkEncoding::Binary), std::invalid_argument);
+}
+
+// Contact frame: one line per touching pair, with its ids and force.
+template <int D>
+void checkContactFrame() {
+  ScratchDir dir("contacts" + std::to_string(D));
+  WorldDef<D> def;
+  def.contact.kn = 1e5;
+  def.contact.hasFriction = false;  // per-node springs only: the force is sum k overlap n
+  def.contact.hasDamping = false;
+  World<D> w(def);
+  const auto s = test::sphereShape<D>(0.05);
+  // A row of four spheres: three overlapping neighbours, then a gap.
+  for (int k = 0; k < 4; ++k) {
+    ParticleDef<D> p;
+    p.shape = s;
+    p.position = Vec<D>::Zero();
+    p.position[0] = 0.095 * k + (k == 3 ? 0.05 : 0.0);
+    w.addParticle(p);
+  }
+  w.step();
+  std::size_t touching = 0;
+  for (const auto& c : w.contacts().particleContacts()) touching += c.nodeCount > 0;
+  ASSERT_EQ(touching, 2u);
+  io::writeContactFrame<D>(dir / "b.vtp", w, VtkEncoding::Binary);
+  io::writeContactFrame<D>(dir / "a.vtp", w, VtkEncoding::Ascii);
+  const test::VtpFile b = test::readVtp(dir / "b.vtp");
+  const test::VtpFile a = test::readVtp(dir / "a.vtp");
+  EXPECT_EQ(b.points, 4u);
+  EXPECT_EQ(b.lines, touching);
+  std::size_t line = 0;
+  for (const auto& c : w.contacts().particleContacts()) {
+    if (c.nodeCount == 0) continue;
+    EXPECT_EQ(b.lineCells.cell(line), (std::vector<std::int64_t>{c.a, c.b}));
+    EXPECT_EQ(b.cellArray("id_a").u64[line], w.particles().id[c.a]);
+    EXPECT_EQ(b.cellArray("id_b").u64[line], w.particles().id[c.b]);
+    EXPECT_EQ(b.cellArray("node_contacts").i32[line], int(c.nodeCount));
+    EXPECT_EQ(b.cellArray("force_magnitude").f64[line], c.force.norm());
+    EXPECT_GT(c.force.norm(), 0.0);
+    // Without friction the force is normal and compressive; the node forces
+    // are k overlap |grad phi| n with |grad phi| = 1 to ~1e-3, so the
+    // overlap-weighted normal holds all but 2e-3 of it. The two parts make up
+    // the whole.
+    const double fn = b.cellArray("normal_force").f64[line], ft = b.cellArray("tangential_force").f64[line];
+    EXPECT_NEAR(fn * fn + ft * ft, c.force.squaredNorm(), 1e-12 * c.force.squaredNorm());
+    EXPECT_NEAR(fn, c.force.norm(), 1e-5 * c.force.norm());
+    EXPECT_LT(ft, 2e-3 * c.force.norm());
+    ++line;
+  }
+  EXPECT_EQ(a.cellArray("force").f64, b.cellArray("force").f64);
+  EXPECT_EQ(a.cellArray("normal_force").f64, b.cellArray("normal_force").f64);
+}
+
+}  // namespace
+
+TEST(Vtk, ParticleFrame2D) { checkParticleFrame<2>(); }
+TEST(Vtk, ParticleFrame3D) { checkParticleFrame<3>(); }
+TEST(Vtk, SurfaceFrame2D) { checkSurfaceFrame<2>(); }
+TEST(Vtk, SurfaceFrame3D) { checkSurfaceFrame<3>(); }
+TEST(Vtk, BoundaryFrame2D) { checkBoundaryFrame<2>(); }
+TEST(Vtk, BoundaryFrame3D) { checkBoundaryFrame<3>(); }
+TEST(Vtk, ContactFrame2D) { checkContactFrame<2>(); }
+TEST(Vtk, ContactFrame3D) { checkContactFrame<3>(); }
+
+// The cache keeps a shape alive while it holds it, and prune() lets go of
+// shapes nobody else holds.
+TEST(Vtk, SurfaceCacheReleasesFreedShapes) {
+  io::SurfaceCache<2> cache;
+  auto kept = test::sphereShape<2>(0.05);
+  auto freed = test::sphereShape<2>(0.02);
+  std::weak_ptr<const geometry::Shape<2>> watch = freed;
+  const std::size_t loops = cache.contour(kept).cellCount();
+  cache.contour(freed);
+  EXPECT_EQ(loops, 1u);
+  EXPECT_EQ(cache.size(), 2u);
+  freed.reset();
+  EXPECT_FALSE(watch.expired());  // held by the cache
+  cache.prune();
+  EXPECT_TRUE(watch.expired());
+  EXPECT_EQ(cache.size(), 1u);
+  EXPECT_THROW(cache.contour(nullptr), std::invalid_argument);
+}
+
+// The series is valid XML listing every frame after each add, restores its
+// entries on resume, and truncation drops the later frames.
+TEST(Vtk, PvdSeriesAddResumeTruncate) {
+  ScratchDir dir("pvd");
+  const std::string file = dir / "particles.pvd";
+  {
+    io::PvdSeries s(file);
+    EXPECT_TRUE(test::readPvd(file).empty());
+    for (int k = 0; k < 4; ++k) {
+      s.add(0.1 * k, "frames/p_" + std::to_string(k) + ".vtp");
+      const auto entries = test::readPvd(file);
+      ASSERT_EQ(entries.size(), std::size_t(k + 1));
+      EXPECT_EQ(entries.back().time, 0.1 * k);
+      EXPECT_EQ(entries.back().file, "frames/p_" + std::to_string(k) + ".vtp");
+    }
+    s.add(0.5, "odd & <name>.vtp");
+    EXPECT_EQ(test::readPvd(file).back().file, "odd & <name>.vtp");
+  }
+  // Resume: the entries come back exactly; truncation keeps t <= 0.2.
+  io::PvdSeries resumed(file, true);
+  ASSERT_EQ(resumed.entries().size(), 5u);
+  EXPECT_EQ(resumed.entries()[3].time, 0.1 * 3);
+  EXPECT_EQ(resumed.entries()[4].file, "odd & <name>.vtp");
+  resumed.truncateAfter(0.2);
+  const auto kept = test::readPvd(file);
+  ASSERT_EQ(kept.size(), 3u);
+  EXPECT_EQ(kept.back().time, 0.1 * 2);
+  // A fresh (non-resumed) series starts empty.
+  io::PvdSeries fresh(file);
+  EXPECT_TRUE(test::readPvd(file).empty());
+  // A broken file is an input error naming the file.
+  std::ofstream(dir / "broken.pvd") << "<VTKFile type=\"Collection\">\n<Collection>\n<DataSet timestep=\"x1\" "
+                                       "file=\"a.vtp\"/>\n</Collection>\n</VTKFile>\n";
+  try {
+    io::PvdSeries broken(dir / "broken.pvd", true);
+    FAIL() << "expected io::InputError";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_EQ(e.key(), "timestep");
+  }
+}
+
+// The frame writer writes the four series with frames that all parse; a
+// resumed writer drops frames after the checkpoint time and continues the
+// numbering from there.
+TEST(Vtk, FrameWriterSeriesAndResume) {
+  ScratchDir dir("writer");
+  World<3> w = smallWorld<3>();
+  io::FrameWriterDef<3> def;
+  def.directory = dir.path() / "out";
+  {
+    io::FrameWriter<3> writer(def);
+    for (int k = 0; k < 3; ++k) {
+      writer.write(w);
+      w.step();
+    }
+    EXPECT_EQ(writer.nextFrame(), 3u);
+  }
+  const std::map<std::string, std::size_t> points{{"particles", 3}, {"contacts", 3}};
+  std::vector<double> times;
+  for (const char* series : {"particles", "surfaces", "boundaries", "contacts"}) {
+    const auto entries = test::readPvd((def.directory / (std::string(series) + ".pvd")).string());
+    ASSERT_EQ(entries.size(), 3u) << series;
+    for (std::size_t k = 0; k < entries.size(); ++k) {
+      const test::VtpFile f = test::readVtp((def.directory / entries[k].file).string());
+      EXPECT_EQ(entries[k].file, "frames/" + std::string(series) + "_00000" + std::to_string(k) + ".vtp");
+      if (points.count(series)) {
+        EXPECT_EQ(f.points, points.at(series));
+      }
+      if (std::string(series) == "boundaries") {
+        EXPECT_EQ(f.polys, 1u);  // the floor
+      }
+      if (std::string(series) == "particles") times.push_back(entries[k].time);
+    }
+  }
+  EXPECT_EQ(times[0], 0.0);
+  EXPECT_GT(times[2], times[1]);
+  // Resume from the checkpoint at the second frame's time.
+  def.resume = true;
+  def.contacts = false;
+  io::FrameWriter<3> resumed(def);
+  resumed.truncateAfter(times[1]);
+  EXPECT_EQ(resumed.nextFrame(), 2u);
+  resumed.write(w);
+  const auto entries = test::readPvd((def.directory / "particles.pvd").string());
+  ASSERT_EQ(entries.size(), 3u);
+  EXPECT_EQ(entries[2].time, w.time());
+  EXPECT_EQ(entries[2].file, "frames/particles_000002.vtp");
+  EXPECT_EQ(test::readVtp((def.directory / entries[2].file).string()).points, 3u);
+}
