@@ -1,0 +1,237 @@
+// Scene files: what they build (placement, tools, effects) and how bad input
+// is reported (one line with file, line and key; exit code 2 from lsdem run).
+
+#include "lsdem/io/InputError.h"
+#include "lsdem/io/Scene.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+using namespace lsdem;
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kBase = R"([simulation]
+dimension = 2
+steps = 10
+
+[contact]
+kn = 1e5
+
+[materials.rock]
+density = 2000.0
+
+[shapes.disc]
+kind = "circle"
+radius = 0.01
+cells_across = 16
+
+[[particles]]
+shape = "disc"
+material = "rock"
+placement = "list"
+positions = [[0.0, 0.05], [0.03, 0.05]]
+)";
+
+fs::path writeScene(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_scene";
+  fs::create_directories(dir);
+  const fs::path p = dir / (name + ".toml");
+  std::ofstream(p) << text;
+  return p;
+}
+
+// Replaces the first occurrence of `from` in the base scene.
+std::string edit(const std::string& from, const std::string& to) {
+  std::string s = kBase;
+  const std::size_t at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return s.replace(at, from.size(), to);
+}
+
+template <int D>
+const io::SceneDef<D>& as(const io::AnySceneDef& s) {
+  return std::get<io::SceneDef<D>>(s);
+}
+
+struct BadCase {
+  std::string name;
+  std::string scene;
+  int line;
+  std::string key;
+  std::string message;  // a part of the problem text
+};
+
+}  // namespace
+
+TEST(Scene, ReadsTheBaseScene) {
+  const io::AnySceneDef any = io::readScene(writeScene("base", kBase).string());
+  const auto& s = as<2>(any);
+  EXPECT_EQ(s.steps, 10u);
+  EXPECT_EQ(s.world.contact.kn, 1e5);
+  EXPECT_FALSE(s.world.contact.hasFriction);  // not declared: not built
+  EXPECT_FALSE(s.world.contact.hasDamping);
+  EXPECT_FALSE(s.world.gravity);
+  ASSERT_EQ(s.groups.size(), 1u);
+  EXPECT_EQ(s.groups[0].density, 2000.0);
+  const io::SceneWorld<2> w = io::buildWorld(s);
+  ASSERT_EQ(w.world->particles().size(), 2u);
+  EXPECT_EQ(w.world->particles().id[1], 1u);
+  EXPECT_EQ(w.world->particles().position[1], geometry::Vec<2>(0.03, 0.05));
+  EXPECT_TRUE(w.world->effectNames().empty());
+  EXPECT_NEAR(w.initialMass, 2.0 * 2000.0 * std::acos(-1.0) * 1e-4, 2e-3 * w.initialMass);
+}
+
+TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
+  const std::vector<BadCase> cases = {
+      {"negative_kn", edit("kn = 1e5", "kn = -1e5"), 6, "contact.kn", "must be positive"},
+      {"negative_friction", edit("kn = 1e5", "kn = 1e5\nfriction = -0.2"), 7, "contact.friction", "must be >= 0"},
+      {"dt_zero", edit("steps = 10", "steps = 10\ndt = 0.0"), 4, "simulation.dt", "must be positive"},
+      {"dt_word", edit("steps = 10", "steps = 10\ndt = \"fast\""), 4, "simulation.dt", "\"auto\""},
+      {"nan_density", edit("density = 2000.0", "density = nan"), 9, "materials.rock.density", "finite"},
+      {"unknown_key", edit("steps = 10", "steps = 10\nstpes = 3"), 4, "simulation.stpes", "unknown key"},
+      {"wrong_type", edit("radius = 0.01", "radius = \"big\""), 13, "shapes.disc.radius", "expected a number"},
+      {"unknown_shape", edit("shape = \"disc\"", "shape = \"dsic\""), 17, "particles[0].shape", "no shape named 'dsic'"},
+      {"unknown_material", edit("material = \"rock\"", "material = \"granite\""), 18, "particles[0].material",
+       "no material named"},
+      {"both_end", edit("steps = 10", "steps = 10\nduration = 1.0"), 3, "simulation.steps", "exactly one"},
+      {"bad_dimension", edit("dimension = 2", "dimension = 4"), 2, "simulation.dimension", "must be 2 or 3"},
+      {"bad_position", edit("[0.0, 0.05], [0.03, 0.05]", "[0.0, 0.05], [0.03]"), 20, "particles[0].positions[1]",
+       "expected 2 numbers"},
+      {"bad_damping", edit("kn = 1e5", "kn = 1e5\ndamping_ratio = 1.5"), 7, "contact.damping_ratio", "[0, 1)"},
+      {"bad_criterion", std::string(kBase) + "[effects.breakage]\ncriterion = \"rankine\"\n", 22,
+       "effects.breakage.criterion", "must be \"von_mises\""},
+      {"bad_motion", std::string(kBase) + "[[tools]]\nshape = \"disc\"\n[tools.motion]\ntype = \"wobble\"\n", 24,
+       "tools[0].motion.type", "unknown motion 'wobble'"},
+      {"zero_normal", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nnormal = [0.0, 0.0]\n", 23,
+       "planes[0].normal", "zero vector"},
+      {"syntax", edit("kn = 1e5", "kn = = 1e5"), 6, "", "TOML syntax error"},
+  };
+  for (const BadCase& c : cases) {
+    const fs::path file = writeScene(c.name, c.scene);
+    try {
+      io::readScene(file.string());
+      ADD_FAILURE() << c.name << ": accepted";
+    } catch (const io::InputError& e) {
+      EXPECT_EQ(e.file(), file.string()) << c.name;
+      EXPECT_EQ(e.line(), c.line) << c.name << ": " << e.what();
+      EXPECT_EQ(e.key(), c.key) << c.name << ": " << e.what();
+      EXPECT_NE(e.problem().find(c.message), std::string::npos) << c.name << ": " << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << c.name;
+    }
+  }
+}
+
+TEST(Scene, LsdemRunExitsWithCodeTwoAndOneLine) {
+  const fs::path file = writeScene("cli_bad", edit("kn = 1e5", "kn = -3"));
+  const std::string cmd = std::string(LSDEM_BINARY) + " run " + file.string() + " --out " +
+                          (file.parent_path() / "cli_out").string() + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  char buf[512];
+  while (fgets(buf, sizeof(buf), pipe)) out += buf;
+  const int status = pclose(pipe);
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  EXPECT_EQ(out, "lsdem: " + file.string() + ":6: contact.kn: must be positive, got -3\n");
+}
+
+TEST(Scene, CloudAndGridPlacementsAreDeterministicAndDoNotOverlap) {
+  const std::string scene = std::string(kBase) + R"(
+[[particles]]
+shape = "disc"
+density = 2500.0
+placement = "cloud"
+region = { min = [0.0, 0.1], max = [0.2, 0.3] }
+count = 40
+random_orientation = true
+diameter_range = [0.01, 0.02]
+
+[[particles]]
+shape = "disc"
+density = 2500.0
+placement = "grid"
+region = { min = [0.0, 0.4], max = [0.1, 0.45] }
+)";
+  const fs::path file = writeScene("placement", scene);
+  const auto any = io::readScene(file.string());
+  const io::SceneWorld<2> a = io::buildWorld(as<2>(any));
+  const io::SceneWorld<2> b = io::buildWorld(as<2>(io::readScene(file.string())));
+  const auto& p = a.world->particles();
+  // 2 listed, 40 in the cloud, the grid: floor(0.1 / (0.02 x 1.0001)) x floor(0.05 / ...) = 4 x 2.
+  ASSERT_EQ(p.size(), 2u + 40u + 8u);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    EXPECT_EQ(p.position[i], b.world->particles().position[i]);
+    for (std::size_t j = 0; j < i; ++j) {
+      EXPECT_GE((p.position[i] - p.position[j]).norm(),
+                p.shape[i]->boundingRadius() + p.shape[j]->boundingRadius() - 1e-12);
+    }
+  }
+  // Sizes in the cloud: equivalent diameters inside the range, shapes scaled exactly.
+  for (std::size_t i = 2; i < 42; ++i) {
+    const double d = p.shape[i]->descriptors().equivalentDiameter;
+    EXPECT_GE(d, 0.01 * (1 - 1e-12));
+    EXPECT_LE(d, 0.02 * (1 + 1e-12));
+    EXPECT_NEAR(p.shape[i]->volume(), std::acos(-1.0) * d * d / 4.0, 1e-12);
+    EXPECT_GE(p.position[i].y() - p.shape[i]->boundingRadius(), 0.1 - 1e-12);
+  }
+}
+
+TEST(Scene, ToolsArePlacedByTheirShapeFrameAndEffectsOnlyWhenDeclared) {
+  const std::string scene = std::string(kBase) + R"(
+[shapes.plate]
+kind = "rectangle"
+half_extents = [0.05, 0.01]
+cells_across = 8
+
+[[tools]]
+name = "press"
+shape = "plate"
+position = [0.1, 0.2]
+angle_deg = 90.0
+
+[[particles]]
+shape = "disc"
+density = 2500.0
+placement = "feed"
+point = [0.0, 0.5]
+interval = 0.01
+count = 3
+
+[effects]
+gravity = [0.0, -9.81]
+local_damping = 0.2
+outflow = { min = [-1.0, -1.0], max = [1.0, 1.0] }
+
+[effects.breakage]
+criterion = "tresca"
+)";
+  const io::SceneWorld<2> w = io::buildWorld(as<2>(io::readScene(writeScene("tools", scene).string())));
+  ASSERT_EQ(w.world->tools().size(), 1u);
+  // A centred, symmetric rectangle: its centroid is its build origin.
+  EXPECT_NEAR((w.world->toolPoses()[0].position - geometry::Vec<2>(0.1, 0.2)).norm(), 0.0, 1e-6);
+  EXPECT_EQ(w.world->effectNames(),
+            (std::vector<std::string>{"gravity", "local_damping", "breakage", "outflow", "feed"}));
+  ASSERT_NE(w.breakage, nullptr);
+  EXPECT_EQ(w.breakage->criterion().name(), "tresca");
+  ASSERT_EQ(w.feeds.size(), 1u);
+}
+
+TEST(Scene, ScaledShapesScaleExactly) {
+  const auto any = io::readScene(writeScene("scale", kBase).string());
+  const auto& shape = *as<2>(any).shapes[0];
+  const auto big = io::scaledShape(shape, 2.5);
+  EXPECT_NEAR(big->volume(), shape.volume() * 6.25, 1e-15);
+  EXPECT_NEAR(big->boundingRadius(), shape.boundingRadius() * 2.5, 1e-15);
+  EXPECT_NEAR(big->descriptors().circularity, shape.descriptors().circularity, 1e-15);
+  EXPECT_NEAR(big->mass().secondMoment(0, 0), shape.mass().secondMoment(0, 0) * std::pow(2.5, 4), 1e-18);
+  // The level set at a scaled point is the scaled level set.
+  const geometry::Vec<2> x(0.004, -0.003);
+  EXPECT_NEAR(big->value(2.5 * x), 2.5 * shape.value(x), 1e-7);
+  EXPECT_THROW(io::scaledShape(shape, 0.0), std::invalid_argument);
+}
