@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Sets up a fresh Debian 12 machine, builds lsdem and runs the default job.
+# Sets up a fresh Debian 12 machine, builds lsdem and runs the default job:
+# the three-grains compression scene (paper Fig. 5) in 2D, with its plots.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
-./build/apps/lsdem shape examples/shapes/random_grain_3d.toml
+./build/apps/lsdem run apps/scenes/three_grains/three_grains_2d.toml --out three_grains_2d-out
+./build/apps/lsdem plot three_grains_2d-out
