@@ -115,6 +115,7 @@ class Runner {
 
   RunResult run(bool resume) {
     const Clock::time_point start = Clock::now();
+    start_ = start;
     fs::create_directories(out_);
     sw_ = buildWorld(scene_);
     World& world = *sw_.world;
@@ -473,6 +474,9 @@ class Runner {
     frameWriter_->write(w, stressMeasure_);
     lastFrameClock_ = clockValue();
     lastFrameTime_ = w.time();
+    // The summary stays current with the frames.
+    wallSeconds_ = secondsSince(start_);
+    writeSummary(false);
   }
 
   void writeSummary(bool stopped) const {
@@ -571,6 +575,7 @@ class Runner {
     putBytes(std::string(state.bytes().begin(), state.bytes().end()));
     putBytes(std::string(runner.bytes().begin(), runner.bytes().end()));
     writeFileAtomically(out_ / kCheckpointFile, out.str());
+    wallSeconds_ = secondsSince(start_);
     writeSummary(false);
   }
 
@@ -660,6 +665,7 @@ class Runner {
   double initialMass_ = 0.0;
   double h0_ = 0.0;
   double wallSeconds_ = 0.0;
+  Clock::time_point start_;
 };
 
 // The scene path stored in a checkpoint, checked against the file's content now.
