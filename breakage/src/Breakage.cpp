@@ -61,6 +61,7 @@ Breakage<D>::Breakage(const BreakageDef<D>& def) : def_(def), criterion_(makeCri
                                 std::to_string(def.bucklingRatio));
   }
   for (const ManualBreak<D>& m : def.manual) {
+    if (m.surface) continue;
     if (!(m.plane.normal.norm() > 0.0) || !m.plane.normal.allFinite() || !std::isfinite(m.plane.offset)) {
       throw std::invalid_argument("manual break of particle " + std::to_string(m.particle) +
                                   " needs a finite plane with a nonzero normal");
@@ -130,7 +131,7 @@ void Breakage<D>::queueFailures(World<D>& world) {
         plane = fracturePlane<D>(p.position[i], points_.of(i), shape.descriptors().equivalentDiameter);
       }
       if (!plane) continue;
-      queue_.push_back({p.id[i], i, criterion_->characteristicStress(principal), *plane, false, buckling});
+      queue_.push_back({p.id[i], i, criterion_->characteristicStress(principal), *plane, false, buckling, nullptr});
     }
   }
 
@@ -147,11 +148,15 @@ void Breakage<D>::queueFailures(World<D>& world) {
       value = criterion_->characteristicStress(principalStressTriple<D>(stress_[i]));
     }
     HalfSpace<D> plane = mb.plane;
-    const double n = plane.normal.norm();
-    plane.normal /= n;
-    plane.offset /= n;
+    if (mb.surface) {
+      plane = HalfSpace<D>{Vec<D>::Zero(), 0.0};
+    } else {
+      const double n = plane.normal.norm();
+      plane.normal /= n;
+      plane.offset /= n;
+    }
     std::erase_if(queue_, [&](const Pending& q) { return q.id == mb.particle; });
-    queue_.push_back({mb.particle, i, value, plane, true, false});
+    queue_.push_back({mb.particle, i, value, plane, true, false, mb.surface ? &mb : nullptr});
   }
 }
 
@@ -173,7 +178,14 @@ void Breakage<D>::applyQueue(World<D>& world) {
     const Mat<D> rotation = p.rotation(i);
     // World plane n.x = o to the parent's body frame: (R^T n).x_b = o - n.X.
     FractureSurface<D> surface;
-    surface.plane = HalfSpace<D>{rotation.transpose() * q.plane.normal, q.plane.offset - q.plane.normal.dot(p.position[i])};
+    if (q.curved) {
+      // phi_f(x_body) = phi_surface(surfaceToWorld^-1 (R x_body + X)): the grid lookup is pure.
+      const geometry::Grid<D>* grid = &q.curved->surface->grid();
+      const geometry::Rigid<D> bodyToSurface = q.curved->surfaceToWorld.inverse() * geometry::Rigid<D>{rotation, p.position[i]};
+      surface.field = [grid, bodyToSurface](const Vec<D>& x) { return grid->value(bodyToSurface.apply(x)); };
+    } else {
+      surface.plane = HalfSpace<D>{rotation.transpose() * q.plane.normal, q.plane.offset - q.plane.normal.dot(p.position[i])};
+    }
     const SplitResult<D> split = splitShape(shape, surface);
     if (!split.isSplit) {
       ++unsplit_;

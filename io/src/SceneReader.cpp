@@ -455,8 +455,17 @@ class SceneReader {
       if (id < 0) mr.fail("particle", "must be a particle id >= 0");
       b.particle = std::uint64_t(id);
       b.time = mr.number("time");
-      b.plane.normal = unitVec<D>(mr, "normal", Vec<D>::UnitX());
-      b.plane.offset = b.plane.normal.dot(vec<D>(mr, "point"));
+      if (mr.has("surface")) {
+        // A curved fracture surface: the zero level set of a [shapes] entry, placed in the world.
+        const std::vector<std::size_t> shapes = shapeList(mr, "surface");
+        if (shapes.size() != 1) mr.fail("surface", "names a shape pool; give one shape");
+        b.surface = scene_.shapes[shapes[0]];
+        b.surfaceToWorld.rotation = rotation<D>(mr);
+        b.surfaceToWorld.translation = vec<D>(mr, "position", Vec<D>::Zero());
+      } else {
+        b.plane.normal = unitVec<D>(mr, "normal", Vec<D>::UnitX());
+        b.plane.offset = b.plane.normal.dot(vec<D>(mr, "point"));
+      }
       mr.finish();
       def.manual.push_back(b);
     }

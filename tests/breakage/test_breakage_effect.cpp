@@ -264,6 +264,8 @@ TEST(BreakageEffect, RejectsBadDefinitions) {
   d.weibull.modulus = 0.0;
   EXPECT_THROW(Breakage<2>{d}, std::invalid_argument);
   d = {};
-  d.manual.push_back({0, 0.0, {Vec<2>::Zero(), 0.0}});
+  breakage::ManualBreak<2> zeroNormal;
+  zeroNormal.plane = {Vec<2>::Zero(), 0.0};
+  d.manual.push_back(zeroNormal);
   EXPECT_THROW(Breakage<2>{d}, std::invalid_argument);
 }

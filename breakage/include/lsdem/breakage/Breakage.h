@@ -61,11 +61,18 @@ namespace lsdem::breakage {
 
 /// A prescribed first break (demolition): particle `particle` is split by
 /// `plane` at the first step ending at or after `time`, whatever its stress.
+/// An arbitrary fracture surface replaces the plane when `surface` is set:
+/// the zero level set of that shape's grid (a grain file's level set, a CAD
+/// mesh's, a primitive's), placed in the world by `surfaceToWorld`; the
+/// fragments are the parent's parts inside and outside it, and their new
+/// surface nodes are regenerated from their own level sets (curved cuts).
 template <int D>
 struct ManualBreak {
   std::uint64_t particle = 0;                 ///< global id of the particle
   double time = 0.0;                          ///< s
   geometry::HalfSpace<D> plane;               ///< fracture plane, WORLD frame (normal need not be unit)
+  std::shared_ptr<const geometry::Shape<D>> surface;  ///< optional curved fracture surface (its grid's phi = 0)
+  geometry::Rigid<D> surfaceToWorld;          ///< the surface shape's GRID frame -> world
 };
 
 /// Everything that configures the breakage effect (STYLE 7).
@@ -95,7 +102,7 @@ struct BreakageEvent {
   double strength = 0.0;                       ///< the parent's critical stress, Pa
   bool manual = false;                         ///< a prescribed break (ManualBreak)
   bool buckling = false;                       ///< cut by the buckling plane (eq. 21)
-  geometry::Vec<D> planeNormal = geometry::Vec<D>::Zero();  ///< unit normal of the fracture plane, world frame
+  geometry::Vec<D> planeNormal = geometry::Vec<D>::Zero();  ///< unit normal of the fracture plane, world frame (zero for a curved manual surface)
   double planeOffset = 0.0;                    ///< normal . x on the plane, world frame, m
   std::vector<double> childVolumes;            ///< corrected volumes of the kept fragments, m^D
   std::vector<double> finesVolumes;            ///< corrected volumes of the fragments removed as fines, m^D
@@ -148,6 +155,7 @@ class Breakage final : public dynamics::Effect<D> {
     geometry::HalfSpace<D> plane;  // world frame
     bool manual;
     bool buckling;
+    const ManualBreak<D>* curved;  // a manual break with a curved surface, or null
   };
 
   bool isBelowMinimum(const geometry::Shape<D>& shape) const;
