@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -143,7 +144,59 @@ Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int
     }
     if (!accepted) break;
   }
-  return x;
+  if (std::abs(phi) <= toleranceCells * h || !std::isfinite(phi)) return x;
+
+  // Newton stalled short of the zero: at a kink of the interpolant (the max()
+  // of a level-set cut, eq. 14-15) the gradient jumps and the damped steps
+  // zig-zag or stop with |phi| up to ~h/4 left. A node left there is outside
+  // its own body and can be inside a neighbour (a fragment's sibling), so
+  // bracket the zero instead: the closest grid node of the opposite sign
+  // within two cells, then bisection on the segment to it (the interpolant is
+  // continuous along it and equals the node's value at its end).
+  const Vec<D> g = grid.toGrid(x);
+  Index<D> base;
+  for (int a = 0; a < D; ++a) base[a] = int(std::floor(g[a]));
+  Vec<D> target = x;
+  double best = std::numeric_limits<double>::infinity();
+  const int reach = 2, width = 2 * reach + 2;
+  int count = 1;
+  for (int a = 0; a < D; ++a) count *= width;
+  for (int q = 0; q < count; ++q) {
+    Index<D> i = base;
+    int rest = q;
+    for (int a = 0; a < D; ++a) {
+      i[a] += rest % width - reach;
+      rest /= width;
+    }
+    if (!grid.inBounds(i)) continue;
+    const double v = grid.at(i);
+    if (!(phi > 0.0 ? v < 0.0 : v > 0.0)) continue;
+    const Vec<D> y = grid.nodePosition(i);
+    const double d = (y - x).squaredNorm();
+    if (d < best) {
+      best = d;
+      target = y;
+    }
+  }
+  if (!std::isfinite(best)) return x;
+  Vec<D> a = x, b = target;  // phi(a) has phi's sign, phi(b) the opposite
+  Vec<D> closest = x;
+  double closestPhi = phi;
+  for (int iteration = 0; iteration < 60; ++iteration) {
+    const Vec<D> m = 0.5 * (a + b);
+    const double vm = grid.value(m);
+    if (std::abs(vm) < std::abs(closestPhi)) {
+      closest = m;
+      closestPhi = vm;
+    }
+    if (std::abs(vm) <= toleranceCells * h) break;
+    if ((vm > 0.0) == (phi > 0.0)) {
+      a = m;
+    } else {
+      b = m;
+    }
+  }
+  return closest;
 }
 
 template Vec<2> projectOntoZero<2>(const Grid<2>&, Vec<2>, double, int);
