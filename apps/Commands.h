@@ -10,7 +10,20 @@ namespace lsdem::apps {
 /// `lsdem shape FILE.toml [--json]`: mass properties, descriptors, grid and nodes of one shape.
 void addShapeCommand(CLI::App& app);
 
+/// `lsdem run SCENE.toml [--out DIR] [--steps N] [--threads N] [--quiet]`, `lsdem run --resume DIR`.
+void addRunCommand(CLI::App& app);
+
 /// `lsdem split FILE.toml --plane nx,ny[,nz],d [--json]`: level-set splitting of one shape by a plane.
 void addSplitCommand(CLI::App& app);
+
+/// `lsdem bench stability [--case NAME] [--dim 2|3] [--long] [--out DIR]`: the stability suite (docs/stability.md).
+void addStabilityBench(CLI::App& bench);
+
+/// `lsdem bench accuracy [--dim 2|3] [--quick] [--out DIR]`: accuracy against cost of the knobs (docs/accuracy.md).
+void addAccuracyBench(CLI::App& bench);
+
+void addMesh2lsCommand(CLI::App& app);  ///< `lsdem mesh2ls MESH --spacing H -o OUT.lsg`: CAD mesh -> grain file (docs/grains.md).
+void addPlotCommand(CLI::App& app);  ///< `lsdem plot DIR [--out PLOTDIR]`: PNG plots of a run's CSV histories (docs/plots.md).
+void addRenderCommand(CLI::App& app);  ///< `lsdem render DIR [--frame N|last] -o IMAGE.png [--view AZ,EL]`: PNG of one frame of a run (docs/render.md).
 
 }  // namespace lsdem::apps

@@ -17,8 +17,16 @@ int main(int argc, char** argv) {
   CLI::App app{"lsdem: Level Set DEM with brittle breakage by level-set splitting (2D and 3D)", "lsdem"};
   app.set_version_flag("--version", std::string("lsdem ") + LSDEM_VERSION);
   app.require_subcommand(1);
+  lsdem::apps::addRunCommand(app);
   lsdem::apps::addShapeCommand(app);
   lsdem::apps::addSplitCommand(app);
+  lsdem::apps::addMesh2lsCommand(app);
+  lsdem::apps::addPlotCommand(app);
+  lsdem::apps::addRenderCommand(app);
+  CLI::App* bench = app.add_subcommand("bench", "measured studies: accuracy and cost, stability");
+  bench->require_subcommand(1);
+  lsdem::apps::addStabilityBench(*bench);
+  lsdem::apps::addAccuracyBench(*bench);
 
   try {
     app.parse(argc, argv);

@@ -134,6 +134,7 @@ class Runner {
     if (!resume) {
       writeFrame();
       writeDistributions();
+      distributionTimeDue();  // times at or before the start are this snapshot
       writeHistoryRow();
       advanceSchedules();
     }
@@ -152,7 +153,7 @@ class Runner {
       appendLogs();
       if (history_.due(clock)) writeHistoryRow();
       if (frames_.due(clock)) writeFrame();
-      if (distributions_.due(clock)) writeDistributions();
+      if (distributions_.due(clock) || distributionTimeDue()) writeDistributions();
       if (checkpoints_.due(clock)) writeCheckpoint();
       advanceSchedules();
       if (options_.progress && secondsSince(lastReport) >= scene_.output.progressSeconds) {
@@ -215,7 +216,9 @@ class Runner {
     const auto roundSteps = [&](double v) { return byTime_ || v <= 0.0 ? v : std::max(1.0, std::floor(v)); };
     frames_.interval = roundSteps(every(scene_.output.frames));
     history_.interval = roundSteps(every(scene_.output.historyRows));
-    distributions_.interval = roundSteps(every(scene_.output.distributions > 1 ? scene_.output.distributions - 1 : 0));
+    distributions_.interval = scene_.output.distributionTimes.empty()
+                                  ? roundSteps(every(scene_.output.distributions > 1 ? scene_.output.distributions - 1 : 0))
+                                  : 0.0;
     checkpoints_.interval = scene_.output.checkpointEvery > 0.0
                                 ? (byTime_ ? scene_.output.checkpointEvery
                                            : std::max(1.0, std::floor(scene_.output.checkpointEvery / std::max(world.dt(), 1e-300))))
@@ -224,6 +227,16 @@ class Runner {
       frames_.next = distributions_.next = history_.next = 0.0;
       checkpoints_.next = checkpoints_.interval;
     }
+  }
+  // Snapshots at the scene's distribution_times (simulated time, s).
+  bool distributionTimeDue() {
+    const std::vector<double>& times = scene_.output.distributionTimes;
+    bool due = false;
+    while (nextDistributionTime_ < times.size() && sw_.world->time() >= times[nextDistributionTime_]) {
+      ++nextDistributionTime_;
+      due = true;
+    }
+    return due;
   }
   bool finished(const World& world) const {
     if (byTime_) return world.time() >= endTime_ * (1.0 - 1e-12);
@@ -547,6 +560,7 @@ class Runner {
     runner.put(lastFrameClock_);
     runner.put(lastDistributionClock_);
     runner.put(lastFrameTime_);
+    runner.put(std::uint64_t(nextDistributionTime_));
     runner.put(std::uint64_t(removedWritten_));
     runner.put(std::uint64_t(eventsWritten_));
     runner.put(std::uint64_t(csv_.size()));
@@ -628,6 +642,7 @@ class Runner {
       lastFrameClock_ = r.get<double>();
       lastDistributionClock_ = r.get<double>();
       lastFrameTime_ = r.get<double>();
+      nextDistributionTime_ = std::size_t(r.get<std::uint64_t>());
       removedWritten_ = std::size_t(r.get<std::uint64_t>());
       eventsWritten_ = std::size_t(r.get<std::uint64_t>());
       std::map<std::string, std::uint64_t> sizes;
@@ -656,6 +671,7 @@ class Runner {
   Schedule frames_, history_, distributions_, checkpoints_;
   double lastHistoryClock_ = -1.0, lastFrameClock_ = -1.0, lastDistributionClock_ = -1.0;
   double lastFrameTime_ = -1.0;  // simulated time of the last frame on the schedule, s
+  std::size_t nextDistributionTime_ = 0;  // index into [output] distribution_times
   std::map<std::string, CsvFile> csv_;
   std::optional<FrameWriter<D>> frameWriter_;
   std::unique_ptr<breakage::Criterion> criterion_;

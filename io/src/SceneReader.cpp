@@ -574,6 +574,14 @@ class SceneReader {
     o.ascii = r.boolean("ascii", false);
     o.historyRows = count("history_rows", o.historyRows);
     o.distributions = count("distributions", o.distributions);
+    if (r.has("distribution_times")) {
+      o.distributionTimes = r.numbers("distribution_times", -1);
+      for (std::size_t k = 0; k < o.distributionTimes.size(); ++k) {
+        if (o.distributionTimes[k] < 0.0 || (k > 0 && !(o.distributionTimes[k] > o.distributionTimes[k - 1]))) {
+          r.fail("distribution_times", "times must be >= 0 s and increase");
+        }
+      }
+    }
     o.checkpointEvery = r.number("checkpoint_every", 0.0);
     if (o.checkpointEvery < 0.0) r.fail("checkpoint_every", "must be >= 0 s");
     o.progressSeconds = r.positive("progress_seconds", o.progressSeconds);

@@ -232,3 +232,22 @@ TEST(Run, ResumeRefusesAChangedSceneAndAMissingCheckpoint) {
     EXPECT_NE(std::string(e.what()).find("changed since the checkpoint"), std::string::npos) << e.what();
   }
 }
+
+TEST(Run, DistributionsAtChosenTimes) {
+  TempDir dir("times");
+  std::string text = kCrushScene;
+  text.replace(text.find("distributions = 3"), 17, "distribution_times = [0.0, 0.005, 0.0075]");
+  io::RunOptions o;
+  o.scene = writeScene(dir.path, text).string();
+  o.outDir = (dir.path / "out").string();
+  io::runScene(o);
+  // Snapshots at 0, the first steps ending at or after 0.005 and 0.0075 s, and the end.
+  const auto rows = lines(readFile(dir.path / "out" / "shape_stats.csv"));
+  ASSERT_EQ(rows.size(), 5u);
+  const double times[4] = {0.0, 0.005, 0.0075, 0.012};
+  for (std::size_t k = 0; k < 4; ++k) {
+    const double t = std::stod(split(rows[k + 1])[0]);
+    EXPECT_GE(t, times[k] - 1e-12);
+    EXPECT_LT(t, times[k] + 2e-5) << "snapshot " << k;  // within a step (dt <= 1.1e-5 s here)
+  }
+}

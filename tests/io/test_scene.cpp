@@ -1,6 +1,7 @@
 // Scene files: what they build (placement, tools, effects) and how bad input
 // is reported (one line with file, line and key; exit code 2 from lsdem run).
 
+#include "lsdem/io/GrainFile.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/Scene.h"
 
@@ -234,4 +235,20 @@ TEST(Scene, ScaledShapesScaleExactly) {
   const geometry::Vec<2> x(0.004, -0.003);
   EXPECT_NEAR(big->value(2.5 * x), 2.5 * shape.value(x), 1e-7);
   EXPECT_THROW(io::scaledShape(shape, 0.0), std::invalid_argument);
+}
+
+TEST(Scene, AFolderOfGrainFilesIsAShapePool) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_scene" / "pool";
+  fs::create_directories(dir);
+  const auto any = io::readScene(writeScene("pool_base", kBase).string());
+  const auto& disc = *as<2>(any).shapes[0];
+  io::writeGrainFile<2>((dir / "a.lsg").string(), disc, io::GrainFormat::Binary);
+  io::writeGrainFile<2>((dir / "b.lsg").string(), *io::scaledShape(disc, 0.5), io::GrainFormat::Text);
+  const std::string scene = edit("kind = \"circle\"\nradius = 0.01\ncells_across = 16",
+                                 "kind = \"grain_folder\"\npath = \"pool\"");
+  const io::SceneWorld<2> w = io::buildWorld(as<2>(io::readScene(writeScene("pool", scene).string())));
+  ASSERT_EQ(w.world->particles().size(), 2u);
+  // Cycled in file-name order: the full disc, then the half-size one.
+  EXPECT_EQ(w.world->particles().shape[0]->volume(), disc.volume());
+  EXPECT_NEAR(w.world->particles().shape[1]->volume(), 0.25 * disc.volume(), 1e-18);
 }

@@ -60,6 +60,7 @@ struct OutputDef {
   bool ascii = false;                   ///< ASCII instead of base64 binary VTP
   std::uint64_t historyRows = 500;      ///< rows of history.csv over the run
   std::uint64_t distributions = 5;      ///< PSD and shape-statistics snapshots over the run (including the first and last)
+  std::vector<double> distributionTimes;  ///< instead: snapshots at these simulated times, s (ascending), plus the first and last
   double checkpointEvery = 0.0;         ///< s of simulated time between checkpoints (0: only at the end)
   double progressSeconds = 2.0;         ///< wall seconds between progress reports
 };

@@ -1,0 +1,52 @@
+#pragma once
+/// @file VtpRead.h
+/// @brief Reading back the ParaView files lsdem writes (io/Vtk.h): VTK XML
+/// PolyData frames (`.vtp`) and ParaView time series (`.pvd`). Used by
+/// `lsdem render` and by tests that check what a run wrote.
+///
+/// What is read. A `.vtp` is `<VTKFile type="PolyData">` with exactly one
+/// `<Piece>`; its DataArrays may be `format="ascii"` or `format="binary"`
+/// (inline base64 of a byte-count header, UInt64 or UInt32 as `header_type`
+/// says, then the raw little-endian values; the header and the data may be one
+/// base64 stream, as lsdem writes them, or two, as VTK writes them).
+/// Compressed data (`compressor=...`), `format="appended"`, big-endian files
+/// and triangle strips are refused with a message. Cells may use VTK's 1.0
+/// layout (offsets hold the end of each cell) or start with a leading 0.
+/// Value types: Float64 and Float32 are read as double, Int64 as int64,
+/// UInt64 as uint64, Int32 as int32, and Int8, UInt8, Int16, UInt16, UInt32 as
+/// int64.
+
+#include "lsdem/io/Vtk.h"
+
+#include <filesystem>
+#include <string_view>
+#include <vector>
+
+namespace lsdem::io {
+
+/// @brief Reads one VTK XML PolyData file into a piece (points, the four cell
+/// kinds but strips, point and cell data, in file order).
+/// @return the piece; points are 3 coordinates each, as in the file.
+/// @note Throws io::InputError (file, line of the offending element, the
+/// element or array name, the problem) when the file cannot be read, is not
+/// PolyData, uses an encoding listed above as refused, or is inconsistent: an
+/// array whose value count does not match its tuple count, offsets that
+/// decrease or do not end at the connectivity size, a cell naming a missing
+/// point, a number that does not parse, a base64 stream whose byte count
+/// differs from its header.
+VtpPiece readVtp(const std::filesystem::path& file);
+
+/// @brief Reads the entries of a ParaView series (`.pvd`): one (time, file)
+/// per `<DataSet timestep=... file=...>`, in file order. The file names are
+/// as written (relative to the `.pvd`'s folder). The file is only read.
+/// @note Throws io::InputError when the file cannot be read, is not a
+/// `<VTKFile type="Collection">`, or a DataSet lacks a finite timestep or a file.
+std::vector<PvdSeries::Entry> readPvd(const std::filesystem::path& file);
+
+/// @brief The array called `name` in `arrays`, or nullptr.
+const VtkArray* findArray(const std::vector<VtkArray>& arrays, std::string_view name);
+
+/// @brief The values of `array` converted to double (integers exactly up to 2^53).
+std::vector<double> arrayAsDoubles(const VtkArray& array);
+
+}  // namespace lsdem::io
