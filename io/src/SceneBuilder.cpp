@@ -191,6 +191,8 @@ class Builder {
       dynamics::Orientation<D> q = dynamics::Rotation<D>::identity();
       if constexpr (D == 2) {
         if (!g.angles.empty()) q = g.angles[k];
+      } else {
+        if (!g.rotations.empty()) q = Eigen::Quaterniond(g.rotations[k]).normalized();
       }
       add(g, shapeFor(g, k, rng), g.positions[k], q);
     }

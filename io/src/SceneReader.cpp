@@ -513,6 +513,21 @@ class SceneReader {
             group.angles = r.numbers("angles_deg", int(group.positions.size()));
             for (double& a : group.angles) a *= kDegree;
           }
+        } else {
+          if (r.has("rotations_deg")) {
+            const auto rows = r.numberRows("rotations_deg", 3);
+            if (rows.size() != group.positions.size()) {
+              r.fail("rotations_deg", "needs one [rx, ry, rz] per position (" + std::to_string(group.positions.size()) +
+                                          "), got " + std::to_string(rows.size()));
+            }
+            for (const auto& e : rows) {
+              const geometry::Mat<3> m = (Eigen::AngleAxisd(e[2] * kDegree, Vec<3>::UnitZ()) *
+                                          Eigen::AngleAxisd(e[1] * kDegree, Vec<3>::UnitY()) *
+                                          Eigen::AngleAxisd(e[0] * kDegree, Vec<3>::UnitX()))
+                                             .toRotationMatrix();
+              group.rotations.push_back(m);
+            }
+          }
         }
       } else if (placement == "cloud" || placement == "grid") {
         group.placement = placement == "cloud" ? Placement::Cloud : Placement::Grid;

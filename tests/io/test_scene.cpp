@@ -252,3 +252,30 @@ TEST(Scene, AFolderOfGrainFilesIsAShapePool) {
   EXPECT_EQ(w.world->particles().shape[0]->volume(), disc.volume());
   EXPECT_NEAR(w.world->particles().shape[1]->volume(), 0.25 * disc.volume(), 1e-18);
 }
+
+TEST(Scene, ListOrientationsTurnThePrincipalFrame3D) {
+  const std::string scene = R"([simulation]
+dimension = 3
+steps = 1
+[contact]
+kn = 1e5
+[shapes.egg]
+kind = "ellipsoid"
+semi_axes = [0.03, 0.02, 0.01]
+cells_across = 8
+[[particles]]
+shape = "egg"
+density = 1000.0
+positions = [[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]]
+rotations_deg = [[0.0, 0.0, 90.0], [90.0, 0.0, 0.0]]
+)";
+  const io::SceneWorld<3> w = io::buildWorld(as<3>(io::readScene(writeScene("rot3", scene).string())));
+  const auto& p = w.world->particles();
+  // The longest axis (body x) turned about z onto world y; the middle (body y) turned about x onto world z.
+  EXPECT_NEAR((p.rotation(0) * geometry::Vec<3>::UnitX() - geometry::Vec<3>::UnitY()).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((p.rotation(1) * geometry::Vec<3>::UnitY() - geometry::Vec<3>::UnitZ()).norm(), 0.0, 1e-12);
+  // One rotation per position.
+  std::string bad = scene;
+  bad.replace(bad.find(", [90.0, 0.0, 0.0]"), 18, "");
+  EXPECT_THROW(io::readScene(writeScene("rot3_bad", bad).string()), io::InputError);
+}

@@ -35,7 +35,8 @@ struct ParticleGroupDef {
   int material = 0;                      ///< index into SceneDef::materials
   Placement placement = Placement::List;
   std::vector<geometry::Vec<D>> positions;  ///< List: centroids, m
-  std::vector<double> angles;               ///< List, 2D: orientation angles, rad (empty: 0)
+  std::vector<double> angles;               ///< List, 2D: orientation angles of the principal frame, rad (empty: 0)
+  std::vector<geometry::Mat<D>> rotations;  ///< List, 3D: rotations of the principal frame (empty: identity)
   geometry::Box<D> region;                  ///< Cloud, Grid: centroids stay in here, bodies inside it, m
   std::uint64_t count = 0;                  ///< Cloud, Grid: particles; Feed: grains in all (0 = no limit)
   double gridSpacing = 0.0;                 ///< Grid: lattice spacing, m (0: the largest bounding diameter)
