@@ -110,12 +110,17 @@ template <int D>
 bool Feed<D>::due(const World<D>& world) const {
   if (def_.count > 0 && dropped_ >= def_.count) return false;
   if (world.time() < def_.startTime) return false;
-  if (dropped_ == 0) return true;
-  if (def_.interval > 0.0) return world.time() >= lastDropTime_ + def_.interval;
-  // Cleared: the last grain is gone or has moved away from the drop point.
+  if (dropped_ > 0 && def_.interval > 0.0 && world.time() < lastDropTime_ + def_.interval) return false;
+  // The drop point must be free: no particle's bounding sphere may reach the
+  // next grain's (a grain dropped onto fragments of the last one would start
+  // deeply overlapping them). With a clearance, the last grain must also have
+  // moved that far from the point (or be gone: broken or removed).
   const Particles<D>& p = world.particles();
+  const double r = def_.shapes[std::size_t(dropped_ % def_.shapes.size())]->boundingRadius();
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.id[i] == lastId_) return (p.position[i] - def_.point).norm() > def_.clearance;
+    const double distance = (p.position[i] - def_.point).norm();
+    if (distance < r + p.shape[i]->boundingRadius()) return false;
+    if (def_.interval == 0.0 && dropped_ > 0 && p.id[i] == lastId_ && distance <= def_.clearance) return false;
   }
   return true;
 }

@@ -152,6 +152,14 @@ class Builder {
     }
     if (scene_.world.outflow) world_->addEffect(std::make_unique<dynamics::Outflow<D>>(*scene_.world.outflow));
     for (auto& f : feeds) {
+      // The feed's grains count for the automatic time step from the start
+      // (a scene may begin with no particle at all).
+      for (const auto& shape : f.shapes) {
+        dynamics::ParticleDef<D> p;
+        p.shape = shape;
+        p.density = f.density;
+        world_->anticipateParticle(p);
+      }
       auto feed = std::make_unique<dynamics::Feed<D>>(std::move(f));
       out.feeds.push_back(feed.get());
       world_->addEffect(std::move(feed));

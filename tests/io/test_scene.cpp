@@ -279,3 +279,44 @@ rotations_deg = [[0.0, 0.0, 90.0], [90.0, 0.0, 0.0]]
   bad.replace(bad.find(", [90.0, 0.0, 0.0]"), 18, "");
   EXPECT_THROW(io::readScene(writeScene("rot3_bad", bad).string()), io::InputError);
 }
+
+TEST(Scene, AFeedAloneStartsWithAnAutomaticStepAndWaitsForAFreePoint) {
+  const std::string feedOnly = R"([simulation]
+dimension = 2
+steps = 3000
+[contact]
+kn = 1e5
+damping_ratio = 0.3
+[shapes.disc]
+kind = "circle"
+radius = 0.01
+cells_across = 12
+[[particles]]
+shape = "disc"
+density = 2000.0
+placement = "feed"
+point = [0.0, 0.05]
+interval = 0.001
+[[planes]]
+point = [0.0, 0.0]
+normal = [0.0, 1.0]
+[effects]
+gravity = [0.0, -9.81]
+)";
+  io::SceneWorld<2> w = io::buildWorld(as<2>(io::readScene(writeScene("feed_only", feedOnly).string())));
+  ASSERT_GT(w.world->dt(), 0.0);  // from the feed's grains
+  EXPECT_EQ(w.world->particles().size(), 0u);
+  // Every 1 ms a grain is due, but the point is free only once the last one has
+  // fallen a diameter: far fewer drops than intervals, and never an overlap at birth.
+  std::size_t seen = 0;
+  for (int s = 0; s < 3000; ++s) {
+    w.world->step();
+    const auto& p = w.world->particles();
+    for (; seen < p.size(); ++seen) {
+      for (std::size_t j = 0; j < seen; ++j) EXPECT_GE((p.position[seen] - p.position[j]).norm(), 0.02 - 1e-12);
+    }
+  }
+  const double intervals = w.world->time() / 0.001;
+  EXPECT_GE(w.feeds[0]->dropped(), 2u);
+  EXPECT_LT(double(w.feeds[0]->dropped()), 0.8 * intervals);
+}

@@ -123,8 +123,9 @@ struct FeedDef {
   double startTime = 0.0;             ///< no grain before this time, s
 };
 
-/// A feed (FeedDef): between steps, adds the next grain when it is due. The
-/// first grain drops at the first step ending at or after startTime.
+/// A feed (FeedDef): between steps, adds the next grain when it is due and
+/// the drop point is free (no particle's bounding sphere reaches the grain's).
+/// The first grain drops at the first step ending at or after startTime.
 template <int D>
 class Feed final : public Effect<D> {
  public:

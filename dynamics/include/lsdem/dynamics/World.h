@@ -68,6 +68,11 @@ struct WorldDef {
 };
 
 /// The energy budget of a run, J. Work done on the particles counts positive.
+/// Kinetic and elastic energy are those of the state after the last step;
+/// gravity's work is exact for the drift (m g . dx); dissipation and the work
+/// of moving boundaries are their power samples (one per step, at the
+/// mid-step velocity) integrated by the trapezoid rule in time, so they
+/// account for the same instant as the kinetic energy.
 struct EnergyLedger {
   double kineticTranslational = 0.0;
   double kineticRotational = 0.0;
@@ -113,6 +118,11 @@ class World {
   // ---- building ----
   /// @brief Adds a particle; re-checks the time step. Returns its index.
   std::size_t addParticle(const ParticleDef<D>& def);
+  /// @brief Folds a particle that will only be added later (a feed's grains)
+  /// into the automatic time step, so a world can start before it has any
+  /// particle; the step never grows afterwards.
+  /// @note Throws std::invalid_argument for a missing shape or a mass <= 0.
+  void anticipateParticle(const ParticleDef<D>& def);
   /// @brief Removes particle `index`, recording it (for mass balance and size
   /// distributions) with `reason`.
   void removeParticle(std::size_t index, const std::string& reason);
@@ -191,6 +201,8 @@ class World {
   /// Re-estimates the critical step: over all particles, or folding in only
   /// the particle just added.
   void updateTimeStep(bool lastAddedOnly);
+  /// Sets dt from dtCritical_ (automatic: safety x critical, never growing; user: checked).
+  void stepFromCritical();
   void checkFinite() const;
   /// The effective contact stiffness of a shape (N/m), from the cache when the
   /// shape is one it still holds. Entries are keyed by the live shape, not by
@@ -233,6 +245,15 @@ class World {
   std::uint64_t steps_ = 0;
   bool forcesValid_ = false;
   EnergyLedger energy_;
+  // The ledger's dissipation and boundary work follow the trapezoid rule in
+  // time. A force sampled at the end of a step (with the mid-step velocity
+  // v(n+1/2)) acts through the closing half kick of that step and the opening
+  // half kick of the next, so a step books half of its own sample and the
+  // other half of the previous one; booking the whole sample at once ran half
+  // a step ahead of the state it is compared with, and a contact's first step
+  // (an impact: a large dashpot power) showed as energy from nothing.
+  // Held-back halves, J: contact loss, damping loss, boundary work.
+  std::array<double, 3> pendingWork_{};
   std::vector<RemovedParticle> removed_;
 };
 
