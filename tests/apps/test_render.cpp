@@ -40,8 +40,10 @@ Result run(const std::string& args, const std::string& env = "") {
   return r;
 }
 
+// One folder per process: ctest runs the tests of this file side by side, each
+// in its own process that runs the scenes again.
 fs::path tempDir() {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_render";
+  const fs::path dir = fs::temp_directory_path() / ("lsdem_test_render_" + std::to_string(getpid()));
   fs::create_directories(dir);
   return dir;
 }
@@ -165,6 +167,7 @@ class Render : public ::testing::Test {
     out2d_ = runScene("render2d", kScene2d);
     out3d_ = runScene("render3d", kScene3d);
   }
+  static void TearDownTestSuite() { fs::remove_all(tempDir()); }
   static fs::path out2d_, out3d_;
 };
 fs::path Render::out2d_, Render::out3d_;
