@@ -304,6 +304,19 @@ RunPlots plotRunFolder(const std::string& dir, const std::string& outDir) {
                                        {series(history, "strain", "stress_Pa", "stress")}});
     draw("void_ratio.png", PlotSpec{"", "Void ratio", "stress (Pa)", "void ratio", true, false, true,
                                     {series(history, "stress_Pa", "void_ratio", "void ratio")}});
+    // Forces on the tools (a tool is a boundary with a power column), one plot each.
+    const std::vector<std::string> cols = csvColumns(history.string());
+    for (const std::string& c : cols) {
+      const std::string suffix = "_power_W";
+      if (c.size() <= suffix.size() || c.compare(c.size() - suffix.size(), suffix.size(), suffix) != 0) continue;
+      const std::string tool = c.substr(0, c.size() - suffix.size());
+      PlotSpec forces{"", "Force of the particles on " + tool, "time (s)", "force (N)", false, false, true, {}};
+      for (const char* axis : {"x", "y", "z"}) {
+        const std::string column = tool + "_force_" + axis + "_N";
+        if (std::find(cols.begin(), cols.end(), column) != cols.end()) forces.series.push_back(series(history, "time_s", column));
+      }
+      draw(tool + "_force.png", forces);
+    }
   }
 
   // psd.csv: one curve per time (at most 8: first, last and evenly between).
@@ -331,7 +344,11 @@ RunPlots plotRunFolder(const std::string& dir, const std::string& outDir) {
   // shape_stats.csv: mean circularity and aspect ratio against strain, or time.
   if (fs::exists(shape)) {
     const std::vector<std::string> cols = csvColumns(shape.string());
-    const bool strain = std::find(cols.begin(), cols.end(), "strain") != cols.end();
+    // Against strain when the run had a specimen (the column then holds numbers).
+    bool strain = false;
+    if (std::find(cols.begin(), cols.end(), "strain") != cols.end()) {
+      for (const std::string& v : csvDistinctValues(shape.string(), "strain")) strain = strain || !v.empty();
+    }
     const std::string x = strain ? "strain" : "time_s";
     draw("shape_stats.png", PlotSpec{"", "Shape statistics", strain ? "strain" : "time (s)", "mean", false, false, true,
                                      {series(shape, x, "mean_circularity", "mean circularity / sphericity"),

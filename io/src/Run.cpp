@@ -416,6 +416,13 @@ class Runner {
       aspect += d.aspectRatio;
       sieve += d.sieveSize;
     }
+    // Fines removed so far count as passing at their own size (paper section
+    // 3: removed particles are kept in the PSD).
+    for (const dynamics::RemovedParticle& r : w.removed()) {
+      if (r.reason != "fines") continue;
+      sizes.emplace_back(r.sieveSize, r.mass);
+      total += r.mass;
+    }
     std::sort(sizes.begin(), sizes.end());
     double passing = 0.0;
     std::string rows;
