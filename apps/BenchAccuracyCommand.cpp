@@ -1,13 +1,14 @@
 /// @file BenchAccuracyCommand.cpp
 /// @brief `lsdem bench accuracy [--dim 2|3] [--quick] [--out DIR]`: runs the
 /// accuracy-versus-cost study (lsdem/study/Accuracy.h), prints one progress
-/// line per setting and the Pareto front, and writes DIR/accuracy.csv,
-/// DIR/accuracy.md and DIR/error_vs_time_<metric>.png (docs/accuracy.md).
+/// line per setting (its CPU time by stage) and the Pareto front, and writes
+/// DIR/accuracy.csv, DIR/accuracy.md and the PNG plots (docs/accuracy.md).
 
 #include "Commands.h"
 
 #include "lsdem/study/Accuracy.h"
 
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -37,7 +38,8 @@ void runAccuracy(const AccuracyOptionsCli& o) {
             << study::paretoText(report.pareto) << '\n';
   std::cout << "wrote " << files.csv << ", " << files.markdown << " and " << files.plots.size() << " plots";
   if (files.plots.empty()) std::cout << " (gnuplot not found, or nothing to plot)";
-  std::cout << "; study took " << report.wallSeconds << " s\n";
+  std::cout << "; study took " << std::lround(report.wallSeconds) << " s wall, " << std::lround(report.cpuSeconds)
+            << " s CPU\n";
 }
 
 }  // namespace

@@ -10,9 +10,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <numbers>
+#include <utility>
 
 using namespace lsdem;
 using namespace lsdem::geometry;
@@ -53,6 +56,47 @@ std::pair<double, double> sphereErrors(double cells) {
     const double inertia = D == 2 ? m.polarMoment() : m.principalInertia().mean();
     v2 += std::pow(m.volume / V - 1.0, 2) / 8.0;
     i2 += std::pow(inertia / I - 1.0, 2) / 8.0;
+  }
+  return {std::sqrt(v2), std::sqrt(i2)};
+}
+
+// RMS over the first four offsets of the relative volume error and of the largest
+// principal-moment error (relative to the largest moment) of the ellipse
+// (semi-axes 0.5, 0.35) / ellipsoid (0.5, 0.35, 0.25) at `cells` across its
+// smallest dimension.
+template <int D>
+std::pair<double, double> ellipsoidErrors(double cells) {
+  Vec<D> axes;
+  if constexpr (D == 2) {
+    axes << 0.5, 0.35;
+  } else {
+    axes << 0.5, 0.35, 0.25;
+  }
+  const double V = (D == 2 ? kPi : 4.0 / 3.0 * kPi) * axes.prod();
+  Vec<D> exact;
+  if constexpr (D == 2) {
+    exact << V * axes.squaredNorm() / 4.0, 0.0;
+  } else {
+    const Vec<3> a2 = axes.cwiseProduct(axes);
+    exact << V * (a2[1] + a2[2]) / 5.0, V * (a2[0] + a2[2]) / 5.0, V * (a2[0] + a2[1]) / 5.0;
+  }
+  double v2 = 0.0, i2 = 0.0;
+  for (int k = 0; k < 4; ++k) {
+    // shiftedGrid takes cells per metre: the smallest dimension is 2 min(a).
+    const auto sdf = [&](const Vec<D>& x) { return sdfEllipsoid<D>(x, axes); };
+    const MassProperties<D> m = massProperties(shiftedGrid<D>(cells / (2.0 * axes.minCoeff()), k, axes.maxCoeff(), sdf));
+    double worst = 0.0;
+    if constexpr (D == 2) {
+      worst = std::abs(m.polarMoment() / exact[0] - 1.0);
+    } else {
+      // Principal moments in descending order against the exact ones, sorted the same way.
+      Vec<3> got = m.principalInertia(), want = exact;
+      std::sort(got.data(), got.data() + 3, std::greater<>());
+      std::sort(want.data(), want.data() + 3, std::greater<>());
+      worst = (got - want).cwiseAbs().maxCoeff() / want[0];
+    }
+    v2 += std::pow(m.volume / V - 1.0, 2) / 4.0;
+    i2 += worst * worst / 4.0;
   }
   return {std::sqrt(v2), std::sqrt(i2)};
 }
@@ -132,5 +176,27 @@ TEST(Convergence, CapVolumesOfACut) {
     std::printf("%dD cap (h = 0.35): volume %.3e -> %.3e (order %.2f)\n", dim, e10, e20, p);
     EXPECT_NEAR(p, dim == 2 ? 3.1 : 2.0, dim == 2 ? 0.7 : 0.4) << dim << "D";
     EXPECT_LT(e20, 1e-3) << dim << "D";
+  }
+}
+
+// Mass properties of an ellipse / ellipsoid (not rotation-invariant: the grid
+// cells meet its surface at every angle), extrapolated estimator, RMS over
+// four placements, 10 -> 20 cells across the smallest dimension. Measured:
+// 2D volume 3.4e-5 -> 7.8e-6 (order 2.1), polar inertia 7.2e-4 -> 5.0e-5
+// (3.9); 3D volume 4.7e-6 -> 7.5e-7 (2.7), principal inertia 1.3e-3 -> 7.8e-5
+// (4.0). The inertia is fourth order like the sphere's; the volume error is
+// already at 1e-5 to 1e-6 and its order (2 to 3) depends on the placements.
+TEST(Convergence, MassPropertiesOfAnEllipsoid) {
+  for (int dim : {2, 3}) {
+    const auto [v10, i10] = dim == 2 ? ellipsoidErrors<2>(10) : ellipsoidErrors<3>(10);
+    const auto [v20, i20] = dim == 2 ? ellipsoidErrors<2>(20) : ellipsoidErrors<3>(20);
+    const double pv = order(v10, v20, 10, 20), pi = order(i10, i20, 10, 20);
+    std::printf("%dD ellipsoid: volume %.3e -> %.3e (order %.2f), inertia %.3e -> %.3e (order %.2f)\n", dim, v10, v20,
+                pv, i10, i20, pi);
+    EXPECT_NEAR(pi, 3.95, 0.5) << dim << "D";
+    EXPECT_LT(i20, 1.5e-4) << dim << "D";
+    EXPECT_GT(pv, 1.6) << dim << "D";
+    EXPECT_LT(pv, 3.5) << dim << "D";
+    EXPECT_LT(v20, 1.5e-5) << dim << "D";
   }
 }

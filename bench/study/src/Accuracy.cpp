@@ -5,13 +5,18 @@
 #include "lsdem/study/Accuracy.h"
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <map>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace lsdem::study {
@@ -22,24 +27,41 @@ struct KnobLists {
   std::vector<double> cells, nodesPerCell, dtFraction;
   double referenceCells = 0.0;  // the random grain's reference grid
   int grains = 0;               // grains in the packing
+  double settleSeconds = 0.1;   // simulated settling time of the packing after the fall, s
 };
 
 KnobLists knobLists(int dimension, bool quick) {
   KnobLists k;
   if (dimension == 2) {
-    k.cells = quick ? std::vector<double>{6, 10, 16, 24} : std::vector<double>{6, 8, 10, 14, 20, 28, 40};
+    k.cells = quick ? std::vector<double>{6, 10, 16, 24} : std::vector<double>{6, 8, 10, 14, 20, 28, 40, 56};
     k.nodesPerCell = quick ? std::vector<double>{0.5, 1, 2, 4} : std::vector<double>{0.5, 1, 1.5, 2, 3, 4};
     k.dtFraction = quick ? std::vector<double>{0.1, 0.2, 0.4} : std::vector<double>{0.05, 0.1, 0.2, 0.4, 0.8};
     k.referenceCells = quick ? 160 : 320;
     k.grains = quick ? 100 : 300;
   } else {
-    k.cells = quick ? std::vector<double>{6, 8, 12} : std::vector<double>{6, 8, 10, 14, 20};
+    k.cells = quick ? std::vector<double>{6, 8, 12} : std::vector<double>{6, 8, 10, 14, 20, 28};
     k.nodesPerCell = quick ? std::vector<double>{0.5, 1, 2} : std::vector<double>{0.5, 1, 1.5, 2, 3};
     k.dtFraction = quick ? std::vector<double>{0.1, 0.2, 0.4} : std::vector<double>{0.05, 0.1, 0.2, 0.4, 0.8};
-    k.referenceCells = quick ? 40 : 64;
-    k.grains = quick ? 32 : 200;
+    k.referenceCells = quick ? 40 : 80;
+    k.grains = quick ? 32 : 128;
   }
   return k;
+}
+
+// Worker threads of the sweep (each measures whole configurations on one
+// OpenMP thread): two, one per core of the machines the study targets.
+constexpr unsigned kStudyThreads = 2;
+
+// A rough relative cost of a setting's packing run, for scheduling only:
+// nodes per grain ~ (cells x nodes per cell)^(D-1), steps ~ cells^-0.35 /
+// dtFraction (the measured trend), and the per-node law's stiffness, growing
+// like nodesPerCell^(D-1), shortens the step by its square root.
+double estimatedCost(const AccuracySetting& s, int dimension) {
+  const double perNode = s.formulation == dynamics::ForceFormulation::PerNode
+                             ? std::pow(s.nodesPerCell, 0.5 * (dimension - 1))
+                             : 1.0;
+  return std::pow(s.cellsAcross * s.nodesPerCell, dimension - 1) * std::pow(s.cellsAcross, -0.35) * perNode /
+         s.dtFraction;
 }
 
 // Everything measured for one configuration (shared by the knobs that reach it).
@@ -47,6 +69,7 @@ struct SettingResult {
   std::vector<MetricValue> metrics;
   PackingResult packing;
   double splitSeconds = 0.0;
+  std::array<double, 5> stageCpu{};  // CPU s of the measuring thread: mass, contact, restitution, split, packing
 };
 
 std::string settingKey(const AccuracySetting& s) {
@@ -59,19 +82,44 @@ std::string settingKey(const AccuracySetting& s) {
 template <int D>
 SettingResult measure(const AccuracySetting& s, const KnobLists& lists) {
   SettingResult r;
-  auto append = [&](const std::vector<MetricValue>& m) { r.metrics.insert(r.metrics.end(), m.begin(), m.end()); };
-  append(massMetrics<D>(s.cellsAcross, lists.referenceCells));
-  append(contactMetrics<D>(s));
-  append(restitutionMetrics<D>(s));
-  append(splitMetrics<D>(s, r.splitSeconds));
-  r.packing = packingRun<D>(s, lists.grains);
+  // Each stage appends its metrics and records the CPU time it took on this thread.
+  int stage = 0;
+  auto append = [&](const std::vector<MetricValue>& m, double cpu0) {
+    r.metrics.insert(r.metrics.end(), m.begin(), m.end());
+    r.stageCpu[std::size_t(stage++)] = threadCpuSeconds() - cpu0;
+  };
+  double cpu0 = threadCpuSeconds();
+  append(massMetrics<D>(s.cellsAcross, lists.referenceCells), cpu0);
+  cpu0 = threadCpuSeconds();
+  append(contactMetrics<D>(s), cpu0);
+  cpu0 = threadCpuSeconds();
+  append(restitutionMetrics<D>(s), cpu0);
+  cpu0 = threadCpuSeconds();
+  append(splitMetrics<D>(s, r.splitSeconds), cpu0);
+  cpu0 = threadCpuSeconds();
+  r.packing = packingRun<D>(s, lists.grains, lists.settleSeconds);
+  r.stageCpu[4] = threadCpuSeconds() - cpu0;
   r.packing.cost.splitSeconds = r.splitSeconds;
   return r;
+}
+
+// One progress line: the setting, its CPU time by stage and the packing's outcome.
+std::string progressLine(const std::string& knob, double value, const SettingResult& r) {
+  const auto& c = r.stageCpu;
+  const auto& pk = r.packing;
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "%-24s %-6g %5.1f s CPU (mass %.1f, contact %.1f, restitution %.1f, split %.1f, packing %.1f); "
+                "packing %.0f steps, %.3g ms/step on 1 thread, Z = %.2f, KE ratio %.2g",
+                knob.c_str(), value, c[0] + c[1] + c[2] + c[3] + c[4], c[0], c[1], c[2], c[3], c[4], pk.cost.steps,
+                1e3 * pk.cost.stepSeconds, pk.coordination, pk.kineticRatio);
+  return line;
 }
 
 template <int D>
 AccuracyReport runStudy(const AccuracyOptions& options) {
   const auto start = std::chrono::steady_clock::now();
+  const double cpuStart = processCpuSeconds();
   const KnobLists lists = knobLists(D, options.quick);
   AccuracyReport report;
   report.dimension = D;
@@ -100,21 +148,8 @@ AccuracyReport runStudy(const AccuracyOptions& options) {
                       return s;
                     }()});
   }
-  for (double f : lists.dtFraction) plan.push_back({"dt_fraction", f, [&] { auto s = base; s.dtFraction = f; return s; }()});
-
-  // Measure every distinct configuration once.
-  std::map<std::string, SettingResult> results;
-  for (const Planned& p : plan) {
-    const std::string key = settingKey(p.config);
-    if (results.count(key)) continue;
-    const auto t0 = std::chrono::steady_clock::now();
-    results.emplace(key, measure<D>(p.config, lists));
-    const auto& pk = results[key].packing;
-    char line[256];
-    std::snprintf(line, sizeof line, "%-24s %-6g  %.1f s (packing: %.0f steps, %.3g ms/step, Z = %.2f, KE ratio %.2g)",
-                  p.knob.c_str(), p.value, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(),
-                  pk.cost.steps, 1e3 * pk.cost.stepSeconds, pk.coordination, pk.kineticRatio);
-    say(line);
+  for (double f : lists.dtFraction) {
+    plan.push_back({"dt_fraction", f, [&] { auto s = base; s.dtFraction = f; return s; }()});
   }
 
   // The packing's reference: the finest grid, baseline nodes, the smallest time-step fraction.
@@ -122,10 +157,56 @@ AccuracyReport runStudy(const AccuracyOptions& options) {
   finest.cellsAcross = lists.cells.back();
   finest.dtFraction = lists.dtFraction.front();
   const std::string finestKey = settingKey(finest);
-  if (!results.count(finestKey)) {
-    results.emplace(finestKey, measure<D>(finest, lists));
-    say("packing reference (finest grid, smallest dt fraction) measured");
+
+  // The distinct configurations, longest first (a rough estimate), so that no
+  // long run trails at the end while the other worker idles.
+  struct Task {
+    std::string knob;
+    double value;
+    AccuracySetting config;
+  };
+  std::vector<Task> tasks{{"packing reference", finest.cellsAcross, finest}};
+  for (const Planned& p : plan) {
+    const std::string key = settingKey(p.config);
+    const auto sameKey = [&](const Task& t) { return settingKey(t.config) == key; };
+    const bool seen = std::any_of(tasks.begin(), tasks.end(), sameKey);
+    if (!seen) tasks.push_back({p.knob, p.value, p.config});
   }
+  std::stable_sort(tasks.begin(), tasks.end(), [](const Task& a, const Task& b) {
+    return estimatedCost(a.config, D) > estimatedCost(b.config, D);
+  });
+
+  // Measure them on two worker threads, each running its OpenMP regions on
+  // one thread: every measurement is a pure function of its configuration, so
+  // the results do not depend on the order, and the costs are the CPU time of
+  // the measuring thread.
+  std::vector<SettingResult> measured(tasks.size());
+  std::vector<std::exception_ptr> failures(tasks.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex sayMutex;
+  auto worker = [&] {
+    const SingleThreadScope oneThread;
+    for (std::size_t t = next++; t < tasks.size(); t = next++) {
+      try {
+        measured[t] = measure<D>(tasks[t].config, lists);
+        const std::string line = progressLine(tasks[t].knob, tasks[t].value, measured[t]);
+        const std::lock_guard<std::mutex> lock(sayMutex);
+        say(line);
+      } catch (...) {
+        failures[t] = std::current_exception();
+      }
+    }
+  };
+  const unsigned workers = std::max(1u, std::min(kStudyThreads, std::thread::hardware_concurrency()));
+  std::vector<std::thread> threads;
+  for (unsigned w = 1; w < workers; ++w) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+  for (const auto& f : failures) {
+    if (f) std::rethrow_exception(f);
+  }
+  std::map<std::string, SettingResult> results;
+  for (std::size_t t = 0; t < tasks.size(); ++t) results.emplace(settingKey(tasks[t].config), measured[t]);
   const PackingResult& ref = results[finestKey].packing;
 
   // The rows: the setting's metrics plus the packing metrics against the reference.
@@ -161,6 +242,7 @@ AccuracyReport runStudy(const AccuracyOptions& options) {
   report.notes.push_back(note);
   report.pareto = paretoFront(report.points, {0.01, 0.001});
   report.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.cpuSeconds = processCpuSeconds() - cpuStart;
   return report;
 }
 
@@ -197,6 +279,7 @@ std::vector<ParetoChoice> paretoFront(const std::vector<AccuracyPoint>& points, 
           c.reached = true;
           c.knob = p.knob;
           c.setting = p.setting;
+          c.config = p.config;
           c.error = p.metric.error;
           c.runSeconds = p.cost.runSeconds;
         }
@@ -209,17 +292,20 @@ std::vector<ParetoChoice> paretoFront(const std::vector<AccuracyPoint>& points, 
 
 std::string paretoText(const std::vector<ParetoChoice>& choices) {
   std::ostringstream out;
-  char line[256];
-  std::snprintf(line, sizeof line, "%-24s %8s  %-32s %10s %12s\n", "metric", "target", "cheapest setting", "error",
-                "run seconds");
+  char line[320];
+  std::snprintf(line, sizeof line, "%-22s %7s  %-50s %10s %9s\n", "metric", "target",
+                "cheapest setting (cells, nodes/cell, law, dt fraction)", "error", "run CPU s");
   out << line;
   for (const auto& c : choices) {
-    const std::string setting = c.reached ? c.knob + "=" + [&] {
-      char v[32];
-      std::snprintf(v, sizeof v, "%g", c.setting);
-      return std::string(v);
-    }() : std::string("(none reaches it)");
-    std::snprintf(line, sizeof line, "%-24s %7s%%  %-32s %9s%% %12.3g\n", c.metric.c_str(), percent(c.target).c_str(),
+    // The knob that reached it, then the full configuration.
+    std::string setting = "(none reaches it)";
+    if (c.reached) {
+      char v[160];
+      std::snprintf(v, sizeof v, "%s=%g (%g, %g, %s, %g)", c.knob.c_str(), c.setting, c.config.cellsAcross,
+                    c.config.nodesPerCell, formulationName(c.config.formulation), c.config.dtFraction);
+      setting = v;
+    }
+    std::snprintf(line, sizeof line, "%-22s %6s%%  %-50s %9s%% %9.3g\n", c.metric.c_str(), percent(c.target).c_str(),
                   setting.c_str(), c.reached ? percent(c.error).c_str() : "-", c.reached ? c.runSeconds : 0.0);
     out << line;
   }
@@ -230,7 +316,9 @@ std::string accuracyMarkdown(const AccuracyReport& report) {
   std::ostringstream md;
   md << "# Accuracy and cost (" << report.dimension << "D, " << (report.quick ? "--quick" : "full sweep") << ")\n\n";
   md << "Regenerate: `lsdem bench accuracy --dim " << report.dimension << (report.quick ? " --quick" : "")
-     << "` (" << std::lround(report.wallSeconds) << " s on this machine).\n\n";
+     << "` (" << std::lround(report.wallSeconds) << " s wall, " << std::lround(report.cpuSeconds)
+     << " s CPU on this machine). Costs are CPU times of one thread (the timed runs are single-threaded), "
+        "so other work on the machine hardly changes them.\n\n";
 
   // The settings in the order of the sweep, with their cost.
   struct Row {
@@ -252,7 +340,8 @@ std::string accuracyMarkdown(const AccuracyReport& report) {
   }
 
   md << "## Cost per setting\n\n";
-  md << "| knob | value | ms/step | steps | run s | node checks/step | split ms | KiB/particle |\n";
+  md << "| knob | value | CPU ms/step (1 thread) | steps | run CPU s | node checks/step | split CPU ms | "
+        "KiB/particle |\n";
   md << "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   char buf[512];
   for (const Row& r : rows) {

@@ -13,8 +13,8 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
+#include <ctime>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -22,6 +22,10 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#ifdef LSDEM_HAVE_OPENMP
+#include <omp.h>
+#endif
 
 namespace lsdem::study {
 
@@ -41,8 +45,11 @@ double medianOf(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
-double secondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+// Seconds of a POSIX clock.
+double clockSeconds(clockid_t clock) {
+  timespec ts{};
+  clock_gettime(clock, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 // A circle (2D) or sphere (3D) of `radius`, `cells` cells across its diameter.
@@ -177,6 +184,18 @@ MetricValue inertiaMetric(const std::string& name, const std::vector<double>& va
 }
 
 }  // namespace
+
+double threadCpuSeconds() { return clockSeconds(CLOCK_THREAD_CPUTIME_ID); }
+
+double processCpuSeconds() { return clockSeconds(CLOCK_PROCESS_CPUTIME_ID); }
+
+#ifdef LSDEM_HAVE_OPENMP
+SingleThreadScope::SingleThreadScope() : previousThreads_(omp_get_max_threads()) { omp_set_num_threads(1); }
+SingleThreadScope::~SingleThreadScope() { omp_set_num_threads(previousThreads_); }
+#else
+SingleThreadScope::SingleThreadScope() = default;
+SingleThreadScope::~SingleThreadScope() = default;
+#endif
 
 const char* formulationName(dynamics::ForceFormulation formulation) {
   return formulation == dynamics::ForceFormulation::PerNode ? "per_node" : "area_weighted";
@@ -372,13 +391,16 @@ std::vector<MetricValue> splitMetrics(const AccuracySetting& setting, double& sp
   const auto shape = sphereShape<D>(R, setting.cellsAcross, setting.nodesPerCell);
   breakage::FractureSurface<D> surface;
   surface.plane = geometry::HalfSpace<D>{Vec<D>::Unit(1), d};
-  // Median of three timed splits.
+  // Median of five splits timed in CPU seconds on one thread.
   std::vector<double> times;
   breakage::SplitResult<D> result;
-  for (int r = 0; r < 3; ++r) {
-    const auto t0 = std::chrono::steady_clock::now();
-    result = breakage::splitShape(*shape, surface);
-    times.push_back(secondsSince(t0));
+  {
+    const SingleThreadScope oneThread;
+    for (int r = 0; r < 5; ++r) {
+      const double t0 = threadCpuSeconds();
+      result = breakage::splitShape(*shape, surface);
+      times.push_back(threadCpuSeconds() - t0);
+    }
   }
   splitSeconds = medianOf(times);
   if (!result.isSplit || result.fragments.size() != 2) {
@@ -418,8 +440,11 @@ std::vector<MetricValue> splitMetrics(const AccuracySetting& setting, double& sp
 // ---- the packing ----
 
 template <int D>
-PackingResult packingRun(const AccuracySetting& setting, int grains) {
+PackingResult packingRun(const AccuracySetting& setting, int grains, double settleSeconds) {
   if (grains < 1) throw std::invalid_argument("packingRun: grains must be >= 1, got " + std::to_string(grains));
+  if (!(settleSeconds >= 0.0)) {
+    throw std::invalid_argument("packingRun: settling time must be >= 0 s, got " + std::to_string(settleSeconds));
+  }
   const double diameter = 0.01, spacing = diameter / setting.cellsAcross;
   // Eight grain shapes, equivalent diameters 0.8-1.2 cm, one grid spacing.
   std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes;
@@ -488,22 +513,26 @@ PackingResult packingRun(const AccuracySetting& setting, int grains) {
     weight += world.particles().mass[i] * 9.81;
   }
 
-  // A fixed simulated time: the fall of the top layer plus settling; timed in blocks.
+  // A fixed simulated time: the fall of the top layer plus settling, run on
+  // one thread and timed in blocks of 50 steps by the thread's CPU clock.
   const double layers = std::ceil(double(grains) / perLayer);
-  const double simulated = 2.0 * std::sqrt(2.0 * layers * pitch / 9.81) + 0.1;
+  const double simulated = 2.0 * std::sqrt(2.0 * layers * pitch / 9.81) + settleSeconds;
   const auto steps = std::uint64_t(std::ceil(simulated / world.dt()));
   const std::uint64_t block = 50;
   std::vector<double> blockSeconds;
   double nodeChecks = 0.0;
-  for (std::uint64_t done = 0; done < steps;) {
-    const std::uint64_t n = std::min(block, steps - done);
-    const auto t0 = std::chrono::steady_clock::now();
-    for (std::uint64_t s = 0; s < n; ++s) {
-      world.step();
-      nodeChecks += double(world.contacts().nodeChecks());
+  {
+    const SingleThreadScope oneThread;
+    for (std::uint64_t done = 0; done < steps;) {
+      const std::uint64_t n = std::min(block, steps - done);
+      const double t0 = threadCpuSeconds();
+      for (std::uint64_t s = 0; s < n; ++s) {
+        world.step();
+        nodeChecks += double(world.contacts().nodeChecks());
+      }
+      if (n == block) blockSeconds.push_back((threadCpuSeconds() - t0) / double(n));
+      done += n;
     }
-    if (n == block) blockSeconds.push_back(secondsSince(t0) / double(n));
-    done += n;
   }
 
   // Final state: floor stress, coordination, vertical load balance, kinetic energy.
@@ -538,7 +567,7 @@ template std::vector<MetricValue> restitutionMetrics<2>(const AccuracySetting&);
 template std::vector<MetricValue> restitutionMetrics<3>(const AccuracySetting&);
 template std::vector<MetricValue> splitMetrics<2>(const AccuracySetting&, double&);
 template std::vector<MetricValue> splitMetrics<3>(const AccuracySetting&, double&);
-template PackingResult packingRun<2>(const AccuracySetting&, int);
-template PackingResult packingRun<3>(const AccuracySetting&, int);
+template PackingResult packingRun<2>(const AccuracySetting&, int, double);
+template PackingResult packingRun<3>(const AccuracySetting&, int, double);
 
 }  // namespace lsdem::study

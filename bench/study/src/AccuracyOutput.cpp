@@ -34,6 +34,17 @@ void writeAtomically(const std::filesystem::path& path, const std::string& text)
   if (ec) throw std::runtime_error("cannot rename " + tmp.string() + " to " + path.string() + ": " + ec.message());
 }
 
+// Draws `spec`; a plot with nothing to draw on its log axes (all errors 0) is
+// recorded as skipped under `name`.
+void drawOrSkip(const io::PlotSpec& spec, const std::string& name, AccuracyFiles& files) {
+  try {
+    io::renderPlot(spec);
+    files.plots.push_back(spec.output);
+  } catch (const std::runtime_error&) {
+    files.skippedPlots.push_back(name);
+  }
+}
+
 std::string number(double v) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.9g", v);
@@ -83,7 +94,7 @@ AccuracyFiles writeAccuracyFiles(const AccuracyReport& report, const std::string
       io::PlotSpec spec;
       spec.output = (dir / ("error_vs_time_" + m + ".png")).string();
       spec.title = m + " (" + std::to_string(report.dimension) + "D)";
-      spec.xLabel = "packing run time, s";
+      spec.xLabel = "packing run, CPU seconds on 1 thread";
       spec.yLabel = "error (relative)";
       spec.logX = true;
       spec.logY = true;
@@ -97,14 +108,52 @@ AccuracyFiles writeAccuracyFiles(const AccuracyReport& report, const std::string
         s.filterValue = m + "/" + k;
         spec.series.push_back(s);
       }
-      // A metric whose errors are all 0 has nothing to draw on a log axis.
-      try {
-        io::renderPlot(spec);
-        files.plots.push_back(spec.output);
-      } catch (const std::runtime_error&) {
-        files.skippedPlots.push_back(m);
+      drawOrSkip(spec, m, files);
+    }
+
+    // The contact stiffness ratio of both laws against the node density:
+    // flat for the area-weighted law, slope D - 1 for the per-node law.
+    io::PlotSpec stiffness;
+    stiffness.output = (dir / "stiffness_vs_nodes_per_cell.png").string();
+    stiffness.title = "total contact stiffness / area-weighted continuum (" + std::to_string(report.dimension) + "D)";
+    stiffness.xLabel = "surface nodes per cell length";
+    stiffness.yLabel = "F / (kn / w_ref int delta dA)";
+    stiffness.logX = true;
+    stiffness.logY = true;
+    for (const char* law : {"nodes_per_cell", "nodes_per_cell_per_node"}) {
+      for (const char* contact : {"plane", "pair"}) {
+        io::PlotSeries s;
+        s.csv = files.csv;
+        s.x = "nodes_per_cell";
+        s.y = "value";
+        s.title = std::string(law == std::string("nodes_per_cell") ? "area-weighted" : "per-node") + ", " + contact;
+        s.filterColumn = "curve";
+        s.filterValue = std::string("stiffness_") + contact + "/" + law;
+        stiffness.series.push_back(s);
       }
     }
+    drawOrSkip(stiffness, "stiffness_vs_nodes_per_cell", files);
+
+    // Convergence in the grid: the errors of the exact-reference metrics against cells across.
+    io::PlotSpec cells;
+    cells.output = (dir / "error_vs_cells.png").string();
+    cells.title = "error against grid resolution (" + std::to_string(report.dimension) + "D)";
+    cells.xLabel = "grid cells across the grain";
+    cells.yLabel = "error (relative)";
+    cells.logX = true;
+    cells.logY = true;
+    for (const char* m : {"volume_sphere", "inertia_sphere", "inertia_grain", "force_plane", "force_pair",
+                          "ripple_plane", "cap_volume", "restitution"}) {
+      io::PlotSeries s;
+      s.csv = files.csv;
+      s.x = "cells_across";
+      s.y = "error";
+      s.title = m;
+      s.filterColumn = "curve";
+      s.filterValue = std::string(m) + "/cells";
+      cells.series.push_back(s);
+    }
+    drawOrSkip(cells, "error_vs_cells", files);
   }
   return files;
 }

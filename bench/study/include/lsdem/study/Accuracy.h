@@ -17,8 +17,10 @@
 ///
 /// Every measurement is a pure function of its setting (fixed seeds, fixed
 /// orientation sequences), so the errors are reproducible; only the timings
-/// vary between machines. Timings are medians of repeats with
-/// std::chrono::steady_clock.
+/// vary between machines. Costs are CPU seconds of the measuring thread
+/// (CLOCK_THREAD_CPUTIME_ID) with the timed code run on one OpenMP thread,
+/// medians of repeats: other programs running on the machine at the same time
+/// take wall time from the study but hardly change these figures.
 ///
 /// Units: the study's grains have a diameter of 1 m (mass properties, contact
 /// forces, splits) or 1 cm (restitution at 1 m/s, overlaps ~5% of the
@@ -54,11 +56,12 @@ struct MetricValue {
 };
 
 /// The cost of one setting, measured on the packing run and the sphere split.
+/// Times are CPU seconds of one thread (the timed code runs single-threaded).
 struct AccuracyCost {
-  double stepSeconds = 0.0;        ///< wall seconds per step of the packing (median over blocks of steps)
-  double runSeconds = 0.0;         ///< stepSeconds x steps the packing needs for its fixed simulated time
+  double stepSeconds = 0.0;        ///< CPU seconds per packing step on 1 thread (median over blocks of 50 steps)
+  double runSeconds = 0.0;         ///< stepSeconds x steps the packing needs for its fixed simulated time, CPU s
   double nodeChecksPerStep = 0.0;  ///< nodes tested against a level set or plane per step (packing, mean)
-  double splitSeconds = 0.0;       ///< wall seconds of one sphere split (median of repeats)
+  double splitSeconds = 0.0;       ///< CPU seconds of one sphere split on 1 thread (median of repeats)
   double bytesPerParticle = 0.0;   ///< Shape::bytes() of a grain + the particle store's bytes per particle
   double steps = 0.0;              ///< steps of the packing run
 };
@@ -79,6 +82,7 @@ struct ParetoChoice {
   bool reached = false;     ///< false: no setting of the sweep reaches it
   std::string knob;         ///< the cheapest setting's knob ...
   double setting = 0.0;     ///< ... and value
+  AccuracySetting config;   ///< its full configuration
   double error = 0.0;       ///< its error
   double runSeconds = 0.0;  ///< its cost (AccuracyCost::runSeconds)
 };
@@ -95,21 +99,54 @@ struct AccuracyOptions {
 struct AccuracyReport {
   int dimension = 3;
   bool quick = false;
-  double wallSeconds = 0.0;              ///< the whole study
+  double wallSeconds = 0.0;              ///< the whole study, wall clock
+  double cpuSeconds = 0.0;               ///< the whole study, CPU seconds of all its threads
   std::vector<AccuracyPoint> points;     ///< every (setting, metric) row
   std::vector<ParetoChoice> pareto;      ///< per metric and target (1%, 0.1%)
   std::vector<std::string> notes;        ///< notes for the table (references used, what is not offered)
 };
 
+/// @brief CPU seconds used so far by the calling thread
+/// (clock_gettime(CLOCK_THREAD_CPUTIME_ID)); differences time code on that
+/// thread whatever else runs on the machine.
+double threadCpuSeconds();
+
+/// @brief CPU seconds used so far by the whole process, all threads
+/// (clock_gettime(CLOCK_PROCESS_CPUTIME_ID)).
+double processCpuSeconds();
+
+/// @brief While alive, OpenMP parallel regions started by the constructing
+/// thread run on one thread (omp_set_num_threads(1)); the destructor restores
+/// the previous count. Results do not change (lsdem is bitwise identical for
+/// any thread count); only the timing becomes a one-thread CPU time.
+/// Without OpenMP it does nothing.
+class SingleThreadScope {
+ public:
+  SingleThreadScope();
+  ~SingleThreadScope();
+  SingleThreadScope(const SingleThreadScope&) = delete;
+  SingleThreadScope& operator=(const SingleThreadScope&) = delete;
+
+ private:
+  int previousThreads_ = 1;  ///< omp_get_max_threads() before the scope
+};
+
 /// @brief Runs the sweep of `options` and returns every point and the Pareto choices.
-/// @note Throws std::invalid_argument for a dimension other than 2 or 3.
+/// The distinct configurations are measured on two worker threads, each with
+/// its OpenMP regions on one thread (SingleThreadScope); the results do not
+/// depend on that (every measurement is a pure function of its setting), and
+/// the progress lines arrive in the order the settings finish.
+/// @note Throws std::invalid_argument for a dimension other than 2 or 3; an
+/// exception thrown by a measurement is rethrown after the workers have stopped.
 AccuracyReport runAccuracyStudy(const AccuracyOptions& options);
 
 /// @brief For each metric and target error, the setting with the smallest
 /// AccuracyCost::runSeconds whose error is at most the target.
 std::vector<ParetoChoice> paretoFront(const std::vector<AccuracyPoint>& points, const std::vector<double>& targets);
 
-/// @brief The Pareto choices as printable lines ("metric  target  knob=value  error  seconds").
+/// @brief The Pareto choices as printable lines: metric, target, the
+/// cheapest configuration (cells, nodes per cell, law, dt fraction), its error
+/// and its packing run's CPU seconds.
 std::string paretoText(const std::vector<ParetoChoice>& choices);
 
 // ---- the measurements (each a pure function of its setting) ----
@@ -147,7 +184,7 @@ std::vector<MetricValue> restitutionMetrics(const AccuracySetting& setting);
 /// (breakage::splitShape): the corrected volumes and the centroids of the two
 /// pieces against the exact spherical caps (circular segments), and the mass
 /// balance of the split before correction (SplitResult::rawRelativeError).
-/// @param splitSeconds receives the median wall time of one split, s.
+/// @param splitSeconds receives the median CPU time of one split on one thread, s.
 template <int D>
 std::vector<MetricValue> splitMetrics(const AccuracySetting& setting, double& splitSeconds);
 
@@ -162,21 +199,30 @@ struct PackingResult {
 
 /// @brief A fixed small packing settled by gravity in a box of planes:
 /// `grains` random grains (equivalent diameters 0.8-1.2 cm, 8 distinct
-/// shapes) dropped from a loose lattice and run for a fixed simulated time.
+/// shapes) dropped from a loose lattice and run for a fixed simulated time,
+/// the top layer's fall time 2 sqrt(2 H / g) plus `settleSeconds`. The run is
+/// single-threaded and its cost is the thread's CPU time (AccuracyCost).
+/// @param grains number of grains, >= 1.
+/// @param settleSeconds simulated settling time after the fall, s, >= 0.
+/// @note Throws std::invalid_argument for grains < 1 or a negative settling time.
 template <int D>
-PackingResult packingRun(const AccuracySetting& setting, int grains);
+PackingResult packingRun(const AccuracySetting& setting, int grains, double settleSeconds = 0.1);
 
 /// The files writeAccuracyFiles made.
 struct AccuracyFiles {
   std::string csv;                 ///< accuracy.csv
   std::string markdown;            ///< accuracy.md
-  std::vector<std::string> plots;  ///< error_vs_time_<metric>.png (empty without gnuplot)
+  /// error_vs_time_<metric>.png, stiffness_vs_nodes_per_cell.png and
+  /// error_vs_cells.png (empty without gnuplot)
+  std::vector<std::string> plots;
   std::vector<std::string> skippedPlots;  ///< metrics not plotted (no positive error to draw on a log axis)
 };
 
 /// @brief Writes accuracy.csv (one row per point, long format), accuracy.md
 /// (the table, notes and Pareto choices) and, when gnuplot is installed,
-/// error_vs_time_<metric>.png (log-log, one curve per knob) into `directory`
+/// error_vs_time_<metric>.png (log-log, one curve per knob), the stiffness
+/// ratio against nodes per cell for both laws (stiffness_vs_nodes_per_cell.png)
+/// and the errors against cells across (error_vs_cells.png) into `directory`
 /// (created if missing). Each file is written to a temporary name and renamed.
 /// @note Throws std::runtime_error when a file cannot be written.
 AccuracyFiles writeAccuracyFiles(const AccuracyReport& report, const std::string& directory);
