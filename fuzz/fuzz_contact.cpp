@@ -141,7 +141,10 @@ void run(fuzz::FuzzInput& in) {
     for (const auto& nc : solver.nodeContacts()) {
       if (!nc.point.allFinite() || !nc.force.allFinite() || !std::isfinite(nc.overlap)) violation("node contact");
       if (!(nc.overlap >= 0.0)) violation("negative overlap", nc.overlap);
-      if (std::abs(nc.normal.norm() - 1.0) > 1e-6) violation("normal not unit", nc.normal.norm());
+      if (std::abs(nc.normal.norm() - 1.0) > 1e-6) {
+        std::fprintf(stderr, "node %u ownerIsB %d overlap %g point %g %g\n", nc.node, int(nc.ownerIsB), nc.overlap, nc.point[0], nc.point[1]);
+        violation("normal not unit", nc.normal.norm());
+      }
       largest = std::max(largest, nc.force.norm());
     }
     if (!std::isfinite(solver.elasticEnergy()) || solver.elasticEnergy() < 0.0) {

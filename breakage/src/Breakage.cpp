@@ -207,6 +207,13 @@ void Breakage<D>::applyQueue(World<D>& world) {
     ev.parentMass = p.mass[i];
     ev.parentMomentum = p.mass[i] * p.velocity[i];
     ev.parentKineticEnergy = p.kineticEnergy(i);
+    if constexpr (D == 2) {
+      ev.inertiaEnergyBound =
+          0.5 * split.inertiaRelativeError * p.inertia[i] * p.angularVelocity[i] * p.angularVelocity[i];
+    } else {
+      ev.inertiaEnergyBound =
+          0.5 * split.inertiaRelativeError * p.inertia[i].norm() * p.angularVelocity[i].squaredNorm();
+    }
     rawVolumeError_ += std::abs(split.rawRelativeError) * split.parentVolume;
 
     // Fragments: the parent's density and motion, eq. 13 strengths; small ones leave as fines.
@@ -301,6 +308,7 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
     out.put(e.fragmentMomentum);
     out.put(e.fragmentMass);
     out.put(e.parentKineticEnergy);
+    out.put(e.inertiaEnergyBound);
     out.put(e.fragmentKineticEnergy);
   }
 }
@@ -340,6 +348,7 @@ void Breakage<D>::loadState(dynamics::StateReader& in) {
     e.fragmentMomentum = in.get<geometry::Vec<D>>();
     e.fragmentMass = in.get<double>();
     e.parentKineticEnergy = in.get<double>();
+    e.inertiaEnergyBound = in.get<double>();
     e.fragmentKineticEnergy = in.get<double>();
   }
 }

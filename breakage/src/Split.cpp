@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <optional>
@@ -169,6 +170,54 @@ std::vector<Grid<D>> sidePieces(const Grid<D>& side, int padding) {
   return out;
 }
 
+// Merges nodes closer than `tolerance` (world units) into the first of them,
+// which takes their weights, so the node set keeps its total weight. Parent
+// nodes pushed back onto a small piece's zero level set can land on one point
+// (a sliver's rim corner takes every parent node across from it): with the
+// per-node law each copy is a full contact spring, so k copies make that point
+// k times as stiff and put k times the elastic energy into a contact the
+// moment the fragment is born. Deterministic: nodes are taken in order and
+// only looked up in the cells around them.
+template <int D>
+void mergeCoincidentNodes(NodeSet<D>& nodes, double tolerance) {
+  using Key = std::array<std::int64_t, 3>;
+  const auto cellOf = [&](const Vec<D>& x) {
+    Key key{0, 0, 0};
+    for (int a = 0; a < D; ++a) key[std::size_t(a)] = std::int64_t(std::floor(x[a] / tolerance));
+    return key;
+  };
+  std::map<Key, std::vector<std::size_t>> cells;  // kept nodes by cell
+  NodeSet<D> kept;
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const Vec<D>& x = nodes.positions[i];
+    const Key home = cellOf(x);
+    // The kept node within the tolerance, if any, among the 3^D cells around.
+    std::size_t found = kept.size();
+    for (int q = 0; q < (D == 2 ? 9 : 27) && found == kept.size(); ++q) {
+      Key key = home;
+      key[0] += q % 3 - 1;
+      key[1] += (q / 3) % 3 - 1;
+      if constexpr (D == 3) key[2] += q / 9 - 1;
+      const auto it = cells.find(key);
+      if (it == cells.end()) continue;
+      for (std::size_t j : it->second) {
+        if ((kept.positions[j] - x).norm() < tolerance) {
+          found = j;
+          break;
+        }
+      }
+    }
+    if (found < kept.size()) {
+      kept.weights[found] += nodes.weights[i];
+    } else {
+      cells[home].push_back(kept.size());
+      kept.positions.push_back(x);
+      kept.weights.push_back(nodes.weights[i]);
+    }
+  }
+  nodes = std::move(kept);
+}
+
 }  // namespace
 
 template <int D>
@@ -268,6 +317,21 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
       // Back onto the piece's own phi = 0: the multilinear interpolant rounds the
       // max() kink of eq. 14-15 at the new rim by up to ~h/4.
       for (Vec<D>& x : nodes.positions) x = geometry::projectOntoZero(side.pieces[k], x, 1e-4, 10);
+      // A node the projection could not bring to the piece's surface (a
+      // parent node several cells from the piece it was given to, left up to a
+      // cell outside it and outside the parent: found by fuzz_split) is not a
+      // surface node of this piece: dropped.
+      std::size_t keptCount = 0;
+      for (std::size_t n = 0; n < nodes.size(); ++n) {
+        if (!(std::abs(side.pieces[k].value(nodes.positions[n])) <= 0.01 * h)) continue;
+        nodes.positions[keptCount] = nodes.positions[n];
+        nodes.weights[keptCount] = nodes.weights[n];
+        ++keptCount;
+      }
+      nodes.positions.resize(keptCount);
+      nodes.weights.resize(keptCount);
+      // Nodes that landed on one point are one node.
+      mergeCoincidentNodes(nodes, 0.25 * h / nodesPerCell);
       if (nodes.empty()) {
         if constexpr (D == 2) {
           nodes = geometry::surfaceNodes(side.pieces[k], nodesPerCell);
@@ -301,11 +365,17 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
   const double scale = result.parentVolume / result.rawVolumeSum;
   for (Fragment<D>& fragment : result.fragments) fragment.volume = fragment.rawVolume * scale;
 
-  // Move the fragments so their volume-weighted centroid is the parent's (0 in its body frame).
+  // The fragments' common centre of mass (parent body frame), a small fraction
+  // of a cell from the parent's centroid. The fragments stay where the
+  // parent's material was: moving them all by -centroidShift (as an earlier
+  // version did, to keep the centre of mass) pushed their surfaces up to a
+  // tenth of a cell into the walls and grains the parent touched, and each
+  // split then started contact springs from nothing. Momentum is kept through
+  // the velocities instead (fragmentState()).
   Vec<D> firstMoment = Vec<D>::Zero();
   for (const Fragment<D>& fragment : result.fragments) firstMoment += fragment.volume * fragment.childToParent.translation;
   result.centroidShift = firstMoment / result.parentVolume;
-  for (Fragment<D>& fragment : result.fragments) fragment.childToParent.translation -= result.centroidShift;
+  for (Fragment<D>& fragment : result.fragments) fragment.centreOfMass = result.centroidShift;
 
   // Inertia mismatch: the fragments' corrected inertias moved to the parent's
   // centroid (parallel axes) against the parent's, per unit density. In 2D the
@@ -314,7 +384,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
   Mat<D> combined = Mat<D>::Zero();
   for (const Fragment<D>& fragment : result.fragments) {
     const Mat<D>& rc = fragment.childToParent.rotation;
-    const Vec<D>& c = fragment.childToParent.translation;
+    const Vec<D> c = fragment.childToParent.translation - result.centroidShift;
     combined += fragment.massScale() * rc * fragment.shape->mass().inertiaTensor() * rc.transpose() +
                 fragment.volume * (c.squaredNorm() * Mat<D>::Identity() - c * c.transpose());
   }
@@ -335,8 +405,10 @@ FragmentState<D> fragmentState(const Fragment<D>& fragment, const Vec<D>& parent
   const Vec<D> lever = parentRotation * fragment.childToParent.translation;
   state.position = parentPosition + lever;
   state.rotation = parentRotation * fragment.childToParent.rotation;
-  // Velocity: the parent's rigid-body velocity at the child's centroid.
-  state.velocity = parentVelocity + dynamics::Rotation<D>::velocityAt(parentSpin, lever);
+  // Velocity: the parent's rigid-body motion (its centroid's velocity carried
+  // by the fragments' common centre of mass), at the child's centroid.
+  state.velocity = parentVelocity + dynamics::Rotation<D>::velocityAt(
+                                        parentSpin, Vec<D>(lever - parentRotation * fragment.centreOfMass));
   state.angularVelocity = parentSpin;
   return state;
 }

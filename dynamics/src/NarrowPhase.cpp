@@ -182,7 +182,7 @@ inline double boundaryWeight(double overlap, double normalSpeed, double dt) {
 // `invMassSum` = 1/ma + 1/mb (1/ma against a boundary); `centreB` is the point
 // b's torque is taken about; velocityB(x) is b's material velocity at x.
 template <int D, NormalModel Normal, bool Friction, bool Damping, class VelocityB>
-void applyLaw(PairContact<D>& rec, ThreadBuffers<D>& buf, std::size_t begin, const LawConstants& law,
+void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, std::size_t begin, const LawConstants& law,
               double invMassSum, double hertzRadius, const Vec<D>& xa, const Vec<D>& va, const Spin<D>& wa,
               const Vec<D>& centreB, const VelocityB& velocityB, const HistoryView<D>& history) {
   const std::size_t end = buf.nodes.size();
@@ -240,6 +240,13 @@ void applyLaw(PairContact<D>& rec, ThreadBuffers<D>& buf, std::size_t begin, con
         const double cn = damping * share * boundaryWeight(c.overlap, vn, law.dt);
         fn -= cn * vn;
         power += cn * vn * vn;
+        // The dashpot's own force and moments, for the energy ledger.
+        const Vec<D> fd = (-cn * vn) * c.normal;
+        dash.force += fd;
+        dash.torqueA += Rotation<D>::moment(c.point - xa, fd);
+        dash.torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-fd));
+        dash.power += cn * vn * vn;
+        dash.boundaryPower += fd.dot(velocityB(c.point));
       }
       force = fn * c.normal;
       if constexpr (Friction) {
@@ -394,6 +401,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   threads_.resize(std::size_t(threadCount()));
   for (ThreadBuffers<D>& buf : threads_) {
     buf.pairs.clear();
+    buf.dashpots.clear();
     buf.nodes.clear();
     buf.work.clear();
     buf.nodeChecks = 0;
@@ -461,10 +469,12 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       const Vec<D>& vb = p.velocity[ib];
       const Spin<D>& wb = p.angularVelocity[ib];
       const auto velocityB = [&](const Vec<D>& x) { return Vec<D>(vb + Rotation<D>::velocityAt(wb, x - xb)); };
-      applyLaw<D, Normal, Friction, Damping>(rec, buf, begin, law, p.invMass[ia] + p.invMass[ib], radius, xa,
+      PairDashpot<D> dash;
+      applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, law, p.invMass[ia] + p.invMass[ib], radius, xa,
                                              p.velocity[ia], p.angularVelocity[ia], xb, velocityB,
                                              historyOf(p.id[ia], p.id[ib]));
       buf.pairs.push_back(rec);
+      buf.dashpots.push_back(dash);
     });
   }
 
@@ -490,11 +500,13 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         rec.nodeCount = std::uint32_t(buf.nodes.size() - begin);
         const double radius = Normal == NormalModel::Hertz ? equivalentRadius<D>(s.volume()) : 0.0;
         const auto velocityB = [&](const Vec<D>&) { return plane.velocity; };
-        applyLaw<D, Normal, Friction, Damping>(rec, buf, begin, law, p.invMass[std::size_t(i)], radius, x,
+        PairDashpot<D> dash;
+      applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, law, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
                                                plane.point, velocityB,
                                                historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)));
         buf.pairs.push_back(rec);
+        buf.dashpots.push_back(dash);
       }
     });
   }
@@ -527,11 +539,13 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
           radius = combinedRadius(equivalentRadius<D>(s.volume()), equivalentRadius<D>(ts.volume()));
         }
         const auto velocityB = [&](const Vec<D>& at) { return tool.velocityAt(at); };
-        applyLaw<D, Normal, Friction, Damping>(rec, buf, begin, law, p.invMass[std::size_t(i)], radius, x,
+        PairDashpot<D> dash;
+      applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, law, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
                                                tool.position, velocityB,
                                                historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)));
         buf.pairs.push_back(rec);
+        buf.dashpots.push_back(dash);
       }
     });
   }
@@ -555,6 +569,7 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   // Copy every task's records to its place (tasks are independent).
   const bool friction = law_.hasFriction;
   pairs_.resize(pairTotal);
+  dashpots_.resize(pairTotal);
   nodes_.resize(nodeTotal);
   shear_.resize(friction ? nodeTotal : 0);
   const std::ptrdiff_t taskCount = std::ptrdiff_t(tasks_.size());
@@ -566,6 +581,7 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
       PairContact<D> rec = buf.pairs[t.firstPair + q];
       rec.firstNode = std::uint32_t(rec.firstNode - t.firstNode + t.outNode);
       pairs_[t.outPair + q] = rec;
+      dashpots_[t.outPair + q] = buf.dashpots[t.firstPair + q];
     }
     for (std::uint32_t q = 0; q < t.nodeCount; ++q) {
       nodes_[t.outNode + q] = buf.nodes[t.firstNode + q];
@@ -665,6 +681,7 @@ template <int D>
 void ContactSolver<D>::loadState(StateReader& in) {
   in.expectTag("contacts");
   in.getVector(pairs_);
+  dashpots_.assign(pairs_.size(), PairDashpot<D>{});
   in.getVector(nodes_);
   in.getVector(shear_);
   in.getVector(history_);

@@ -255,16 +255,21 @@ StabilityResult massRatioCase(CaseLength length) {
   const auto s = sphere<D>(r, 10);
   addLattice<D>(w, s, Vec<D>::Constant(0.5 * gap), gap, {n, 1, n}, 0.0);
 
-  // The heavy grain sits in the hollow above the middle of the layer.
+  // The heavy grain is released touching the grains of the hollow above the
+  // middle of the layer (centres 2 r apart, no gap, no overlap), so it comes
+  // to rest on them.
   ParticleDef<D> heavy;
   heavy.shape = s;
   heavy.density = 2650.0 * 1e4;
-  heavy.position = Vec<D>::Constant(0.5 * n * gap);
-  heavy.position[1] = 0.5 * gap + 1.8 * r;
+  heavy.position = Vec<D>::Constant(gap * double(n / 2));  // between two (2D) or four (3D) grains
+  const double offAxis = 0.5 * gap * std::sqrt(double(D - 1));  // horizontal distance to a supporting centre
+  heavy.position[1] = 0.5 * gap + std::sqrt(4.0 * r * r - offAxis * offAxis);
   w.addParticle(heavy);
 
   StabilityMonitor<D> monitor(w, nullptr, box);
-  runMonitored(w, monitor, isLong ? 200000 : (D == 2 ? 6000 : 3000), out, [] { return false; });
+  // Short: long enough for the heavy grain to load its supports (in 3D the
+  // light grains' step is 25 x smaller than in 2D).
+  runMonitored(w, monitor, isLong ? 200000 : (D == 2 ? 6000 : 20000), out, [] { return false; });
   return finishCase(monitor, out, t0);
 }
 
@@ -291,8 +296,11 @@ StabilityResult toolCrushCase(CaseLength length) {
   const double width = n * gap;
   const Box<D> box = boxOf<D>(width, rows * gap + 6.0 * r, width);
   closeBox<D>(w, box);
+  // The bed starts without overlaps (a jitter of 0.02 r against gaps of 0.05 r;
+  // 0.05 r put neighbours 0.05 r into each other, and in 3D the grains broke
+  // on their initial springs within a few steps, before the tool touched them).
   const auto s = sphere<D>(r, D == 2 ? 10 : 8);
-  addLattice<D>(w, s, Vec<D>::Constant(0.5 * gap), gap, {n, rows, n}, 0.05 * r);
+  addLattice<D>(w, s, Vec<D>::Constant(0.5 * gap), gap, {n, rows, n}, 0.02 * r);
 
   // The tool: a box slightly narrower than the container, above the bed, moving down.
   geometry::ShapeDef<D> toolDef;
@@ -305,6 +313,15 @@ StabilityResult toolCrushCase(CaseLength length) {
   tool.name = "ram";
   tool.shape = geometry::buildShape(toolDef);
   dynamics::ConstantVelocity<D> motion;
+  // A tool's pose is that of its body frame, the principal frame of the box
+  // (in 3D its thin axis is the third principal axis, not y): turn the body
+  // so the box's own axes are the world's.
+  const geometry::Mat<D> boxAxes = tool.shape->bodyToGrid().rotation;
+  if constexpr (D == 2) {
+    motion.orientation = std::atan2(boxAxes(1, 0), boxAxes(0, 0));
+  } else {
+    motion.orientation = Eigen::Quaterniond(boxAxes).normalized();
+  }
   motion.position = Vec<D>::Constant(0.5 * width);
   motion.position[1] = rows * gap + 2.1 * r;
   motion.velocity = -0.5 * Vec<D>::Unit(1);
@@ -396,11 +413,19 @@ StabilityResult gridEdgeCase(CaseLength length) {
     p.position = b.position + onFace - node;
     p.velocity = Vec<D>::Unit(0) * 0.5;
     w.addParticle(p);
-    // A second one crossing the large grain's grid corner diagonally, grazing its surface.
+    // A second one entering the large grain's grid near its corner and
+    // grazing its surface: on a straight path its centre would pass 1.1 R from
+    // the large grain's centre (0.05 R inside the sum of the radii), starting
+    // 1.5 R before that point, clear of the large grain.
     ParticleDef<D> q = p;
-    q.position = b.position + Vec<D>::Constant(0.75 * R);
-    q.position[0] -= 1.2 * R;
-    q.velocity = Vec<D>::Unit(0) * 1.0 - Vec<D>::Unit(1) * 0.3;
+    Vec<D> along = Vec<D>::Zero(), across = Vec<D>::Zero();
+    along[0] = 1.0;
+    along[1] = -0.3;
+    along.normalize();
+    across[0] = -along[1];
+    across[1] = along[0];
+    q.position = b.position - 1.5 * R * along + 1.1 * R * across;
+    q.velocity = along * std::sqrt(1.0 + 0.3 * 0.3);
     w.addParticle(q);
   }
 
@@ -430,7 +455,8 @@ StabilityResult gridEdgeCase(CaseLength length) {
   }
 
   StabilityMonitor<D> monitor(w, nullptr, box);
-  runMonitored(w, monitor, isLong ? 200000 : (D == 2 ? 8000 : 4000), out, [] { return false; });
+  // Short: in 3D long enough for the grazing grain to reach the large one.
+  runMonitored(w, monitor, isLong ? 200000 : (D == 2 ? 8000 : 16000), out, [] { return false; });
   return finishCase(monitor, out, t0);
 }
 

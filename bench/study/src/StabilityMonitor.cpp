@@ -158,7 +158,7 @@ void StabilityMonitor<D>::observe() {
       const breakage::BreakageEvent<D>& ev = events[eventsSeen_];
       out_.maxSplitMassError =
           std::max(out_.maxSplitMassError, std::abs(ev.fragmentMass - ev.parentMass) / ev.parentMass);
-      const double allowed = ev.parentKineticEnergy * (1.0 + ev.inertiaRelativeError);
+      const double allowed = ev.parentKineticEnergy + ev.inertiaEnergyBound;
       const double gain = (ev.fragmentKineticEnergy - allowed) / std::max(ev.parentKineticEnergy, 1e-300);
       if (ev.fragmentKineticEnergy > allowed) out_.maxSplitEnergyGain = std::max(out_.maxSplitEnergyGain, gain);
       if (!std::isfinite(ev.fragmentKineticEnergy) || !std::isfinite(ev.fragmentMass)) ++out_.nonFinite;

@@ -113,6 +113,11 @@ struct BreakageEvent {
   geometry::Vec<D> fragmentMomentum = geometry::Vec<D>::Zero();  ///< of all fragments incl. fines, kg m/s
   double fragmentMass = 0.0;                   ///< of all fragments incl. fines, kg
   double parentKineticEnergy = 0.0;            ///< J
+  /// J: the largest change of kinetic energy the split's inertia mismatch can
+  /// make, (1/2) inertiaRelativeError |I_parent| |w|^2 (Split.h: the change is
+  /// (1/2) w.(I_comb - I_parent) w; 3D: |I| the Frobenius norm of the principal
+  /// moments, which bounds the quadratic form).
+  double inertiaEnergyBound = 0.0;
   double fragmentKineticEnergy = 0.0;          ///< of all fragments incl. fines, J
 };
 

@@ -25,29 +25,34 @@
 ///     inertia_k = s_k * rho * (the child shape's own inertia per unit density),
 /// which keeps the child's radius of gyration that of its own grid.
 ///
-/// Centroids. The fragments' volume-weighted centroid differs from the
-/// parent's centroid by the same kind of discretisation error (a small fraction
-/// of a cell). The split moves every fragment rigidly by -c_bar, with
+/// Centroids. The fragments stay exactly where the parent's material was
+/// (c_k: child centroid in the parent body frame, from its own grid). Their
+/// volume-weighted centroid
 ///     c_bar = sum_k volume_k c_k / parentVolume   (parent body frame, reported as
-///     SplitResult::centroidShift),
-/// so that sum_k volume_k c_k = 0 to round-off: the centre of mass does not jump
-/// when the grain breaks.
+///     SplitResult::centroidShift and kept in Fragment::centreOfMass)
+/// differs from the parent's centroid (0) by the discretisation error of the
+/// cut, a small fraction of a cell: the centre of mass moves by R c_bar when
+/// the grain breaks. (Moving the fragments by -c_bar instead would keep the
+/// centre of mass but push their surfaces by c_bar into whatever the parent
+/// touched, and start contact springs from nothing.)
 ///
 /// Momentum (the rule fragmentState() applies). A fragment takes the parent's
-/// rigid-body velocity at its centroid and the parent's angular velocity,
-///     v_k = v + w x (x_k - x),   w_k = w,
-/// with x the parent's centroid and x_k = x + R c_k (world frame). Then
-///   - linear momentum: sum_k m_k v_k = M v + w x (sum_k m_k R c_k) = M v
-///     exactly (to round-off), since sum_k m_k = M and sum_k m_k c_k = 0;
+/// rigid-body motion with the parent's centroid velocity carried by the
+/// fragments' centre of mass, and the parent's angular velocity,
+///     v_k = v + w x (x_k - x_bar),   w_k = w,
+/// with x_k = x + R c_k and x_bar = x + R c_bar (world frame). Then
+///   - linear momentum: sum_k m_k v_k = M v + w x (sum_k m_k (x_k - x_bar)) = M v
+///     exactly (to round-off), since sum_k m_k = M and sum_k m_k c_k = M c_bar;
 ///   - angular momentum about any point: orbital + spin parts give
-///     sum_k (m_k x_k x v_k + I_k w) = M x x v + I_comb w, with
-///     I_comb = sum_k [I_k + m_k (|r_k|^2 1 - r_k r_k^T)], r_k = R c_k (the
-///     parallel-axis sum about the parent's centroid; in 2D the scalar
-///     sum_k [I_k + m_k |r_k|^2]). It equals the parent's I w + M x x v exactly
-///     when the inertias add up, I_comb = I_parent; otherwise the change is
+///     sum_k (m_k x_k x v_k + I_k w) = M x_bar x v + I_comb w, with
+///     I_comb = sum_k [I_k + m_k (|r_k|^2 1 - r_k r_k^T)], r_k = R (c_k - c_bar)
+///     (the parallel-axis sum about the fragments' centre of mass; in 2D the
+///     scalar sum_k [I_k + m_k |r_k|^2]): the parent's I w + M x x v up to
 ///     (I_comb - I_parent) w, whose relative size is
 ///     SplitResult::inertiaRelativeError (discretisation error, ~1e-3 at 20
-///     cells across). Kinetic energy changes by (1/2) w.(I_comb - I_parent) w.
+///     cells across), and M (R c_bar) x v, the momentum's moment over the
+///     centre of mass's sub-cell move. Kinetic energy changes by
+///     (1/2) w.(I_comb - I_parent) w.
 
 #include "lsdem/dynamics/Rotation.h"
 #include "lsdem/geometry/Csg.h"
@@ -83,9 +88,13 @@ struct Fragment {
   /// parent's grid frame), nodes and mass properties in its own principal body frame.
   std::shared_ptr<const geometry::Shape<D>> shape;
   /// Child body frame -> parent body frame: translation = child centroid in
-  /// parent body coordinates (after the centroid shift, see the file comment),
+  /// parent body coordinates (where the parent's material was, see the file comment),
   /// rotation = child principal axes in parent body coordinates.
   geometry::Rigid<D> childToParent;
+  /// The centre of mass of all the split's fragments, parent body frame
+  /// (SplitResult::centroidShift); fragmentState() moves it with the parent's
+  /// centroid velocity.
+  geometry::Vec<D> centreOfMass = geometry::Vec<D>::Zero();
   double rawVolume = 0.0;  ///< volume (area in 2D) from the child's own grid (eq. 24-30), world units^D
   double volume = 0.0;     ///< corrected volume rawVolume * parentVolume / rawVolumeSum, world units^D
   int side = 0;            ///< -1: the phi_f < 0 side (eq. 15); +1: the phi_f > 0 side (eq. 14)
@@ -124,12 +133,12 @@ struct SplitResult {
   /// (rawVolumeSum + droppedRawVolume - parentVolume) / parentVolume: the
   /// discretisation error of the split before correction (0 when not split).
   double rawRelativeError = 0.0;
-  /// c_bar: the corrected-volume-weighted centroid of the fragments before
-  /// they were moved by -c_bar, parent body frame, world units.
+  /// c_bar: the corrected-volume-weighted centroid of the fragments (their
+  /// common centre of mass), parent body frame, world units.
   geometry::Vec<D> centroidShift = geometry::Vec<D>::Zero();
   /// |I_comb - I_parent| / |I_parent| per unit density (2D: polar moments;
   /// 3D: Frobenius norms of the tensors), with the corrected inertias about the
-  /// parent's centroid: the relative change of angular momentum (file comment).
+  /// fragments' centre of mass: the relative change of spin angular momentum (file comment).
   double inertiaRelativeError = 0.0;
 };
 
@@ -178,12 +187,12 @@ template <int D>
 struct FragmentState {
   geometry::Vec<D> position = geometry::Vec<D>::Zero();    ///< centroid, world frame, m
   geometry::Mat<D> rotation = geometry::Mat<D>::Identity(); ///< child body -> world rotation
-  geometry::Vec<D> velocity = geometry::Vec<D>::Zero();    ///< v + w x (x_k - x), world frame, m/s
+  geometry::Vec<D> velocity = geometry::Vec<D>::Zero();    ///< v + w x (x_k - x_bar), world frame, m/s
   dynamics::Spin<D> angularVelocity = dynamics::Rotation<D>::zeroSpin();  ///< the parent's w, world frame, rad/s
 };
 
 /// @brief The rigid-body rule for a fragment's pose and velocity (file
-/// comment): x_k = x + R c_k, R_k = R R_c, v_k = v + w x (x_k - x), w_k = w.
+/// comment): x_k = x + R c_k, R_k = R R_c, v_k = v + w x (x_k - x - R c_bar), w_k = w.
 /// @param fragment a fragment of the parent's split.
 /// @param parentPosition parent centroid x, world frame, m.
 /// @param parentRotation parent body -> world rotation R.

@@ -64,6 +64,18 @@ struct BoundaryLoads {
   std::vector<Spin<D>> toolTorque;  ///< torque of the particles on each tool about ToolPose::position, N m
 };
 
+/// The contact dashpot's part of one PairContact (pairDashpots() is aligned
+/// with pairContacts()): what the energy ledger needs to book the dashpot's
+/// work exactly (World.h), since the dashpot's force depends on the velocity.
+template <int D>
+struct PairDashpot {
+  Vec<D> force = Vec<D>::Zero();              ///< dashpot force on a, N (b gets -force), world frame
+  Spin<D> torqueA = Rotation<D>::zeroSpin();  ///< its torque on a about a's centroid, N m
+  Spin<D> torqueB = Rotation<D>::zeroSpin();  ///< torque of -force on b about b's centroid (particle pairs), N m
+  double power = 0.0;          ///< sum over nodes of c_i v_n^2 at the sampled velocities, W (part of dissipatedPower)
+  double boundaryPower = 0.0;  ///< plane and tool pairs: sum over nodes of the node's dashpot force . the boundary's velocity there, W
+};
+
 namespace detail {
 
 /// Per-node working values of the contact solver (internal).
@@ -79,6 +91,7 @@ struct NodeWork {
 template <int D>
 struct alignas(64) ThreadBuffers {
   std::vector<PairContact<D>> pairs;
+  std::vector<PairDashpot<D>> dashpots;  ///< aligned with pairs
   std::vector<NodeContact<D>> nodes;
   std::vector<NodeWork<D>> work;
   std::uint64_t nodeChecks = 0;
@@ -169,6 +182,9 @@ class ContactSolver {
   std::span<const PairContact<D>> toolContacts() const {
     return {pairs_.data() + particlePairCount_ + planePairCount_, pairs_.size() - particlePairCount_ - planePairCount_};
   }
+  /// @brief The dashpot's part of each record of pairContacts() (aligned with
+  /// it); all zero when the law has no damping.
+  const std::vector<PairDashpot<D>>& pairDashpots() const { return dashpots_; }
   /// @brief Node contacts of the last compute(); pair k owns
   /// [pairContacts()[k].firstNode, + nodeCount). Within a pair: the nodes of a
   /// inside b (ownerIsB = 0) by node index, then those of b inside a.
@@ -205,6 +221,7 @@ class ContactSolver {
   ContactLawDef law_;
   // Output of the last compute(); nodes_ / shear_ with history_ are also the history.
   std::vector<PairContact<D>> pairs_;
+  std::vector<PairDashpot<D>> dashpots_;  // aligned with pairs_; not part of the saved state
   std::vector<NodeContact<D>> nodes_;
   std::vector<Vec<D>> shear_;
   std::vector<detail::HistoryPair> history_;  // sorted by (idA, other)

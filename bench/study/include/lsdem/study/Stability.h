@@ -68,7 +68,7 @@ struct StabilityResult {
   std::size_t breakages = 0;          ///< splits applied
   std::size_t particles = 0;          ///< particles at the end
   double maxEnergyExcess = 0.0;       ///< max over steps of the energy excess, fraction of the energy scale
-  double maxSplitEnergyGain = 0.0;    ///< max over splits of (KE_children - KE_parent (1 + inertia error)) / KE_parent
+  double maxSplitEnergyGain = 0.0;    ///< max over splits of (KE_children - KE_parent - inertia bound) / KE_parent (BreakageEvent::inertiaEnergyBound)
   double maxSplitMassError = 0.0;     ///< max over splits, relative
   double maxMassError = 0.0;          ///< max over steps of the run's mass balance error, relative
   double maxOverlapFraction = 0.0;    ///< deepest overlap / smaller body's equivalent diameter
