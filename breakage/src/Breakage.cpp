@@ -250,6 +250,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
         r.volume = f.volume;
         r.sieveSize = f.shape->descriptors().sieveSize;
         r.reason = "fines";
+        ledger.addedEnergy += kinetic;  // a fragment, and then removed
         world.recordRemoval(r, kinetic);
         finesMass_ += mass;
         ev.finesVolumes.push_back(f.volume);

@@ -30,7 +30,7 @@ GlobalDamping<D>::GlobalDamping(double coefficient) : c_(coefficient) {
 }
 
 template <int D>
-void GlobalDamping<D>::applyForces(World<D>& world, double dt) {
+void GlobalDamping<D>::applyForces(World<D>& world, double /*dt*/) {
   Particles<D>& p = world.particles();
   double power = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -49,7 +49,7 @@ void GlobalDamping<D>::applyForces(World<D>& world, double dt) {
       power -= t.dot(p.angularVelocity[i]);
     }
   }
-  world.energyLedger().dampingLoss += power * dt;
+  power_ = power;
 }
 
 template <int D>
@@ -60,7 +60,7 @@ LocalDamping<D>::LocalDamping(double alpha) : alpha_(alpha) {
 }
 
 template <int D>
-void LocalDamping<D>::applyForces(World<D>& world, double dt) {
+void LocalDamping<D>::applyForces(World<D>& world, double /*dt*/) {
   Particles<D>& p = world.particles();
   double power = 0.0;
   auto damp = [&](double& f, double v) {
@@ -76,7 +76,7 @@ void LocalDamping<D>::applyForces(World<D>& world, double dt) {
       for (int a = 0; a < 3; ++a) damp(p.torque[i][a], p.angularVelocity[i][a]);
     }
   }
-  world.energyLedger().dampingLoss += power * dt;
+  power_ = power;
 }
 
 template <int D>

@@ -54,6 +54,7 @@ std::uint32_t nodeKey(const NodeContact<D>& c) {
 // Law constants of one compute() call.
 struct LawConstants {
   double kn = 0.0, ks = 0.0, mu = 0.0, zeta = 0.0, eStar = 0.0, dt = 0.0;
+  double shearDt = 0.0;  // dt, or 0 when re-evaluating an unchanged state
 };
 
 // A pair's node contacts of the previous step (its shear history), by node key.
@@ -262,7 +263,7 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
           if (projected2 > 0.0) shear *= std::sqrt(old.squaredNorm() / projected2);
         }
         // Add this step's tangential displacement; spring force capped by Coulomb.
-        shear += law.dt * (vrel - vn * c.normal);
+        shear += law.shearDt * (vrel - vn * c.normal);
         const double kt = law.ks * w.stiffness;
         Vec<D> ft = -kt * shear;
         const double cap = law.mu * std::max(fn, 0.0);
@@ -316,7 +317,8 @@ ContactSolver<D>::ContactSolver(const ContactLawDef& law) : law_(law) {
 
 template <int D>
 void ContactSolver<D>::compute(const Particles<D>& particles, const std::vector<Pair>& pairs,
-                               const std::vector<Plane<D>>& planes, const std::vector<ToolPose<D>>& tools, double dt) {
+                               const std::vector<Plane<D>>& planes, const std::vector<ToolPose<D>>& tools, double dt,
+                               bool advanceShear) {
   // Check the inputs before anything changes.
   if (!(dt > 0.0) || !std::isfinite(dt)) {
     std::ostringstream msg;
@@ -370,7 +372,8 @@ void ContactSolver<D>::compute(const Particles<D>& particles, const std::vector<
       withFlag(law_.hasFriction, [&](auto friction) {
         withFlag(law_.hasDamping, [&](auto damping) {
           this->template run<decltype(normal)::value, decltype(formulation)::value, decltype(friction)::value,
-                             decltype(damping)::value>(particles, pairs, planes, tools, dt);
+                             decltype(damping)::value>(particles, pairs, planes, tools, dt,
+                                                              advanceShear ? dt : 0.0);
         });
       });
     });
@@ -383,7 +386,7 @@ void ContactSolver<D>::compute(const Particles<D>& particles, const std::vector<
 template <int D>
 template <NormalModel Normal, ForceFormulation Formulation, bool Friction, bool Damping>
 void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
-                           const std::vector<ToolPose<D>>& tools, double dt) {
+                           const std::vector<ToolPose<D>>& tools, double dt, double shearDt) {
   LawConstants law;
   law.kn = law_.kn;
   law.ks = law_.ks;
@@ -391,6 +394,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   law.zeta = law_.dampingRatio;
   law.eStar = Normal == NormalModel::Hertz ? effectiveModulus(law_) : 0.0;
   law.dt = dt;
+  law.shearDt = shearDt;
 
   // Tasks: one per candidate pair, then one per particle for the planes and one for the tools.
   const std::size_t n = p.size();
@@ -660,8 +664,9 @@ const BoundaryLoads<D>& ContactSolver<D>::accumulate(Particles<D>& particles) {
 
 template <int D>
 void ContactSolver<D>::saveState(StateWriter& out) const {
-  out.putTag("contacts");
+  out.putTag("contacts 2");  // 2: with the pair dashpots
   out.putVector(pairs_);
+  out.putVector(dashpots_);
   out.putVector(nodes_);
   out.putVector(shear_);
   out.putVector(history_);
@@ -679,9 +684,9 @@ void ContactSolver<D>::saveState(StateWriter& out) const {
 
 template <int D>
 void ContactSolver<D>::loadState(StateReader& in) {
-  in.expectTag("contacts");
+  in.expectTag("contacts 2");
   in.getVector(pairs_);
-  dashpots_.assign(pairs_.size(), PairDashpot<D>{});
+  in.getVector(dashpots_);
   in.getVector(nodes_);
   in.getVector(shear_);
   in.getVector(history_);
@@ -695,7 +700,7 @@ void ContactSolver<D>::loadState(StateReader& in) {
   in.getVector(loads_.planeTorque);
   in.getVector(loads_.toolForce);
   in.getVector(loads_.toolTorque);
-  if (particlePairCount_ + planePairCount_ > pairs_.size()) {
+  if (particlePairCount_ + planePairCount_ > pairs_.size() || dashpots_.size() != pairs_.size()) {
     throw std::runtime_error("checkpoint state: contact record counts exceed the records");
   }
   for (const PairContact<D>& rec : pairs_) {

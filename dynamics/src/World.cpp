@@ -90,7 +90,7 @@ const char* stageName(Stage s) {
 
 double EnergyLedger::relativeBalanceError() const {
   const double scale = std::max({std::abs(initial), std::abs(total()), std::abs(gravityWork), std::abs(boundaryWork),
-                                 dampingLoss, contactLoss, removedEnergy, addedEnergy,
+                                 dampingLoss, contactLoss, removedEnergy, addedEnergy, std::abs(splitRelease),
                                  std::numeric_limits<double>::min()});
   return balanceError() / scale;
 }
@@ -296,9 +296,12 @@ void World<D>::computeForces(double dtClosing) {
   stageSeconds_[std::size_t(Stage::BroadPhase)] += secondsSince(t0);
 
   // Narrow phase and contact law (eq. 3-4). The shear increment needs a step;
-  // the initial evaluation uses the step to come.
+  // the initial evaluation uses the step to come. A re-evaluation between
+  // steps (the particle set changed) sees the state the last evaluation saw,
+  // so the shear springs of the pairs that remain keep their length.
   t0 = Clock::now();
-  contacts_.compute(particles_, broad_.pairs(), planes_, toolPoses_, dtClosing > 0.0 ? dtClosing : dt_);
+  contacts_.compute(particles_, broad_.pairs(), planes_, toolPoses_, dtClosing > 0.0 ? dtClosing : dt_,
+                    dtClosing > 0.0 || steps_ == 0);
   stageSeconds_[std::size_t(Stage::NarrowPhase)] += secondsSince(t0);
 
   // Sum contact forces into the particles in a fixed order.
@@ -310,9 +313,7 @@ void World<D>::computeForces(double dtClosing) {
   loads_ = contacts_.accumulate(particles_);
   stageSeconds_[std::size_t(Stage::Accumulate)] += secondsSince(t0);
 
-  // Declared effects. Damping effects book their power x dtClosing into the
-  // ledger; that booking is taken back here and re-booked below.
-  const double dampingBefore = energy_.dampingLoss;
+  // Declared effects (gravity books its exact work over the closing step).
   for (std::size_t e = 0; e < effects_.size(); ++e) {
     t0 = Clock::now();
     effects_[e]->applyForces(*this, dtClosing);
@@ -321,41 +322,42 @@ void World<D>::computeForces(double dtClosing) {
     stageSeconds_[std::size_t(Stage::Effects)] += s;
   }
 
-  // Contact dissipation, damping and the work of moving boundaries over the
-  // closing step, booked by the trapezoid rule in time (see pendingWork_).
+  // Sliding friction: capping a shear spring at the Coulomb limit took
+  // energy out of it at this evaluation, booked whole (power x the solver's
+  // step). At a re-evaluation between steps that drop is part of splitRelease.
   if (dtClosing > 0.0) {
-    const double dampingBooked = energy_.dampingLoss - dampingBefore;
-    energy_.dampingLoss = dampingBefore;
-    double power = 0.0;
-    for (std::size_t k = 0; k < planes_.size(); ++k) power -= loads_.planeForce[k].dot(planes_[k].velocity);
-    for (std::size_t k = 0; k < toolPoses_.size(); ++k) {
-      power -= loads_.toolForce[k].dot(toolPoses_[k].velocity);
-      power -= Rotation<D>::dot(loads_.toolTorque[k], toolPoses_[k].angularVelocity);
-    }
-    // Sliding friction (the power of the slip of capped shear springs), damping
-    // effects and boundaries: half of this step's sample now, half next step.
     double dashpotPower = 0.0;
     for (const PairDashpot<D>& d : contacts_.pairDashpots()) dashpotPower += d.power;
-    const std::array<double, 3> booked{(contacts_.dissipatedPower() - dashpotPower) * dtClosing, dampingBooked,
-                                       power * dtClosing};
-    const std::array<double*, 3> ledger{&energy_.contactLoss, &energy_.dampingLoss, &energy_.boundaryWork};
-    for (std::size_t j = 0; j < booked.size(); ++j) {
-      *ledger[j] += pendingWork_[j] + 0.5 * booked[j];
-      pendingWork_[j] = 0.5 * booked[j];
-    }
-    // Contact dashpots, exactly: their force acts through the closing half
-    // kick (the velocity goes from v(n+1/2) to v(n+1/2) + dt/2 a) and the
-    // opening half kick of the next step (from there on by another dt/2 a), so
-    // each half does its force times the mean velocity of that half. Booking
-    // the sampled c v_n^2 dt instead overstates the loss by about c dt / (2 m)
-    // of it, which for small or slender bodies (whose effective mass at a
-    // contact is a fraction of their mass) showed as energy from nothing.
-    if (def_.contact.hasDamping) {
-      energy_.contactLoss += 0.5 * dtClosing * dashpotLoss(particles_, contacts_, 0.25 * dtClosing);
-      pendingWork_[0] += 0.5 * dtClosing * dashpotLoss(particles_, contacts_, 0.75 * dtClosing);
-    }
+    energy_.contactLoss += (contacts_.dissipatedPower() - dashpotPower) * dtClosing;
   }
+
+  // Powers of the damping effects and moving boundaries (see lastPower_).
+  double dampingPower = 0.0;
+  for (const auto& e : effects_) dampingPower += e->dampingPower();
+  double boundaryPower = 0.0;
+  for (std::size_t k = 0; k < planes_.size(); ++k) boundaryPower -= loads_.planeForce[k].dot(planes_[k].velocity);
+  for (std::size_t k = 0; k < toolPoses_.size(); ++k) {
+    boundaryPower -= loads_.toolForce[k].dot(toolPoses_[k].velocity);
+    boundaryPower -= Rotation<D>::dot(loads_.toolTorque[k], toolPoses_[k].angularVelocity);
+  }
+  lastPower_ = {dampingPower, boundaryPower};
+
+  // The closing half kick: velocities go from v(n+1/2) on by dt/2 a.
+  if (dtClosing > 0.0) bookHalfKick(0.5 * dtClosing, 0.25 * dtClosing);
   forcesValid_ = true;
+}
+
+template <int D>
+void World<D>::bookHalfKick(double halfDt, double lead) {
+  energy_.dampingLoss += halfDt * lastPower_[0];
+  energy_.boundaryWork += halfDt * lastPower_[1];
+  // Contact dashpots, exactly: over a half kick a dashpot force does its
+  // force times the mean velocity of that half kick, the velocity `lead`
+  // seconds of the current forces ahead (a quarter step). Booking the sampled
+  // c v^2 dt instead overstates the loss by about c dt / (2 m) of it, which for
+  // small or slender bodies (whose effective mass at a contact is a fraction
+  // of their mass) showed as energy from nothing.
+  if (def_.contact.hasDamping) energy_.contactLoss += halfDt * dashpotLoss(particles_, contacts_, lead);
 }
 
 template <int D>
@@ -365,12 +367,18 @@ void World<D>::step() {
   }
   // Forces of the current state, once, before the first step or after changes.
   if (!forcesValid_) {
+    const double elasticBefore = contacts_.elasticEnergy();
     computeForces(0.0);
     if (steps_ == 0) {
       refreshEnergy();
       energy_.initial = energy_.total();
+    } else {
+      energy_.splitRelease += (elasticBefore - contacts_.elasticEnergy());
     }
   }
+
+  // The opening half kick books the work of the forces it applies.
+  bookHalfKick(0.5 * dt_, 0.25 * dt_);
 
   // Half kick and drift.
   auto t0 = Clock::now();
@@ -413,7 +421,7 @@ void World<D>::run(std::uint64_t n) {
 template <int D>
 void World<D>::saveState(
     StateWriter& out, const std::function<std::uint32_t(const std::shared_ptr<const geometry::Shape<D>>&)>& shapeIndex) const {
-  out.putTag("world");
+  out.putTag("world 2");  // 2: ledger with half-step works and split release
   out.put(std::int32_t(D));
   out.put(std::uint64_t(planes_.size()));
   out.put(std::uint64_t(tools_.size()));
@@ -423,7 +431,7 @@ void World<D>::saveState(
   out.put(dt_);
   out.put(dtCritical_);
   out.put(energy_);
-  out.put(pendingWork_);
+  out.put(lastPower_);
   out.put(stageSeconds_);
   out.putVector(effectSeconds_);
   out.put(std::uint64_t(removed_.size()));
@@ -459,7 +467,7 @@ void World<D>::saveState(
 template <int D>
 void World<D>::loadState(StateReader& in,
                          const std::function<std::shared_ptr<const geometry::Shape<D>>(std::uint32_t)>& shapeAt) {
-  in.expectTag("world");
+  in.expectTag("world 2");
   const auto mismatch = [](const std::string& what, std::uint64_t saved, std::uint64_t here) {
     throw std::runtime_error("checkpoint does not fit this scene: " + what + " " + std::to_string(saved) +
                              " in the checkpoint, " + std::to_string(here) + " in the scene");
@@ -475,7 +483,7 @@ void World<D>::loadState(StateReader& in,
   dt_ = in.get<double>();
   dtCritical_ = in.get<double>();
   energy_ = in.get<EnergyLedger>();
-  pendingWork_ = in.get<std::array<double, 3>>();
+  lastPower_ = in.get<std::array<double, 2>>();
   stageSeconds_ = in.get<std::array<double, std::size_t(Stage::Count)>>();
   in.getVector(effectSeconds_);
   effectSeconds_.resize(effects_.size(), 0.0);

@@ -294,7 +294,7 @@ RunPlots plotRunFolder(const std::string& dir, const std::string& outDir) {
   if (fs::exists(history)) {
     PlotSpec energies{"", "Energy budget", "time (s)", "energy (J)", false, false, true, {}};
     for (const char* c : {"kinetic_J", "elastic_J", "gravity_work_J", "boundary_work_J", "damping_loss_J",
-                          "contact_loss_J", "energy_error_J"}) {
+                          "contact_loss_J", "split_release_J", "energy_error_J"}) {
       energies.series.push_back(series(history, "time_s", c));
     }
     draw("energies.png", energies);

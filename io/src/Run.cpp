@@ -261,7 +261,7 @@ class Runner {
     // history.csv
     std::string header =
         "step,time_s,dt_s,particles,contacts,breakages,removed_mass_kg,kinetic_J,elastic_J,gravity_work_J,"
-        "boundary_work_J,damping_loss_J,contact_loss_J,energy_error_J";
+        "boundary_work_J,damping_loss_J,contact_loss_J,split_release_J,energy_error_J";
     const char* axes[3] = {"x", "y", "z"};
     for (const std::string& name : sw_.world->planeNames()) {
       for (int a = 0; a < D; ++a) header += "," + name + "_force_" + axes[a] + "_N";
@@ -310,7 +310,7 @@ class Runner {
                       "," + std::to_string(sw_.breakage ? sw_.breakage->breakages() : 0) + "," + num(w.removedMass()) +
                       "," + num(e.kineticTranslational + e.kineticRotational) + "," + num(e.elastic) + "," +
                       num(e.gravityWork) + "," + num(e.boundaryWork) + "," + num(e.dampingLoss) + "," +
-                      num(e.contactLoss) + "," + num(e.balanceError());
+                      num(e.contactLoss) + "," + num(e.splitRelease) + "," + num(e.balanceError());
     const auto& loads = w.boundaryLoads();
     for (std::size_t k = 0; k < w.planes().size(); ++k) {
       for (int a = 0; a < D; ++a) row += "," + num(k < loads.planeForce.size() ? loads.planeForce[k][a] : 0.0);

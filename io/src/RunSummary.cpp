@@ -42,6 +42,7 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
       .field("contact_loss", e.contactLoss)
       .field("removed", e.removedEnergy)
       .field("added", e.addedEnergy)
+      .field("split_release", e.splitRelease)
       .field("initial", e.initial)
       .field("balance_error", e.balanceError())
       .field("relative_balance_error", e.relativeBalanceError())

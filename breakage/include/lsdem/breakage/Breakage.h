@@ -27,9 +27,10 @@
 ///
 /// Mass: fragments + fines carry the parent's mass exactly (to round-off;
 /// Split.h). Energy: the kinetic energy of a broken parent leaves the ledger's
-/// addedEnergy and that of its kept fragments enters it, so addedEnergy
-/// accumulates the net change of kinetic energy by splitting; fines carry
-/// theirs to removedEnergy.
+/// addedEnergy and that of all its fragments enters it, so addedEnergy
+/// accumulates the net change of kinetic energy by splitting; fines then carry
+/// theirs to removedEnergy. The contact springs' energy a split changes is
+/// booked by the World as splitRelease.
 ///
 /// Contacts and indices. The stresses need the contact records to describe
 /// the particles as they are. When an effect that ran before this one in the

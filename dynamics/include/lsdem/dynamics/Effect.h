@@ -41,6 +41,10 @@ class Effect {
     (void)world;
     (void)dt;
   }
+  /// @brief Power the forces of the last applyForces() take out of the
+  /// particles, W (damping effects; 0 for others). The World books it into
+  /// the ledger's damping loss over the half kicks those forces act through.
+  virtual double dampingPower() const { return 0.0; }
   /// @brief Runs between steps, after the integration (removal, breakage,
   /// recorders). May add or remove particles.
   virtual void afterStep(World<D>& world) { (void)world; }
@@ -64,16 +68,18 @@ class Gravity final : public Effect<D> {
 };
 
 /// Global viscous damping (the paper's C_g, in 1/s): F = -C_g m v and
-/// T = -C_g I w (principal frame). The energy it removes is accumulated.
+/// T = -C_g I w (principal frame). The energy it removes is booked by the World.
 template <int D>
 class GlobalDamping final : public Effect<D> {
  public:
   explicit GlobalDamping(double coefficient);
   std::string name() const override { return "global_damping"; }
   void applyForces(World<D>& world, double dt) override;
+  double dampingPower() const override { return power_; }
 
  private:
   double c_;
+  double power_ = 0.0;
 };
 
 /// Local non-viscous damping (Cundall): each component of the force and torque
@@ -85,9 +91,11 @@ class LocalDamping final : public Effect<D> {
   explicit LocalDamping(double alpha);
   std::string name() const override { return "local_damping"; }
   void applyForces(World<D>& world, double dt) override;
+  double dampingPower() const override { return power_; }
 
  private:
   double alpha_;
+  double power_ = 0.0;
 };
 
 /// Outflow removal: a particle whose centroid leaves the region `keep` is

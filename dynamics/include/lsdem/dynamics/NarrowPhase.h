@@ -152,11 +152,15 @@ class ContactSolver {
   /// @param planes plane walls (unit normals).
   /// @param tools kinematic level-set bodies (non-null shapes).
   /// @param dt time step, s, > 0: the shear displacement increment is v_t dt.
+  /// @param advanceShear false re-evaluates the contacts of the state the
+  ///   last compute() saw (after particles were split, added or removed
+  ///   between steps): the shear springs keep their length instead of taking
+  ///   another increment.
   /// @note Throws std::invalid_argument for dt <= 0 or not finite, an index out
   /// of range, a pair not in canonical order, a plane normal not of unit length
   /// (within 1e-6) or a tool without a shape; nothing is changed then.
   void compute(const Particles<D>& particles, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
-               const std::vector<ToolPose<D>>& tools, double dt);
+               const std::vector<ToolPose<D>>& tools, double dt, bool advanceShear = true);
 
   /// @brief Adds the forces and torques of the last compute() into
   /// `particles` (force, torque), pair by pair in output order (a fixed order,
@@ -215,7 +219,7 @@ class ContactSolver {
  private:
   template <NormalModel Normal, ForceFormulation Formulation, bool Friction, bool Damping>
   void run(const Particles<D>& particles, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
-           const std::vector<ToolPose<D>>& tools, double dt);
+           const std::vector<ToolPose<D>>& tools, double dt, double shearDt);
   void gather(const Particles<D>& particles, std::size_t particlePairTasks, std::size_t planeTasks);
 
   ContactLawDef law_;

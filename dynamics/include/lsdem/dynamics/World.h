@@ -69,10 +69,12 @@ struct WorldDef {
 
 /// The energy budget of a run, J. Work done on the particles counts positive.
 /// Kinetic and elastic energy are those of the state after the last step;
-/// gravity's work is exact for the drift (m g . dx); dissipation and the work
-/// of moving boundaries are their power samples (one per step, at the
-/// mid-step velocity) integrated by the trapezoid rule in time, so they
-/// account for the same instant as the kinetic energy.
+/// gravity's work is exact for the drift (m g . dx); the loss of sliding
+/// friction is booked when a shear spring is capped; contact dashpots, damping
+/// effects and moving boundaries are booked over the two half kicks their
+/// forces act through (the trapezoid rule in time), so they account for the
+/// same instant as the kinetic energy; splitRelease books the springs' energy
+/// that a change of the particle set between steps takes away.
 struct EnergyLedger {
   double kineticTranslational = 0.0;
   double kineticRotational = 0.0;
@@ -83,12 +85,19 @@ struct EnergyLedger {
   double contactLoss = 0.0;      ///< dissipated by contact damping and sliding friction so far
   double removedEnergy = 0.0;    ///< kinetic energy carried away by removed particles
   double addedEnergy = 0.0;      ///< kinetic energy brought by particles added after the start
+  /// Elastic energy the contact springs lost when the particle set changed
+  /// between steps, so far: the springs re-evaluated on the new set (a split
+  /// parent's springs on its fragments, whose shear history starts afresh;
+  /// the springs of fines that left). In a breakage scene, the energy the
+  /// fractures took. Negative if the new set stores more.
+  double splitRelease = 0.0;
   double initial = 0.0;          ///< kinetic + elastic at the start
 
   double total() const { return kineticTranslational + kineticRotational + elastic; }
   /// @brief Energy now minus energy accounted for: 0 for an exact budget.
   double balanceError() const {
-    return total() + dampingLoss + contactLoss + removedEnergy - initial - gravityWork - boundaryWork - addedEnergy;
+    return total() + dampingLoss + contactLoss + removedEnergy + splitRelease - initial - gravityWork - boundaryWork -
+           addedEnergy;
   }
   /// @brief balanceError relative to the largest term of the budget.
   double relativeBalanceError() const;
@@ -245,15 +254,20 @@ class World {
   std::uint64_t steps_ = 0;
   bool forcesValid_ = false;
   EnergyLedger energy_;
-  // The ledger's dissipation and boundary work follow the trapezoid rule in
-  // time. A force sampled at the end of a step (with the mid-step velocity
-  // v(n+1/2)) acts through the closing half kick of that step and the opening
-  // half kick of the next, so a step books half of its own sample and the
-  // other half of the previous one; booking the whole sample at once ran half
-  // a step ahead of the state it is compared with, and a contact's first step
-  // (an impact: a large dashpot power) showed as energy from nothing.
-  // Held-back halves, J: contact loss, damping loss, boundary work.
-  std::array<double, 3> pendingWork_{};
+  // The ledger's damping, dashpot and boundary work follow the trapezoid rule in
+  // time. Forces evaluated at the end of a step act through the closing half
+  // kick of that step and the opening half kick of the next, so each half kick
+  // books its half of their power: the closing half when the forces are
+  // computed, the opening half at the start of the next step. Between the two
+  // the particle set may change (breakage, removal) and the forces be
+  // re-evaluated; the opening half then books the power of the forces that
+  // really act. Booking a whole sample at once ran half a step ahead of the
+  // state it is compared with, and a contact's first step (an impact: a large
+  // dashpot power) showed as energy from nothing.
+  // Powers of the last force evaluation, W: damping effects, moving
+  // boundaries (on the particles).
+  std::array<double, 2> lastPower_{};
+  void bookHalfKick(double halfDt, double lead);
   std::vector<RemovedParticle> removed_;
 };
 
