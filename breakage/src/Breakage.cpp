@@ -1,6 +1,7 @@
 #include "lsdem/breakage/Breakage.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -113,7 +114,7 @@ void Breakage<D>::queueFailures(World<D>& world) {
   if (!stale) {
     grainStresses(p, world.contacts(), stress_);
     for (std::size_t i = 0; i < p.size(); ++i) {
-      if (stress_[i].isZero(0.0)) continue;
+      if (stress_[i].isZero(0.0) || !std::isfinite(p.strength[i])) continue;  // infinite: unsplittable
       const Vec<3> principal = principalStressTriple<D>(stress_[i]);
       if (!criterion_->fails(principal, p.strength[i])) continue;
       const Shape<D>& shape = *p.shape[i];
@@ -186,7 +187,19 @@ void Breakage<D>::applyQueue(World<D>& world) {
     } else {
       surface.plane = HalfSpace<D>{rotation.transpose() * q.plane.normal, q.plane.offset - q.plane.normal.dot(p.position[i])};
     }
-    const SplitResult<D> split = splitShape(shape, surface);
+    SplitResult<D> split = splitShape(shape, surface);
+    if (!split.isSplit && !q.curved && !q.manual) {
+      // The plane through the contacts grazes the grain (one side holds no
+      // interior grid node): the same orientation through the centroid.
+      surface.plane->offset = 0.0;
+      split = splitShape(shape, surface);
+      if (!split.isSplit) {
+        // No cut resolves at this grid: the grain stays whole from now on
+        // rather than being retried every step.
+        p.strength[i] = std::numeric_limits<double>::infinity();
+        ++unsplittable_;
+      }
+    }
     if (!split.isSplit) {
       ++unsplit_;
       continue;
@@ -287,6 +300,7 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
   out.put(rawVolumeError_);
   out.put(finesMass_);
   out.put(std::uint64_t(unsplit_));
+  out.put(std::uint64_t(unsplittable_));
   out.put(std::uint64_t(skipped_));
   out.put(std::uint64_t(removedSeen_));
   out.put(std::uint64_t(events_.size()));
@@ -327,6 +341,7 @@ void Breakage<D>::loadState(dynamics::StateReader& in) {
   rawVolumeError_ = in.get<double>();
   finesMass_ = in.get<double>();
   unsplit_ = std::size_t(in.get<std::uint64_t>());
+  unsplittable_ = std::size_t(in.get<std::uint64_t>());
   skipped_ = std::size_t(in.get<std::uint64_t>());
   removedSeen_ = std::size_t(in.get<std::uint64_t>());
   events_.resize(std::size_t(in.get<std::uint64_t>()));

@@ -520,6 +520,7 @@ class Runner {
             .field("fines_mass", b.finesMass())
             .field("raw_volume_error", b.rawVolumeError())
             .field("unsplit_failures", b.unsplitFailures())
+            .field("unsplittable", b.unsplittable())
             .field("skipped_steps", b.skippedSteps())
             .endObject();
       }

@@ -505,7 +505,7 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
     diameter[i] = p.shape[i]->descriptors().equivalentDiameter;
     mass[i] = p.mass[i];
     if (!stressMeasure.empty()) stress[i] = stressMeasure[i];
-    strength[i] = p.strength[i];
+    strength[i] = std::isfinite(p.strength[i]) ? p.strength[i] : -1.0;  // -1: made unbreakable
     push3<D>(velocity, p.velocity[i]);
     pushSpin<D>(spin, p.angularVelocity[i]);
     pushQuaternion<D>(orientation, p.orientation[i]);

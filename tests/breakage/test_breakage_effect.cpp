@@ -149,6 +149,14 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
   out.steps = w.steps();
   for (const auto& rm : w.removed()) out.fines += rm.reason == "fines";
   EXPECT_NEAR(brk.finesMass(), w.removedMass(), 1e-12 * initialMass);
+  // A grain whose cut fails is cut through its centroid or made unbreakable,
+  // never retried step after step (thousands of retries before).
+  EXPECT_EQ(brk.unsplitFailures(), brk.unsplittable());
+  for (std::size_t i = 0; i < w.particles().size(); ++i) {
+    if (std::isinf(w.particles().strength[i])) {
+      EXPECT_LT(w.particles().shape[i]->descriptors().equivalentDiameter, 5.0 * h);  // 3-4 cells across
+    }
+  }
   // Children are stronger than their parents (eq. 13, smaller diameter) and one generation on.
   const auto& p = w.particles();
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -158,9 +166,9 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
   out.energyError = w.energy().relativeBalanceError();
   out.splitRelease = w.energy().splitRelease / w.energy().boundaryWork;
   std::printf("[ crush %dD ] %zu breakages, %zu fines, %zu particles, %llu steps, %.1f s, max mass error %.2e, "
-              "unsplit %zu, skipped %zu, energy balance %.2e, split release %.3f of the platen work\n",
+              "unsplit %zu (unsplittable %zu), skipped %zu, energy balance %.2e, split release %.3f of the platen work\n",
               D, out.breakages, out.fines, p.size(), (unsigned long long)out.steps, out.seconds, out.maxMassError,
-              brk.unsplitFailures(), brk.skippedSteps(), out.energyError, out.splitRelease);
+              brk.unsplitFailures(), brk.unsplittable(), brk.skippedSteps(), out.energyError, out.splitRelease);
   return out;
 }
 

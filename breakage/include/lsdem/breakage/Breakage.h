@@ -15,8 +15,11 @@
 ///      the buckling mode is on; held, not queued, when no plane is defined),
 ///      and so is each manual break that is due;
 ///   3. the queue is applied in ascending global id: the parent is split by
-///      its plane (mapped to the parent's body frame); if it does not split,
-///      nothing happens; else the parent leaves the store (not as a removal: its
+///      its plane (mapped to the parent's body frame); a contact plane that
+///      only grazes the grain is moved, parallel, to the centroid; if that
+///      does not split it either, the grain cannot be cut at its grid
+///      resolution and is made unbreakable (strength set to infinity, counted
+///      in unsplittable()); else the parent leaves the store (not as a removal: its
 ///      matter lives on) and each fragment is added with the parent's density
 ///      (parent mass / parent shape volume), the split's exact-mass factor,
 ///      the rigid-body pose and velocity of fragmentState(), generation + 1,
@@ -148,8 +151,14 @@ class Breakage final : public dynamics::Effect<D> {
   double rawVolumeError() const { return rawVolumeError_; }
   /// @brief Mass removed as fines so far, kg.
   double finesMass() const { return finesMass_; }
-  /// @brief Failures whose plane did not split the grain (it missed or grazed it).
+  /// @brief Failures whose surface did not split the grain (it missed or
+  /// grazed it, and for a contact plane so did the parallel plane through the
+  /// centroid).
   std::size_t unsplitFailures() const { return unsplit_; }
+  /// @brief Grains that failed but could not be split at their grid
+  /// resolution through their centroid either; they were made unbreakable
+  /// (strength set to infinity).
+  std::size_t unsplittable() const { return unsplittable_; }
   /// @brief Steps whose stress evaluation was skipped for stale contacts (file comment).
   std::size_t skippedSteps() const { return skipped_; }
 
@@ -182,6 +191,7 @@ class Breakage final : public dynamics::Effect<D> {
   double rawVolumeError_ = 0.0;
   double finesMass_ = 0.0;
   std::size_t unsplit_ = 0;
+  std::size_t unsplittable_ = 0;
   std::size_t skipped_ = 0;
   std::size_t removedSeen_ = 0;
 };
