@@ -116,3 +116,11 @@ if [ $have_gnuplot = 1 ]; then
     echo "wrote $plot"
   fi
 fi
+
+# The README's pictures: the CSS 80 mm crusher at 4 s (frame 16 of 80 over
+# 20 s) and the product PSD plot.
+if [ $have_gnuplot = 1 ] && [ -d "$out/css80/frames" ]; then
+  mkdir -p docs/images
+  "$lsdem" render "$out/css80" --frame 16 --size 1200x900 -o docs/images/jaw_crusher_css80.png
+  [ -f "$out/product_psd.png" ] && cp "$out/product_psd.png" docs/images/jaw_crusher_product_psd.png
+fi

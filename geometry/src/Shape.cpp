@@ -54,13 +54,25 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromGridAndNodes(Grid<D> grid, NodeSet
   shape->mass_.centroid.setZero();
   shape->mass_.secondMoment = massGrid.principalSecondMoments().asDiagonal();
 
-  // Bounding radius: nodes and interior grid nodes (a concave surface can bulge
-  // between nodes by less than a cell; interior nodes bound that).
+  // Bounding radius: it must hold all of {phi < 0} of the interpolated grid,
+  // which reaches past the nodes (a fragment's edge where its cut meets the
+  // old surface can hold none) and up to a cell past the interior grid
+  // nodes. Every cell with an interior corner lies inside the corners of the
+  // 3^D block about that corner, so the block's farthest corner (per axis the
+  // farther side) bounds it. A radius from the nodes and interior grid nodes
+  // alone let a neighbour's node reach 0.1 cell into a fragment before the
+  // narrow phase looked (a 3D crushing cascade gained 51 % of its energy
+  // scale that way).
+  const Index<D> last = grid.dims() - 1;
+  double radius2 = radius * radius;
   for (std::size_t n = 0; n < grid.size(); ++n) {
-    if (grid[n] < 0.0f) {
-      radius = std::max(radius, (grid.nodePosition(grid.unlinear(n)) - massGrid.centroid).norm());
-    }
+    if (!(grid[n] < 0.0f)) continue;
+    const Index<D> i = grid.unlinear(n);
+    const Vec<D> lo = grid.nodePosition((i - 1).max(Index<D>::Zero())) - massGrid.centroid;
+    const Vec<D> hi = grid.nodePosition((i + 1).min(last)) - massGrid.centroid;
+    radius2 = std::max(radius2, lo.cwiseAbs2().cwiseMax(hi.cwiseAbs2()).sum());
   }
+  radius = std::sqrt(radius2);
   shape->boundingRadius_ = radius;
   shape->grid_ = std::move(grid);
   return shape;

@@ -1,6 +1,7 @@
 #include "lsdem/geometry/Primitives.h"
 #include "lsdem/geometry/Shape.h"
 #include "lsdem/geometry/ShapeDef.h"
+#include "support/Shapes.h"
 
 #include <gtest/gtest.h>
 
@@ -46,7 +47,7 @@ TEST(Shape, BodyFrameIsThePrincipalFrameOfARotatedEllipsoid) {
   for (const Vec<3>& p : shape->nodes().positions) EXPECT_LT(std::abs(shape->value(p)), 0.05 * 0.03);
   // The bounding sphere holds the whole ellipsoid and is tight.
   EXPECT_GE(shape->boundingRadius(), 0.6 - 0.01);
-  EXPECT_LT(shape->boundingRadius(), 0.6 + 0.03);
+  EXPECT_LT(shape->boundingRadius(), 0.6 + std::sqrt(3.0) * 0.03);  // the negative region's cells: up to a cell diagonal
 }
 
 TEST(Shape, BodyLookupsEqualGridLookups) {
@@ -91,4 +92,20 @@ TEST(ShapeDef, ResolutionMustBeGivenOnce) {
   EXPECT_THROW(resolvedSpacing(def), std::invalid_argument);
   def.spacing = 0.0;
   EXPECT_DOUBLE_EQ(resolvedSpacing(def), 0.05);
+}
+
+// The bounding sphere holds every point where the interpolated level set is
+// negative, not only the nodes and interior grid nodes (the fragments of a
+// split, with sharp edges where nodes are sparse, are checked in test_split).
+TEST(Shape, BoundingSphereHoldsTheWholeInterpolatedGrain) {
+  ShapeDef<3> box;
+  box.kind = ShapeKind::Box;
+  box.halfExtents = Vec<3>(0.3, 0.2, 0.1);
+  box.cellsAcross = 6;
+  EXPECT_LE(lsdem::test::boundingSphereExcess(*buildShape(box)), 0.0);
+  ShapeDef<2> triangle;
+  triangle.kind = ShapeKind::Polygon;
+  triangle.vertices = {Vec<2>(0.0, 0.0), Vec<2>(1.0, 0.1), Vec<2>(0.2, 0.5)};
+  triangle.cellsAcross = 6;
+  EXPECT_LE(lsdem::test::boundingSphereExcess(*buildShape(triangle)), 0.0);
 }
