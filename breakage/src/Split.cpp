@@ -10,10 +10,10 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <map>
 #include <stdexcept>
 #include <string>
 #include <optional>
+#include <unordered_map>
 #include <utility>
 
 namespace lsdem::breakage {
@@ -180,27 +180,35 @@ std::vector<Grid<D>> sidePieces(const Grid<D>& side, int padding) {
 // only looked up in the cells around them.
 template <int D>
 void mergeCoincidentNodes(NodeSet<D>& nodes, double tolerance) {
-  using Key = std::array<std::int64_t, 3>;
+  // Kept nodes by cell of side `tolerance`, the cell packed into one integer
+  // (21 bits per axis; a grain spans far fewer cells than that).
   const auto cellOf = [&](const Vec<D>& x) {
-    Key key{0, 0, 0};
-    for (int a = 0; a < D; ++a) key[std::size_t(a)] = std::int64_t(std::floor(x[a] / tolerance));
-    return key;
+    std::array<std::int64_t, 3> c{0, 0, 0};
+    for (int a = 0; a < D; ++a) c[std::size_t(a)] = std::int64_t(std::floor(x[a] / tolerance));
+    return c;
   };
-  std::map<Key, std::vector<std::size_t>> cells;  // kept nodes by cell
+  const auto pack = [](const std::array<std::int64_t, 3>& c) {
+    constexpr std::int64_t bias = std::int64_t(1) << 20;
+    return (std::uint64_t(c[0] + bias) << 42) | (std::uint64_t(c[1] + bias) << 21) | std::uint64_t(c[2] + bias);
+  };
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
+  cells.reserve(nodes.size());
   NodeSet<D> kept;
+  kept.positions.reserve(nodes.size());
+  kept.weights.reserve(nodes.size());
   for (std::size_t i = 0; i < nodes.size(); ++i) {
     const Vec<D>& x = nodes.positions[i];
-    const Key home = cellOf(x);
+    const std::array<std::int64_t, 3> home = cellOf(x);
     // The kept node within the tolerance, if any, among the 3^D cells around.
     std::size_t found = kept.size();
     for (int q = 0; q < (D == 2 ? 9 : 27) && found == kept.size(); ++q) {
-      Key key = home;
+      std::array<std::int64_t, 3> key = home;
       key[0] += q % 3 - 1;
       key[1] += (q / 3) % 3 - 1;
       if constexpr (D == 3) key[2] += q / 9 - 1;
-      const auto it = cells.find(key);
+      const auto it = cells.find(pack(key));
       if (it == cells.end()) continue;
-      for (std::size_t j : it->second) {
+      for (std::uint32_t j : it->second) {
         if ((kept.positions[j] - x).norm() < tolerance) {
           found = j;
           break;
@@ -210,7 +218,7 @@ void mergeCoincidentNodes(NodeSet<D>& nodes, double tolerance) {
     if (found < kept.size()) {
       kept.weights[found] += nodes.weights[i];
     } else {
-      cells[home].push_back(kept.size());
+      cells[pack(home)].push_back(std::uint32_t(kept.size()));
       kept.positions.push_back(x);
       kept.weights.push_back(nodes.weights[i]);
     }
