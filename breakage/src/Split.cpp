@@ -13,7 +13,6 @@
 #include <stdexcept>
 #include <string>
 #include <optional>
-#include <unordered_map>
 #include <utility>
 
 namespace lsdem::breakage {
@@ -180,35 +179,52 @@ std::vector<Grid<D>> sidePieces(const Grid<D>& side, int padding) {
 // only looked up in the cells around them.
 template <int D>
 void mergeCoincidentNodes(NodeSet<D>& nodes, double tolerance) {
-  // Kept nodes by cell of side `tolerance`, the cell packed into one integer
-  // (21 bits per axis; a grain spans far fewer cells than that).
-  const auto cellOf = [&](const Vec<D>& x) {
-    std::array<std::int64_t, 3> c{0, 0, 0};
-    for (int a = 0; a < D; ++a) c[std::size_t(a)] = std::int64_t(std::floor(x[a] / tolerance));
-    return c;
-  };
+  // Kept nodes by cell of side 2 x tolerance: a kept node within the
+  // tolerance of x lies in x's cell or, per axis, in the neighbour on the side
+  // of the cell x is nearer to (2^D cells). Cells are packed into one integer
+  // (21 bits per axis; a grain spans far fewer cells) and found in an
+  // open-addressing table; the kept nodes of a cell form a list through next.
+  const double cell = 2.0 * tolerance;
   const auto pack = [](const std::array<std::int64_t, 3>& c) {
     constexpr std::int64_t bias = std::int64_t(1) << 20;
     return (std::uint64_t(c[0] + bias) << 42) | (std::uint64_t(c[1] + bias) << 21) | std::uint64_t(c[2] + bias);
   };
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
-  cells.reserve(nodes.size());
+  constexpr std::uint64_t kEmpty = ~std::uint64_t(0);
+  constexpr std::uint32_t kNone = ~std::uint32_t(0);
+  std::size_t capacity = 16;
+  int bits = 4;
+  while (capacity < 4 * nodes.size()) {
+    capacity *= 2;
+    ++bits;
+  }
+  std::vector<std::uint64_t> keys(capacity, kEmpty);
+  std::vector<std::uint32_t> heads(capacity, kNone);
+  const auto slotOf = [&](std::uint64_t key) {
+    std::size_t slot = std::size_t((key * 0x9E3779B97F4A7C15ull) >> (64 - bits));  // the product's top bits
+    while (keys[slot] != kEmpty && keys[slot] != key) slot = (slot + 1) & (capacity - 1);
+    return slot;
+  };
   NodeSet<D> kept;
   kept.positions.reserve(nodes.size());
   kept.weights.reserve(nodes.size());
+  std::vector<std::uint32_t> next;
+  next.reserve(nodes.size());
   for (std::size_t i = 0; i < nodes.size(); ++i) {
     const Vec<D>& x = nodes.positions[i];
-    const std::array<std::int64_t, 3> home = cellOf(x);
-    // The kept node within the tolerance, if any, among the 3^D cells around.
+    std::array<std::int64_t, 3> home{0, 0, 0}, side{0, 0, 0};
+    for (int a = 0; a < D; ++a) {
+      const double u = x[a] / cell;
+      home[std::size_t(a)] = std::int64_t(std::floor(u));
+      side[std::size_t(a)] = u - std::floor(u) < 0.5 ? -1 : 1;
+    }
     std::size_t found = kept.size();
-    for (int q = 0; q < (D == 2 ? 9 : 27) && found == kept.size(); ++q) {
+    for (int q = 0; q < (1 << D) && found == kept.size(); ++q) {
       std::array<std::int64_t, 3> key = home;
-      key[0] += q % 3 - 1;
-      key[1] += (q / 3) % 3 - 1;
-      if constexpr (D == 3) key[2] += q / 9 - 1;
-      const auto it = cells.find(pack(key));
-      if (it == cells.end()) continue;
-      for (std::uint32_t j : it->second) {
+      for (int a = 0; a < D; ++a) {
+        if (q & (1 << a)) key[std::size_t(a)] += side[std::size_t(a)];
+      }
+      const std::size_t slot = slotOf(pack(key));
+      for (std::uint32_t j = keys[slot] == kEmpty ? kNone : heads[slot]; j != kNone; j = next[j]) {
         if ((kept.positions[j] - x).norm() < tolerance) {
           found = j;
           break;
@@ -218,7 +234,10 @@ void mergeCoincidentNodes(NodeSet<D>& nodes, double tolerance) {
     if (found < kept.size()) {
       kept.weights[found] += nodes.weights[i];
     } else {
-      cells[pack(home)].push_back(std::uint32_t(kept.size()));
+      const std::size_t slot = slotOf(pack(home));
+      keys[slot] = pack(home);
+      next.push_back(heads[slot]);
+      heads[slot] = std::uint32_t(kept.size());
       kept.positions.push_back(x);
       kept.weights.push_back(nodes.weights[i]);
     }
