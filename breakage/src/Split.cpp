@@ -116,18 +116,25 @@ void cutGrids(const Grid<D>& grid, const Psi& psi, Grid<D>& minus, Grid<D>& plus
   plus = grid;
   const std::int64_t count = std::int64_t(grid.size());
   std::int64_t firstNaN = count;
+  // By slices of the last axis, the node index stepped within each slice.
+  const int slices = grid.dims()[D - 1];
+  const std::size_t sliceSize = grid.size() / std::size_t(slices);
 #ifdef LSDEM_HAVE_OPENMP
 #pragma omp parallel for schedule(static) reduction(min : firstNaN) if (count > (1 << 18))
 #endif
-  for (std::int64_t n = 0; n < count; ++n) {
-    const std::size_t node = std::size_t(n);
-    const double f = psi(grid.nodePosition(grid.unlinear(node)));
-    if (std::isnan(f)) {
-      firstNaN = std::min(firstNaN, n);
-      continue;
+  for (int slice = 0; slice < slices; ++slice) {
+    geometry::Index<D> i = geometry::Index<D>::Zero();
+    i[D - 1] = slice;
+    const std::size_t begin = std::size_t(slice) * sliceSize;
+    for (std::size_t node = begin; node < begin + sliceSize; ++node, grid.advance(i)) {
+      const double f = psi(grid.nodePosition(i));
+      if (std::isnan(f)) {
+        firstNaN = std::min(firstNaN, std::int64_t(node));
+        continue;
+      }
+      minus[node] = float(std::max(double(grid[node]), f));
+      plus[node] = float(std::max(double(grid[node]), -f));
     }
-    minus[node] = float(std::max(double(grid[node]), f));
-    plus[node] = float(std::max(double(grid[node]), -f));
   }
   if (firstNaN < count) {
     throw std::invalid_argument("splitShape: the fracture surface is NaN at grid node " + std::to_string(firstNaN));
@@ -150,9 +157,9 @@ std::vector<Grid<D>> sidePieces(const Grid<D>& side, int padding) {
 
   // Node bounding box of the single piece.
   geometry::Index<D> lower = side.dims(), upper = geometry::Index<D>::Constant(-1);
-  for (std::size_t n = 0; n < side.size(); ++n) {
+  geometry::Index<D> i = geometry::Index<D>::Zero();
+  for (std::size_t n = 0; n < side.size(); ++n, side.advance(i)) {
     if (labels[n] < 0) continue;
-    const geometry::Index<D> i = side.unlinear(n);
     lower = lower.min(i);
     upper = upper.max(i);
   }
@@ -160,9 +167,10 @@ std::vector<Grid<D>> sidePieces(const Grid<D>& side, int padding) {
   const geometry::Index<D> cropLo = lower - padding;
   const geometry::Index<D> cropHi = (upper + padding).max(cropLo + 1);
   Grid<D> piece(cropHi - cropLo + 1, side.nodePosition(cropLo), side.spacing());
-  for (std::size_t m = 0; m < piece.size(); ++m) {
-    const geometry::Index<D> gi = cropLo + piece.unlinear(m);
-    piece[m] = side.inBounds(gi) ? side.at(gi) : float(side.value(piece.nodePosition(piece.unlinear(m))));
+  geometry::Index<D> j = geometry::Index<D>::Zero();
+  for (std::size_t m = 0; m < piece.size(); ++m, piece.advance(j)) {
+    const geometry::Index<D> gi = cropLo + j;
+    piece[m] = side.inBounds(gi) ? side.at(gi) : float(side.value(piece.nodePosition(j)));
   }
   std::vector<Grid<D>> out;
   out.push_back(std::move(piece));

@@ -65,9 +65,9 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromGridAndNodes(Grid<D> grid, NodeSet
   // scale that way).
   const Index<D> last = grid.dims() - 1;
   double radius2 = radius * radius;
-  for (std::size_t n = 0; n < grid.size(); ++n) {
+  Index<D> i = Index<D>::Zero();
+  for (std::size_t n = 0; n < grid.size(); ++n, grid.advance(i)) {
     if (!(grid[n] < 0.0f)) continue;
-    const Index<D> i = grid.unlinear(n);
     const Vec<D> lo = grid.nodePosition((i - 1).max(Index<D>::Zero())) - massGrid.centroid;
     const Vec<D> hi = grid.nodePosition((i + 1).min(last)) - massGrid.centroid;
     radius2 = std::max(radius2, lo.cwiseAbs2().cwiseMax(hi.cwiseAbs2()).sum());

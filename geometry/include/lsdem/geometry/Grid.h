@@ -59,6 +59,14 @@ class Grid {
       return std::size_t(i[0]) + std::size_t(dims_[0]) * (std::size_t(i[1]) + std::size_t(dims_[1]) * std::size_t(i[2]));
     }
   }
+  /// @brief Steps node index `i` to the next node in linear order (x fastest):
+  /// unlinear(n + 1) from i = unlinear(n) without divisions.
+  void advance(Index<D>& i) const {
+    for (int a = 0; a < D; ++a) {
+      if (++i[a] < dims_[a]) return;
+      i[a] = 0;
+    }
+  }
   /// @brief Node index of linear offset `n`.
   Index<D> unlinear(std::size_t n) const {
     Index<D> i;
