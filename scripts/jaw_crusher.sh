@@ -62,15 +62,16 @@ passing() {
 
 # The summary table (also written to OUTDIR/crusher_summary.csv).
 csv="$out/crusher_summary.csv"
-echo "css_mm,product_particles,product_kg_per_m,P50_mm,P80_mm,throughput_t_per_h_per_m,mean_power_kW_per_m,boundary_work_power_kW_per_m,breakages,fines_kg_per_m,in_crusher_kg_per_m,feed_kg_per_m,mass_balance_relative,steps,simulated_s,wall_s,particles_end" > "$csv"
+echo "css_mm,product_particles,product_kg_per_m,P50_mm,P80_mm,throughput_t_per_h_per_m,mean_power_kW_per_m,boundary_work_power_kW_per_m,breakages,fines_kg_per_m,ejected_kg_per_m,in_crusher_kg_per_m,feed_kg_per_m,mass_balance_relative,steps,simulated_s,wall_s,particles_end" > "$csv"
 for css in "${settings[@]}"; do
   d="$out/css$css"
   s="$d/summary.json"
   [ -f "$s" ] || { echo "jaw_crusher.sh: $s is missing (run without SKIP_RUN=1)" >&2; exit 1; }
   T=$(json "$s" simulated_time)
-  # Product: the particles that left through the outflow box (removed.csv).
-  read -r n_product m_product m_fines < <(awk -F, 'NR > 1 { if ($6 == "outflow") { n++; m += $3 } else if ($6 == "fines") f += $3 }
-                                                 END { printf "%d %.1f %.1f\n", n, m, f }' "$d/removed.csv")
+  # Product: the particles that left through the discharge under the jaws;
+  # ejected: those thrown out of the mouth (removed.csv reasons).
+  read -r n_product m_product m_fines m_ejected < <(awk -F, 'NR > 1 { if ($6 == "discharge") { n++; m += $3 } else if ($6 == "fines") f += $3; else if ($6 == "outflow") e += $3 }
+                                                 END { printf "%d %.1f %.1f %.1f\n", n, m, f, e }' "$d/removed.csv")
   if [ -f "$d/product_psd.csv" ]; then
     p50=$(passing "$d/product_psd.csv" 50); p80=$(passing "$d/product_psd.csv" 80)
   else
@@ -89,12 +90,12 @@ for css in "${settings[@]}"; do
   m_in=$(awk -v a="$(mb initial)" -v b="$(mb fed)" 'BEGIN { printf "%.6g", a + b }')
   m_now=$(awk -v a="$(mb particles)" 'BEGIN { printf "%.6g", a }')
   rel=$(awk -v a="$(mb relative_error)" 'BEGIN { printf "%.2g", a }')
-  echo "$css,$n_product,$m_product,$p50,$p80,$tph,$p_mean,$p_work,$(json "$s" breakages),$m_fines,$m_now,$m_in,$rel,$(json "$s" steps),$(printf %.3f "$T"),$(printf %.0f "$(json "$s" wall_time)"),$(json "$s" particles)" >> "$csv"
+  echo "$css,$n_product,$m_product,$p50,$p80,$tph,$p_mean,$p_work,$(json "$s" breakages),$m_fines,$m_ejected,$m_now,$m_in,$rel,$(json "$s" steps),$(printf %.3f "$T"),$(printf %.0f "$(json "$s" wall_time)"),$(json "$s" particles)" >> "$csv"
 done
 
 # The table on stdout.
 column -s, -t < "$csv" 2>/dev/null || cat "$csv"
-echo "(per metre of jaw width; mass balance: (particles + removed) / (initial + fed) - 1, removed = product + fines)"
+echo "(per metre of jaw width; mass balance: (particles + removed) / (initial + fed) - 1, removed = product + ejected + fines)"
 
 # One plot with the product PSD of every CSS.
 if [ $have_gnuplot = 1 ]; then

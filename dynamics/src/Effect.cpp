@@ -83,7 +83,9 @@ template <int D>
 void Outflow<D>::afterStep(World<D>& world) {
   // Walk backwards so swap-removal does not skip a particle.
   for (std::size_t i = world.particles().size(); i-- > 0;) {
-    if (!keep_.contains(world.particles().position[i])) world.removeParticle(i, "outflow");
+    const Vec<D>& x = world.particles().position[i];
+    if (keep_.contains(x)) continue;
+    world.removeParticle(i, discharge_ && discharge_->contains(x) ? "discharge" : "outflow");
   }
 }
 

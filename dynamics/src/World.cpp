@@ -107,7 +107,7 @@ World<D>::World(const WorldDef<D>& def) : def_(def), broad_(def.broadPhase), con
   if (def.gravity) addEffect(std::make_unique<Gravity<D>>(*def.gravity));
   if (def.globalDamping) addEffect(std::make_unique<GlobalDamping<D>>(*def.globalDamping));
   if (def.localDamping) addEffect(std::make_unique<LocalDamping<D>>(*def.localDamping));
-  if (def.outflow) addEffect(std::make_unique<Outflow<D>>(*def.outflow));
+  if (def.outflow) addEffect(std::make_unique<Outflow<D>>(*def.outflow, def.discharge));
   dt_ = def.dt;
 }
 

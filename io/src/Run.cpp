@@ -454,12 +454,14 @@ class Runner {
     lastDistributionClock_ = clockValue();
   }
 
-  // The size distribution of the particles that left through the outflow (a crusher's product).
+  // The size distribution of the particles that left through the discharge
+  // (a crusher's product), or through the outflow when no discharge is declared.
   void writeProductPsd() const {
+    const std::string product = scene_.world.discharge ? "discharge" : "outflow";
     std::vector<std::pair<double, double>> sizes;
     double total = 0.0;
     for (const auto& r : sw_.world->removed()) {
-      if (r.reason != "outflow") continue;
+      if (r.reason != product) continue;
       sizes.emplace_back(r.sieveSize, r.mass);
       total += r.mass;
     }

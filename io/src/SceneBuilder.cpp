@@ -150,7 +150,9 @@ class Builder {
         throw InputError(scene_.file, 0, "effects.breakage", e.what());
       }
     }
-    if (scene_.world.outflow) world_->addEffect(std::make_unique<dynamics::Outflow<D>>(*scene_.world.outflow));
+    if (scene_.world.outflow) {
+      world_->addEffect(std::make_unique<dynamics::Outflow<D>>(*scene_.world.outflow, scene_.world.discharge));
+    }
     for (auto& f : feeds) {
       // The feed's grains count for the automatic time step from the start
       // (a scene may begin with no particle at all).

@@ -197,6 +197,32 @@ TEST(World, OutflowRemovesAndRecords) {
   EXPECT_DOUBLE_EQ(w.removedMass(), m);
 }
 
+// With a discharge box, what leaves the outflow box inside it is the
+// discharge (a crusher's product) and what leaves elsewhere stays "outflow":
+// one grain falls through the discharge, one is thrown sideways out of the box.
+TEST(World, DischargeSeparatesProductFromEjectedGrains) {
+  WorldDef<2> def;
+  def.gravity = Vec<2>(0.0, -9.81);
+  def.outflow = geometry::Box<2>{Vec<2>(-1.0, -0.5), Vec<2>(1.0, 1.0)};
+  def.discharge = geometry::Box<2>{Vec<2>(-0.2, -0.7), Vec<2>(0.2, -0.4)};
+  World<2> w(def);
+  ParticleDef<2> p;
+  p.shape = test::sphereShape<2>(0.05);
+  p.position = Vec<2>(0.0, 0.0);
+  w.addParticle(p);
+  p.position = Vec<2>(0.5, 0.0);
+  p.velocity = Vec<2>(3.0, 0.0);
+  w.addParticle(p);
+  w.run(std::uint64_t(std::ceil(0.5 / w.dt())));
+  ASSERT_EQ(w.particles().size(), 0u);
+  ASSERT_EQ(w.removed().size(), 2u);
+  const auto& first = w.removed()[0].time < w.removed()[1].time ? w.removed()[0] : w.removed()[1];
+  const auto& second = &first == &w.removed()[0] ? w.removed()[1] : w.removed()[0];
+  EXPECT_EQ(first.reason, "outflow");     // the thrown grain leaves through the side at t = 0.5 / 3
+  EXPECT_NEAR(first.time, 0.5 / 3.0, 0.01);
+  EXPECT_EQ(second.reason, "discharge");  // the other falls through the discharge
+}
+
 TEST(World, UserTimeStepIsCheckedAgainstTheCriticalOne) {
   WorldDef<2> def;
   def.dt = 1.0;

@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -103,12 +104,18 @@ class LocalDamping final : public Effect<D> {
 template <int D>
 class Outflow final : public Effect<D> {
  public:
-  explicit Outflow(const geometry::Box<D>& keep) : keep_(keep) {}
+  /// @param keep particles whose centroid leaves this box are removed.
+  /// @param discharge optional: a removed particle whose centroid lies in
+  ///   this box left through the discharge (a crusher's product) and is
+  ///   recorded with reason "discharge"; the others with reason "outflow".
+  explicit Outflow(const geometry::Box<D>& keep, std::optional<geometry::Box<D>> discharge = std::nullopt)
+      : keep_(keep), discharge_(std::move(discharge)) {}
   std::string name() const override { return "outflow"; }
   void afterStep(World<D>& world) override;
 
  private:
   geometry::Box<D> keep_;
+  std::optional<geometry::Box<D>> discharge_;
 };
 
 /// Definition of a feed: grains dropped one at a time from a point (the jaw

@@ -64,6 +64,9 @@ struct WorldDef {
   std::optional<double> globalDamping;      ///< C_g, 1/s (Tables 1-2)
   std::optional<double> localDamping;       ///< Cundall alpha in [0, 1)
   std::optional<geometry::Box<D>> outflow;  ///< particles whose centroid leaves this box are removed
+  /// With outflow: removed particles whose centroid lies in this box left
+  /// through the discharge (reason "discharge"); the others are "outflow".
+  std::optional<geometry::Box<D>> discharge;
   bool checkFinite = false;                 ///< check every state value for NaN/Inf each step (debug)
 };
 
