@@ -14,6 +14,7 @@ namespace lsdem::io {
 namespace {
 
 using geometry::Vec;
+using geometry::Mat;
 
 // Uniform doubles in [0, 1) from 53 random bits (the same on every platform,
 // unlike std::uniform_real_distribution).
@@ -40,18 +41,39 @@ dynamics::Orientation<D> randomOrientation(Random& rng) {
   }
 }
 
-// Bounding spheres placed so far, in cells of a hash grid, for overlap tests.
+// True when a node of `a` (posed Ra, xa) lies in `b` (posed Rb, xb) or closer
+// to its surface than `clearance`.
 template <int D>
-class SphereIndex {
- public:
-  explicit SphereIndex(double cell) : cell_(cell) {}
-  void add(const Vec<D>& x, double r) {
-    centres_.push_back(x);
-    radii_.push_back(r);
-    cells_[key(x)].push_back(centres_.size() - 1);
-    maxRadius_ = std::max(maxRadius_, r);
+bool nodesReach(const geometry::Shape<D>& a, const Mat<D>& Ra, const Vec<D>& xa, const geometry::Shape<D>& b,
+                const Mat<D>& Rb, const Vec<D>& xb, double clearance) {
+  const Mat<D> map = Rb.transpose() * Ra;
+  const Vec<D> shift = Rb.transpose() * (xa - xb);
+  const double reach2 = (b.boundingRadius() + clearance) * (b.boundingRadius() + clearance);
+  for (const Vec<D>& n : a.nodes().positions) {
+    const Vec<D> y = map * n + shift;
+    if (y.squaredNorm() > reach2) continue;
+    if (b.value(y) < clearance) return true;
   }
-  bool overlaps(const Vec<D>& x, double r) const {
+  return false;
+}
+
+// Particles placed so far, in cells of a hash grid, for overlap tests: the
+// bounding spheres first, then the shapes themselves (nodes against level
+// sets both ways, with half a cell of clearance), so grains can be placed as
+// densely as their shapes allow.
+template <int D>
+class PlacementIndex {
+ public:
+  explicit PlacementIndex(double cell) : cell_(cell) {}
+  void add(const Vec<D>& x, const std::shared_ptr<const geometry::Shape<D>>& shape, const Mat<D>& R) {
+    centres_.push_back(x);
+    shapes_.push_back(shape);
+    rotations_.push_back(R);
+    cells_[key(x)].push_back(centres_.size() - 1);
+    maxRadius_ = std::max(maxRadius_, shape->boundingRadius());
+  }
+  bool overlaps(const Vec<D>& x, const geometry::Shape<D>& shape, const Mat<D>& R) const {
+    const double r = shape.boundingRadius();
     const int reach = int(std::ceil((r + maxRadius_) / cell_));
     Eigen::Array<std::int64_t, D, 1> c = cellOf(x);
     Eigen::Array<std::int64_t, D, 1> o = Eigen::Array<std::int64_t, D, 1>::Constant(-reach);
@@ -60,7 +82,13 @@ class SphereIndex {
       const auto it = cells_.find(hash(c + o));
       if (it != cells_.end()) {
         for (std::size_t k : it->second) {
-          if ((centres_[k] - x).norm() < radii_[k] + r) return true;
+          const geometry::Shape<D>& other = *shapes_[k];
+          if ((centres_[k] - x).norm() >= other.boundingRadius() + r) continue;
+          const double clearance = 0.5 * std::max(shape.grid().spacing(), other.grid().spacing());
+          if (nodesReach(shape, R, x, other, rotations_[k], centres_[k], clearance) ||
+              nodesReach(other, rotations_[k], centres_[k], shape, R, x, clearance)) {
+            return true;
+          }
         }
       }
       int a = 0;
@@ -84,7 +112,8 @@ class SphereIndex {
   double cell_;
   double maxRadius_ = 0.0;
   std::vector<Vec<D>> centres_;
-  std::vector<double> radii_;
+  std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes_;
+  std::vector<Mat<D>> rotations_;
   std::unordered_map<std::uint64_t, std::vector<std::size_t>> cells_;
 };
 
@@ -114,7 +143,7 @@ class Builder {
     if (scene_.groups.size() > 0) {
       for (const auto& g : scene_.groups) cell = std::max(cell, g.diameterMax);
     }
-    index_ = std::make_unique<SphereIndex<D>>(cell > 0.0 ? cell : 1.0);
+    index_ = std::make_unique<PlacementIndex<D>>(cell > 0.0 ? cell : 1.0);
     std::vector<dynamics::FeedDef<D>> feeds;
     for (const ParticleGroupDef<D>& g : scene_.groups) {
       Random rng(g.seed);
@@ -193,7 +222,7 @@ class Builder {
     p.orientation = q;
     p.velocity = g.velocity;
     world_->addParticle(p);
-    index_->add(x, shape->boundingRadius());
+    index_->add(x, shape, dynamics::Rotation<D>::matrix(q));
   }
 
   void placeList(const ParticleGroupDef<D>& g, Random& rng) {
@@ -212,17 +241,21 @@ class Builder {
     const std::uint64_t attemptsPerParticle = 20000;
     for (std::uint64_t k = 0; k < g.count; ++k) {
       const auto shape = shapeFor(g, std::size_t(k), rng);
-      const double r = shape->boundingRadius();
+      // The region must hold every surface node (a sphere through the farthest node).
+      double r = 0.0;
+      for (const Vec<D>& n : shape->nodes().positions) r = std::max(r, n.norm());
       const Vec<D> lo = g.region.lower.array() + r, hi = g.region.upper.array() - r;
       if (!((hi.array() >= lo.array()).all())) {
-        fail(g, "the cloud region is smaller than a particle (bounding radius " + std::to_string(r) + " m)");
+        fail(g, "the cloud region is smaller than a particle (radius " + std::to_string(r) + " m)");
       }
       bool placed = false;
       for (std::uint64_t attempt = 0; attempt < attemptsPerParticle && !placed; ++attempt) {
         Vec<D> x;
         for (int a = 0; a < D; ++a) x[a] = rng.uniform(lo[a], hi[a]);
-        if (index_->overlaps(x, r)) continue;
-        add(g, shape, x, g.randomOrientation ? randomOrientation<D>(rng) : dynamics::Rotation<D>::identity());
+        const dynamics::Orientation<D> q =
+            g.randomOrientation ? randomOrientation<D>(rng) : dynamics::Rotation<D>::identity();
+        if (index_->overlaps(x, *shape, dynamics::Rotation<D>::matrix(q))) continue;
+        add(g, shape, x, q);
         placed = true;
       }
       if (!placed) {
@@ -270,7 +303,7 @@ class Builder {
 
   const SceneDef<D>& scene_;
   dynamics::World<D>* world_ = nullptr;
-  std::unique_ptr<SphereIndex<D>> index_;
+  std::unique_ptr<PlacementIndex<D>> index_;
 };
 
 }  // namespace

