@@ -492,7 +492,7 @@ StabilityResult settledCase(CaseLength length) {
   Breakage<D>* brk = addBreakage(w, breakageDef<D>(1e7, 2.0 * r, s->grid().spacing()));
 
   StabilityMonitor<D> monitor(w, brk, box);
-  const std::uint64_t steps = isLong ? (D == 2 ? 1000000 : 100000) : 20000;
+  const std::uint64_t steps = isLong ? 1000000 : 20000;
   runMonitored(w, monitor, steps, out, [] { return false; });
   return finishCase(monitor, out, t0);
 }
