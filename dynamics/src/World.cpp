@@ -205,8 +205,11 @@ void World<D>::removeParticle(std::size_t index, const std::string& reason) {
     stiffness_[index] = stiffness_.back();
     stiffness_.pop_back();
   }
+  // The contact records index the particles as they were (the last one took
+  // the removed one's place): the next step re-evaluates them, and the
+  // springs the particle held leave the ledger as splitRelease.
   broad_.invalidate();
-  forcesValid_ = true;
+  forcesValid_ = false;
 }
 
 template <int D>

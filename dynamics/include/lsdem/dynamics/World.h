@@ -91,7 +91,7 @@ struct EnergyLedger {
   /// Elastic energy the contact springs lost when the particle set changed
   /// between steps, so far: the springs re-evaluated on the new set (a split
   /// parent's springs on its fragments, whose shear history starts afresh;
-  /// the springs of fines that left). In a breakage scene, the energy the
+  /// the springs of particles that left: fines, outflow). In a breakage scene, the energy the
   /// fractures took. Negative if the new set stores more.
   double splitRelease = 0.0;
   double initial = 0.0;          ///< kinetic + elastic at the start
