@@ -23,6 +23,9 @@ void validateContactLaw(const ContactLawDef& law) {
   if (!(law.kn > 0.0) || !std::isfinite(law.kn)) reject("kn", "> 0 (N/m)", law.kn);
   if (!(law.ks >= 0.0) || !std::isfinite(law.ks)) reject("ks", ">= 0 (N/m)", law.ks);
   if (!(law.friction >= 0.0) || !std::isfinite(law.friction)) reject("friction", ">= 0", law.friction);
+  if (!(law.frictionFrom >= 0.0) || !std::isfinite(law.frictionFrom)) {
+    reject("friction_from", ">= 0", law.frictionFrom);
+  }
   if (!(law.dampingRatio >= 0.0 && law.dampingRatio < 1.0)) reject("dampingRatio", "in [0, 1)", law.dampingRatio);
   // Material constants of the Hertz law.
   if (law.normal == NormalModel::Hertz) {

@@ -369,7 +369,7 @@ void ContactSolver<D>::compute(const Particles<D>& particles, const std::vector<
   };
   withNormal([&](auto normal) {
     withFormulation([&](auto formulation) {
-      withFlag(law_.hasFriction, [&](auto friction) {
+      withFlag(frictionOn(), [&](auto friction) {
         withFlag(law_.hasDamping, [&](auto damping) {
           this->template run<decltype(normal)::value, decltype(formulation)::value, decltype(friction)::value,
                              decltype(damping)::value>(particles, pairs, planes, tools, dt,
@@ -571,7 +571,7 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   if (tasks_.size() <= particlePairTasks + planeTasks) planePairCount_ = std::size_t(pairTotal) - particlePairCount_;
 
   // Copy every task's records to its place (tasks are independent).
-  const bool friction = law_.hasFriction;
+  const bool friction = frictionOn();
   pairs_.resize(pairTotal);
   dashpots_.resize(pairTotal);
   nodes_.resize(nodeTotal);

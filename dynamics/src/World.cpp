@@ -303,6 +303,8 @@ void World<D>::computeForces(double dtClosing) {
   // steps (the particle set changed) sees the state the last evaluation saw,
   // so the shear springs of the pairs that remain keep their length.
   t0 = Clock::now();
+  const double forceTime = dtClosing > 0.0 ? time_ + dtClosing : time_;
+  contacts_.setFrictionActive(forceTime >= def_.contact.frictionFrom);
   contacts_.compute(particles_, broad_.pairs(), planes_, toolPoses_, dtClosing > 0.0 ? dtClosing : dt_,
                     dtClosing > 0.0 || steps_ == 0);
   stageSeconds_[std::size_t(Stage::NarrowPhase)] += secondsSince(t0);

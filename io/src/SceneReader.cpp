@@ -200,6 +200,11 @@ class SceneReader {
     law.hasFriction = r.has("friction");
     law.friction = r.number("friction", 0.0);
     if (law.friction < 0.0) r.fail("friction", "must be >= 0, got " + std::to_string(law.friction));
+    if (r.has("friction_from") && !law.hasFriction) r.fail("friction_from", "needs `friction`");
+    law.frictionFrom = r.number("friction_from", 0.0);
+    if (law.frictionFrom < 0.0) {
+      r.fail("friction_from", "must be >= 0 s, got " + std::to_string(law.frictionFrom));
+    }
     law.ks = r.number("ks", 0.8 * law.kn);
     if (law.ks < 0.0) r.fail("ks", "must be >= 0 N/m, got " + std::to_string(law.ks));
     law.hasDamping = r.has("damping_ratio");

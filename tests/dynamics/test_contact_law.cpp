@@ -8,6 +8,7 @@
 #include "lsdem/dynamics/ContactLaw.h"
 #include "lsdem/dynamics/Integrator.h"
 #include "lsdem/dynamics/NarrowPhase.h"
+#include "lsdem/dynamics/World.h"
 #include "lsdem/geometry/ShapeDef.h"
 
 #include <gtest/gtest.h>
@@ -209,6 +210,12 @@ TEST(ContactLaw, RejectsBadParameters) {
   law.friction = -0.1;
   expectRejected(law, "friction");
   law = good;
+  law.frictionFrom = -1e-3;
+  expectRejected(law, "friction_from");
+  law = good;
+  law.frictionFrom = std::numeric_limits<double>::infinity();
+  expectRejected(law, "friction_from");
+  law = good;
   law.dampingRatio = 1.0;
   expectRejected(law, "dampingRatio");
   law = good;
@@ -352,3 +359,46 @@ TEST(ContactLaw, ShearSpringAndCoulombCap) {
 
 TEST(ContactLaw, AreaWeightedStiffnessIndependentOfNodeDensity2D) { checkAreaWeighted<2>(); }
 TEST(ContactLaw, AreaWeightedStiffnessIndependentOfNodeDensity3D) { checkAreaWeighted<3>(); }
+
+// Friction from a given time (ContactLawDef::frictionFrom): a block sliding
+// on a floor keeps its speed exactly while the law is frictionless (no
+// tangential force, no shear history), then slows at mu g, booking the
+// friction's dissipation, from the time friction acts.
+template <int D>
+void checkFrictionFrom() {
+  const double mu = 0.3, v0 = 1.0, from = 0.2;
+  WorldDef<D> def;
+  def.gravity = -kGravity * Vec<D>::UnitY();
+  def.contact.kn = D == 2 ? 3e7 : 3e5;
+  def.contact.ks = 0.8 * def.contact.kn;
+  def.contact.friction = mu;
+  def.contact.frictionFrom = from;
+  def.contact.hasDamping = true;
+  def.contact.dampingRatio = 0.4;
+  def.dt = 2e-5;
+  World<D> w(def);
+  PlaneDef<D> floor;
+  floor.plane.point = Vec<D>::Zero();
+  floor.plane.normal = Vec<D>::UnitY();
+  w.addPlane(floor);
+  ParticleDef<D> p;
+  p.shape = block<D>(1.0);
+  p.orientation = faceDown(*p.shape);
+  p.position = 0.1 * Vec<D>::UnitY();
+  p.velocity = v0 * Vec<D>::UnitX();
+  w.addParticle(p);
+  w.run(std::uint64_t(std::lround(0.1 / def.dt)));  // settled on the floor, still frictionless
+  EXPECT_EQ(w.particles().velocity[0][0], v0);
+  w.run(std::uint64_t(std::lround(0.1 / def.dt)) - 1);  // the last frictionless step ends at t = from
+  EXPECT_EQ(w.particles().velocity[0][0], v0);
+  const double lossBefore = w.energy().contactLoss;
+  w.run(std::uint64_t(std::lround(0.1 / def.dt)) + 1);  // t = from + 0.1 s
+  const double dv = mu * kGravity * 0.1;
+  EXPECT_NEAR(w.particles().velocity[0][0], v0 - dv, 0.02 * dv);
+  // Sliding friction dissipates mu m g times the distance slid.
+  const double slid = (v0 - 0.5 * dv) * 0.1;
+  const double frictionWork = mu * w.particles().mass[0] * kGravity * slid;
+  EXPECT_NEAR(w.energy().contactLoss - lossBefore, frictionWork, 0.03 * frictionWork);
+}
+TEST(ContactLaw, FrictionActsFromItsStartTime2D) { checkFrictionFrom<2>(); }
+TEST(ContactLaw, FrictionActsFromItsStartTime3D) { checkFrictionFrom<3>(); }

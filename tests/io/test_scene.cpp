@@ -88,10 +88,25 @@ TEST(Scene, ReadsTheBaseScene) {
   EXPECT_NEAR(w.initialMass, 2.0 * 2000.0 * std::acos(-1.0) * 1e-4, 2e-3 * w.initialMass);
 }
 
+TEST(Scene, FrictionFromAStartTime) {
+  const std::string scene = edit("kn = 1e5", "kn = 1e5\nfriction = 0.3\nfriction_from = 0.25");
+  const auto any = io::readScene(writeScene("friction_from", scene).string());
+  const auto& s = as<2>(any);
+  EXPECT_TRUE(s.world.contact.hasFriction);
+  EXPECT_EQ(s.world.contact.friction, 0.3);
+  EXPECT_EQ(s.world.contact.frictionFrom, 0.25);
+  const auto plain = io::readScene(writeScene("plain", edit("kn = 1e5", "kn = 1e5\nfriction = 0.3")).string());
+  EXPECT_EQ(as<2>(plain).world.contact.frictionFrom, 0.0);  // from the start
+}
+
 TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
   const std::vector<BadCase> cases = {
       {"negative_kn", edit("kn = 1e5", "kn = -1e5"), 6, "contact.kn", "must be positive"},
       {"negative_friction", edit("kn = 1e5", "kn = 1e5\nfriction = -0.2"), 7, "contact.friction", "must be >= 0"},
+      {"friction_from_alone", edit("kn = 1e5", "kn = 1e5\nfriction_from = 0.1"), 7, "contact.friction_from",
+       "needs `friction`"},
+      {"negative_friction_from", edit("kn = 1e5", "kn = 1e5\nfriction = 0.3\nfriction_from = -1.0"), 8,
+       "contact.friction_from", "must be >= 0"},
       {"dt_zero", edit("steps = 10", "steps = 10\ndt = 0.0"), 4, "simulation.dt", "must be positive"},
       {"dt_word", edit("steps = 10", "steps = 10\ndt = \"fast\""), 4, "simulation.dt", "\"auto\""},
       {"nan_density", edit("density = 2000.0", "density = nan"), 9, "materials.rock.density", "finite"},

@@ -83,6 +83,11 @@ struct ContactLawDef {
   /// Hertz: Poisson's ratio, 0 <= nu < 0.5.
   double poissonRatio = 0.25;
   bool hasFriction = true;  ///< Coulomb friction with shear history
+  /// Simulated time, s, >= 0, from which friction acts (when `hasFriction`);
+  /// before it the law is frictionless and keeps no shear history, and the
+  /// shear springs start from zero at that time. A dense specimen is made
+  /// frictionless, then tested with friction.
+  double frictionFrom = 0.0;
   bool hasDamping = true;   ///< contact damping C_res
 };
 

@@ -141,6 +141,15 @@ class ContactSolver {
   /// @brief The law this solver applies.
   const ContactLawDef& law() const { return law_; }
 
+  /// @brief Switches the law's friction on or off for the next compute()
+  /// calls (ContactLawDef::frictionFrom). Off, the law is frictionless and the
+  /// shear history is dropped; switched on, the shear springs start from zero.
+  /// No effect on a law without friction.
+  void setFrictionActive(bool active) { frictionActive_ = active; }
+
+  /// @brief Whether compute() applies friction: the law has it and it is active.
+  bool frictionOn() const { return law_.hasFriction && frictionActive_; }
+
   /// @brief Computes the node contacts and forces of the candidate pairs, of
   /// every particle against every plane and against every tool, at the current
   /// state of `particles`; fills pairContacts() and nodeContacts() and updates
@@ -223,6 +232,7 @@ class ContactSolver {
   void gather(const Particles<D>& particles, std::size_t particlePairTasks, std::size_t planeTasks);
 
   ContactLawDef law_;
+  bool frictionActive_ = true;
   // Output of the last compute(); nodes_ / shear_ with history_ are also the history.
   std::vector<PairContact<D>> pairs_;
   std::vector<PairDashpot<D>> dashpots_;  // aligned with pairs_; not part of the saved state
