@@ -150,9 +150,12 @@ Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int
   // of a level-set cut, eq. 14-15) the gradient jumps and the damped steps
   // zig-zag or stop with |phi| up to ~h/4 left. A node left there is outside
   // its own body and can be inside a neighbour (a fragment's sibling), so
-  // bracket the zero instead: the closest grid node of the opposite sign
-  // within two cells, then bisection on the segment to it (the interpolant is
-  // continuous along it and equals the node's value at its end).
+  // bracket the zero instead: the closest grid node of the opposite sign, or
+  // zero, within two cells, then bisection on the segment to it (the
+  // interpolant is continuous along it and equals the node's value at its
+  // end). Zero-valued nodes count: a flat cut through a row of grid nodes
+  // gives max(phi, phi_f) = 0 there, and a node beside the rim may see no
+  // negative node within reach (fuzz_split found nodes left 0.008 cells out).
   const Vec<D> g = grid.toGrid(x);
   Index<D> base;
   for (int a = 0; a < D; ++a) base[a] = int(std::floor(g[a]));
@@ -170,7 +173,7 @@ Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int
     }
     if (!grid.inBounds(i)) continue;
     const double v = grid.at(i);
-    if (!(phi > 0.0 ? v < 0.0 : v > 0.0)) continue;
+    if (!(phi > 0.0 ? v <= 0.0 : v >= 0.0)) continue;
     const Vec<D> y = grid.nodePosition(i);
     const double d = (y - x).squaredNorm();
     if (d < best) {
