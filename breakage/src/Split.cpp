@@ -354,11 +354,13 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
       for (Vec<D>& x : nodes.positions) x = geometry::projectOntoZero(side.pieces[k], x, 1e-4, 10);
       // A node the projection could not bring to the piece's surface (a
       // parent node several cells from the piece it was given to, left up to a
-      // cell outside it and outside the parent: found by fuzz_split) is not a
-      // surface node of this piece: dropped.
+      // cell outside it and outside the parent; or one beside a sliver whose
+      // grid values stay just above zero, left 0.008 cells out: both found by
+      // fuzz_split) is not a surface node of this piece: dropped. A converged
+      // projection is within 1e-4 cells.
       std::size_t keptCount = 0;
       for (std::size_t n = 0; n < nodes.size(); ++n) {
-        if (!(std::abs(side.pieces[k].value(nodes.positions[n])) <= 0.01 * h)) continue;
+        if (!(std::abs(side.pieces[k].value(nodes.positions[n])) <= 1e-3 * h)) continue;
         nodes.positions[keptCount] = nodes.positions[n];
         nodes.weights[keptCount] = nodes.weights[n];
         ++keptCount;
