@@ -15,12 +15,12 @@
 # with scripts/build.sh when missing), THREADS (default: the scenes'),
 # SKIP_RUN=1 (only post-process runs already in OUTDIR).
 #
-# The test starts at the seating point: after the platen's fast generation
-# stage (the scenes' key frames), the row of least platen stress before the
-# stress first exceeds 1 MPa (the loose packing just jammed under the slow
-# platen). Strain, the initial void ratio and the snapshots count from there.
+# The test starts when friction starts to act (the scene's [contact]
+# friction_from): the specimen is generated and densified frictionless, then
+# loaded with friction. Strain, the initial void ratio and the snapshots count
+# from there.
 # Besides the paper's figures the summary gives the strain and stress at which
-# the target void ratio 0.18 (eq. 22) is reached and a quasi-static check: the
+# the target void ratio (0.18 in 2D, eq. 22; 0.6 in 3D) is reached and a quasi-static check: the
 # largest kinetic / elastic energy ratio once the stress exceeds 0.5 MPa.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -45,9 +45,14 @@ scene_of() {
     *) echo "oedometer.sh: unknown case '$1' (von_mises, tresca, max_principal, 3d)" >&2; exit 2 ;;
   esac
 }
-# The slow (loading) stage of each scene starts at this time, s (the scene's key frames).
-load_start_of() { case "$1" in 3d) echo 0.012 ;; *) echo 0.010 ;; esac; }
-target_void_ratio=0.18
+# The test's start, s: the scene's [contact] friction_from.
+test_start_of() {
+  local t
+  t=$(sed -n 's/^friction_from *= *\([0-9.eE+-]*\).*/\1/p' "$1" | head -1)
+  [ -n "$t" ] || { echo "oedometer.sh: $1 has no [contact] friction_from (the test's start)" >&2; exit 2; }
+  echo "$t"
+}
+target_void_ratio_of() { case "$1" in 3d) echo 0.6 ;; *) echo 0.18 ;; esac; }
 
 have_gnuplot=0
 command -v gnuplot >/dev/null 2>&1 && have_gnuplot=1
@@ -71,7 +76,7 @@ for c in "${cases[@]}"; do
   [ -f "$d/summary.json" ] || { echo "oedometer.sh: $d/summary.json is missing (run without SKIP_RUN=1)" >&2; exit 1; }
   p="$d/oedometer"
   mkdir -p "$p"
-  t_load=$(load_start_of "$c")
+  t_load=$(test_start_of "$scene")
 
   # 1. The test curve: strain from the start height (history.csv), stress in MPa.
   awk -F, -v tl="$t_load" -v dir="$p" '
@@ -81,12 +86,8 @@ for c in "${cases[@]}"; do
       B[n] = $col["breakages"]; P[n] = $col["particles"]; K[n] = $col["kinetic_J"]; U[n] = $col["elastic_J"]
     }
     END {
-      # the seating point: least stress in the slow stage before the stress first exceeds 1 MPa
-      for (k = 1; k <= n; ++k) {
-        if (T[k] + 1e-12 < tl) continue
-        if (S[k] > 1e6) break
-        if (!start || S[k] < S[start]) start = k
-      }
+      # the test starts at the first row at or after friction_from
+      for (k = 1; k <= n && !start; ++k) if (T[k] + 1e-12 >= tl) start = k
       if (!start) start = n
       h0 = H[start]
       print "time_s,strain,stress_MPa,void_ratio,breakages,particles,kinetic_to_elastic" > (dir "/curve.csv")
@@ -96,7 +97,7 @@ for c in "${cases[@]}"; do
     }' "$d/history.csv"
   read -r t0 h0 e0 s0 < "$p/start.txt"
   # The strain and stress at the target void ratio, and the quasi-static check.
-  read -r target_eps target_s ke_max < <(awk -F, -v et="$target_void_ratio" '
+  read -r target_eps target_s ke_max < <(awk -F, -v et="$(target_void_ratio_of "$c")" '
     NR == 1 { next }
     { if (!hit && $4 <= et) { hit = 1; eps = $2; s = $3 }
       if ($3 > 0.5 && $7 > r) r = $7 }
@@ -129,13 +130,13 @@ for c in "${cases[@]}"; do
   times=$(awk -F, 'NR > 1 && !seen[$1]++ { print $1 }' "$d/psd.csv")
   : > "$p/snapshots.txt"
   for t in $times; do
-    awk -v t="$t" -v t0="$t0" 'BEGIN { exit !(t + 1e-12 >= t0) }' || continue
+    awk -v t="$t" -v tl="$t_load" 'BEGIN { exit !(t + 1e-12 >= tl) }' || continue
     echo "$t $(strain_at "$t")" >> "$p/snapshots.txt"
   done
   # Mean circularity and aspect ratio against the test's strain.
-  echo "strain,mean_circularity,mean_aspect_ratio,particles" > "$p/shape_stats.csv"
+  echo "strain,mean_circularity,mean_aspect_ratio,particles,shape_particles" > "$p/shape_stats.csv"
   while read -r t eps; do
-    awk -F, -v t="$t" -v eps="$eps" 'NR > 1 && $1 == t { printf "%s,%s,%s,%s\n", eps, $4, $5, $3 }' "$d/shape_stats.csv" >> "$p/shape_stats.csv"
+    awk -F, -v t="$t" -v eps="$eps" 'NR > 1 && $1 == t { printf "%s,%s,%s,%s,%s\n", eps, $4, $5, $3, $7 }' "$d/shape_stats.csv" >> "$p/shape_stats.csv"
   done < "$p/snapshots.txt"
 
   # Final state and run figures.

@@ -274,7 +274,8 @@ class Runner {
     csv_["history.csv"].open(out_ / "history.csv", header, size("history.csv"));
     csv_["psd.csv"].open(out_ / "psd.csv", "time_s,sieve_size_m,percent_passing", size("psd.csv"));
     csv_["shape_stats.csv"].open(out_ / "shape_stats.csv",
-                                 "time_s,strain,particles,mean_circularity,mean_aspect_ratio,mean_sieve_size_m",
+                                 "time_s,strain,particles,mean_circularity,mean_aspect_ratio,mean_sieve_size_m,"
+                                 "shape_particles",
                                  size("shape_stats.csv"));
     csv_["shape_histograms.csv"].open(out_ / "shape_histograms.csv", "time_s,strain,quantity,bin_low,bin_high,count",
                                       size("shape_histograms.csv"));
@@ -406,15 +407,20 @@ class Runner {
     const std::string t = num(w.time());
     const std::string strain = scene_.specimen && h0_ > 0.0 ? num((h0_ - specimenHeight()) / h0_) : "";
     // Particle size distribution by mass against sieve size (eq. 21).
+    // Shape statistics only of the particles resolved on their grids ([output] shape_min_cells).
     std::vector<std::pair<double, double>> sizes;
     double total = 0.0, circ = 0.0, aspect = 0.0, sieve = 0.0;
+    std::vector<std::size_t> resolved;
     for (std::size_t i = 0; i < p.size(); ++i) {
       const auto& d = p.shape[i]->descriptors();
       sizes.emplace_back(d.sieveSize, p.mass[i]);
       total += p.mass[i];
-      circ += d.circularity;
-      aspect += d.aspectRatio;
       sieve += d.sieveSize;
+      if (d.equivalentDiameter >= scene_.output.shapeMinCells * p.shape[i]->grid().spacing()) {
+        resolved.push_back(i);
+        circ += d.circularity;
+        aspect += d.aspectRatio;
+      }
     }
     // Fines removed so far count as passing at their own size (paper section
     // 3: removed particles are kept in the PSD).
@@ -433,12 +439,13 @@ class Runner {
     csv_["psd.csv"].stream() << rows;
     csv_["psd.csv"].flush();
     const double n = double(std::max<std::size_t>(p.size(), 1));
-    csv_["shape_stats.csv"].row(t + "," + strain + "," + std::to_string(p.size()) + "," + num(circ / n) + "," +
-                                num(aspect / n) + "," + num(sieve / n));
+    const double m = double(std::max<std::size_t>(resolved.size(), 1));
+    csv_["shape_stats.csv"].row(t + "," + strain + "," + std::to_string(p.size()) + "," + num(circ / m) + "," +
+                                num(aspect / m) + "," + num(sieve / n) + "," + std::to_string(resolved.size()));
     // Histograms of circularity (sphericity) and aspect ratio, 10 bins on [0, 1].
     for (const char* quantity : {"circularity", "aspect_ratio"}) {
       std::array<std::size_t, 10> bins{};
-      for (std::size_t i = 0; i < p.size(); ++i) {
+      for (const std::size_t i : resolved) {
         const auto& d = p.shape[i]->descriptors();
         const double v = std::string(quantity) == "circularity" ? d.circularity : d.aspectRatio;
         bins[std::size_t(std::clamp(int(v * 10.0), 0, 9))]++;

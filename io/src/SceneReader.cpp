@@ -606,6 +606,8 @@ class SceneReader {
         }
       }
     }
+    o.shapeMinCells = r.number("shape_min_cells", o.shapeMinCells);
+    if (o.shapeMinCells < 0.0) r.fail("shape_min_cells", "must be >= 0 cells, got " + std::to_string(o.shapeMinCells));
     o.checkpointEvery = r.number("checkpoint_every", 0.0);
     if (o.checkpointEvery < 0.0) r.fail("checkpoint_every", "must be >= 0 s");
     o.progressSeconds = r.positive("progress_seconds", o.progressSeconds);

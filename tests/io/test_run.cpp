@@ -251,3 +251,69 @@ TEST(Run, DistributionsAtChosenTimes) {
     EXPECT_LT(t, times[k] + 2e-5) << "snapshot " << k;  // within a step (dt <= 1.1e-5 s here)
   }
 }
+
+// Shape statistics leave out particles under [output] shape_min_cells cells
+// across: a disc 20 cells across is counted (circularity near 1), one 3 cells
+// across is not; with shape_min_cells = 0 both are.
+TEST(Run, ShapeStatisticsLeaveOutUnresolvedParticles) {
+  const std::string base = R"([simulation]
+dimension = 2
+steps = 2
+
+[contact]
+kn = 1e5
+
+[materials.rock]
+density = 2000.0
+
+[shapes.big]
+kind = "circle"
+radius = 0.01
+cells_across = 20
+
+[shapes.tiny]
+kind = "circle"
+radius = 0.01
+cells_across = 3
+
+[[particles]]
+shape = "big"
+material = "rock"
+placement = "list"
+positions = [[0.0, 0.05]]
+
+[[particles]]
+shape = "tiny"
+material = "rock"
+placement = "list"
+positions = [[0.05, 0.05]]
+
+[output]
+distributions = 2
+)";
+  for (const double minCells : {5.0, 0.0}) {
+    TempDir dir(minCells > 0.0 ? "shape_min_default" : "shape_min_zero");
+    std::string text = base;
+    if (minCells == 0.0) text += "shape_min_cells = 0\n";
+    io::RunOptions o;
+    o.scene = writeScene(dir.path, text).string();
+    o.outDir = (dir.path / "out").string();
+    io::runScene(o);
+    const auto rows = lines(readFile(dir.path / "out" / "shape_stats.csv"));
+    ASSERT_GE(rows.size(), 2u);
+    EXPECT_EQ(split(rows[0]).back(), "shape_particles");
+    const auto first = split(rows[1]);
+    EXPECT_EQ(first[2], "2");  // particles
+    EXPECT_EQ(first.back(), minCells > 0.0 ? "1" : "2") << rows[1];
+    if (minCells > 0.0) {
+      EXPECT_NEAR(std::stod(first[3]), 1.0, 0.02) << "the big disc's circularity";
+    }
+    // Histograms count the same particles.
+    std::size_t counted = 0;
+    for (const std::string& row : lines(readFile(dir.path / "out" / "shape_histograms.csv"))) {
+      const auto cells = split(row);
+      if (cells[0] == first[0] && cells[2] == "circularity") counted += std::stoul(cells[5]);
+    }
+    EXPECT_EQ(counted, minCells > 0.0 ? 1u : 2u);
+  }
+}

@@ -127,6 +127,8 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
       {"zero_normal", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nnormal = [0.0, 0.0]\n", 23,
        "planes[0].normal", "zero vector"},
       {"syntax", edit("kn = 1e5", "kn = = 1e5"), 6, "", "TOML syntax error"},
+      {"negative_shape_min_cells", std::string(kBase) + "[output]\nshape_min_cells = -1.0\n", 22,
+       "output.shape_min_cells", "must be >= 0"},
       {"discharge_alone", std::string(kBase) + "[effects]\ndischarge = { min = [0.0, 0.0], max = [1.0, 1.0] }\n", 22,
        "effects.discharge", "needs an outflow box"},
   };

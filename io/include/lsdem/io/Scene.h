@@ -62,6 +62,11 @@ struct OutputDef {
   std::uint64_t historyRows = 500;      ///< rows of history.csv over the run
   std::uint64_t distributions = 5;      ///< PSD and shape-statistics snapshots over the run (including the first and last)
   std::vector<double> distributionTimes;  ///< instead: snapshots at these simulated times, s (ascending), plus the first and last
+  /// Shape statistics (circularity / sphericity, aspect ratio) leave out
+  /// particles whose equivalent diameter is below this many cells of their
+  /// own grid: a fragment a few cells across has no resolved shape (its
+  /// sphericity from the grid's volume and the nodes' area can exceed 1).
+  double shapeMinCells = 5.0;
   double checkpointEvery = 0.0;         ///< s of simulated time between checkpoints (0: only at the end)
   double progressSeconds = 2.0;         ///< wall seconds between progress reports
 };
