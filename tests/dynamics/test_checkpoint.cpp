@@ -22,8 +22,11 @@ struct Heap {
 
   // A heap of spheres falling into a box with friction and damping, a servo
   // platen pressing from above, and a feed dropping more spheres.
+  double frictionFrom = 0.0;  // s (ContactLawDef::frictionFrom)
+
   std::unique_ptr<World<D>> build() const {
     WorldDef<D> def;
+    def.contact.frictionFrom = frictionFrom;
     def.contact.kn = 2e4;
     def.contact.ks = 1.6e4;
     def.gravity = Vec<D>(-9.81 * Vec<D>::Unit(1));
@@ -90,10 +93,17 @@ void expectSameState(const World<D>& a, const World<D>& b) {
   EXPECT_EQ(a.toolPoses()[0].position, b.toolPoses()[0].position);
 }
 
+// `frictionLate`: friction acts only from halfway through the resumed part,
+// so the saved state has no shear history and the switch happens after the restore.
 template <int D>
-void checkpointRoundTrip() {
+void checkpointRoundTrip(bool frictionLate = false) {
   Heap<D> setup;
   const std::uint64_t before = 1500, after = 1500;
+  if (frictionLate) {
+    auto probe = setup.build();
+    probe->run(before);
+    setup.frictionFrom = 1.5 * probe->time();
+  }
 
   // Uninterrupted run.
   auto straight = setup.build();
@@ -110,7 +120,11 @@ void checkpointRoundTrip() {
     if (added) table.push_back(s);
     return it->second;
   });
-  ASSERT_GT(first->contacts().historySize(), 0u) << "the test needs shear history to carry over";
+  if (frictionLate) {
+    ASSERT_EQ(first->contacts().historySize(), 0u) << "frictionless until friction_from";
+  } else {
+    ASSERT_GT(first->contacts().historySize(), 0u) << "the test needs shear history to carry over";
+  }
 
   // Restored into a fresh world and continued.
   auto resumed = setup.build();
@@ -121,12 +135,17 @@ void checkpointRoundTrip() {
   resumed->run(after);
   expectSameState(*straight, *resumed);
   EXPECT_GT(resumed->particles().size(), 12u);  // the feed kept dropping
+  if (frictionLate) {
+    EXPECT_GT(resumed->contacts().historySize(), 0u) << "friction acts at the end";
+  }
 }
 
 }  // namespace
 
 TEST(Checkpoint, ResumedRunEqualsUninterruptedRun2D) { checkpointRoundTrip<2>(); }
 TEST(Checkpoint, ResumedRunEqualsUninterruptedRun3D) { checkpointRoundTrip<3>(); }
+TEST(Checkpoint, ResumedRunCrossingFrictionFromEqualsUninterruptedRun2D) { checkpointRoundTrip<2>(true); }
+TEST(Checkpoint, ResumedRunCrossingFrictionFromEqualsUninterruptedRun3D) { checkpointRoundTrip<3>(true); }
 
 TEST(Checkpoint, StateOfAnotherSceneIsRefused) {
   Heap<2> setup;
