@@ -77,8 +77,9 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
     w.beginObject().field("dimension", D).field("split", result.isSplit).key("fragments").beginArray();
     for (const auto& f : result.fragments) {
       w.beginObject()
-          .field("volume", f.rawVolume)
-          .field("corrected_volume", f.volume)
+          .field("volume", f.volume)
+          .field("grid_volume", f.rawVolume)
+          .field("regridded", f.regridded)
           .field("centroid", centroidOf(f))
           .field("nodes", f.shape->nodes().size())
           .field("side", f.side)
@@ -86,8 +87,8 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
     }
     w.endArray()
         .field("parent_volume", result.parentVolume)
-        .field("raw_volume_error", result.rawRelativeError)
-        .field("corrected_volume_sum", correctedSum)
+        .field("share_error", result.rawRelativeError)
+        .field("volume_sum", correctedSum)
         .field("dropped_fragments", result.droppedCount)
         .endObject();
     return;
@@ -98,12 +99,12 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
   for (std::size_t k = 0; k < result.fragments.size(); ++k) {
     const auto& f = result.fragments[k];
     const geometry::Vec<D> c = centroidOf(f);
-    std::printf("  fragment %zu: %s %.9g (corrected %.9g), centroid (", k, D == 2 ? "area" : "volume", f.rawVolume,
-                f.volume);
+    std::printf("  fragment %zu: %s %.9g (its own grid gives %.9g%s), centroid (", k, D == 2 ? "area" : "volume",
+                f.volume, f.rawVolume, f.regridded ? ", re-gridded" : "");
     for (int a = 0; a < D; ++a) std::printf("%s%.6g", a ? ", " : "", c[a]);
     std::printf("), %zu nodes\n", f.shape->nodes().size());
   }
-  std::printf("  raw volume error %.3e (relative); corrected sum %.9g\n", result.rawRelativeError, correctedSum);
+  std::printf("  share quadrature error %.3e (relative, removed); sum %.9g\n", result.rawRelativeError, correctedSum);
 }
 
 }  // namespace

@@ -54,6 +54,7 @@ Breakage<D>::Breakage(const BreakageDef<D>& def) : def_(def), criterion_(makeCri
   if (!(def.minVolume >= 0.0) || !std::isfinite(def.minVolume)) {
     throw std::invalid_argument("breakage minVolume must be finite and >= 0, got " + std::to_string(def.minVolume));
   }
+  validateSplitOptions(def.split);
   if (def.minNodes < 0) {
     throw std::invalid_argument("breakage minNodes must be >= 0, got " + std::to_string(def.minNodes));
   }
@@ -187,12 +188,12 @@ void Breakage<D>::applyQueue(World<D>& world) {
     } else {
       surface.plane = HalfSpace<D>{rotation.transpose() * q.plane.normal, q.plane.offset - q.plane.normal.dot(p.position[i])};
     }
-    SplitResult<D> split = splitShape(shape, surface);
+    SplitResult<D> split = splitShape(shape, surface, def_.split);
     if (!split.isSplit && !q.curved && !q.manual) {
       // The plane through the contacts grazes the grain (one side holds no
       // interior grid node): the same orientation through the centroid.
       surface.plane->offset = 0.0;
-      split = splitShape(shape, surface);
+      split = splitShape(shape, surface, def_.split);
       if (!split.isSplit) {
         // No cut resolves at this grid: the grain stays whole from now on
         // rather than being retried every step.

@@ -98,7 +98,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const Box<D> box = grid.bounds();
   const Vec<D> centre = toGrid.translation;
   const double reach2 = other.boundingRadius() * other.boundingRadius();
-  const double weightToFactor = directionWeight / referenceNodeWeight<D>(owner.grid().spacing());
+  const double weightToFactor = directionWeight / referenceNodeWeight<D>(owner.contactSpacing());
 
   // Test every node of the owner.
   const std::vector<Vec<D>>& nodes = owner.nodes().positions;
@@ -139,7 +139,7 @@ std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>
                            double offset, ThreadBuffers<D>& buf) {
   // The plane normal in the owner's body frame: distance = offset + nb . x_body.
   const Vec<D> nb = Ro.transpose() * plane.normal;
-  const double weightToFactor = 1.0 / referenceNodeWeight<D>(owner.grid().spacing());
+  const double weightToFactor = 1.0 / referenceNodeWeight<D>(owner.contactSpacing());
   const std::vector<Vec<D>>& nodes = owner.nodes().positions;
   const std::vector<double>& weights = owner.nodes().weights;
   const std::size_t count = nodes.size();

@@ -123,7 +123,7 @@ StiffestContact<D> stiffestContact(const geometry::Shape<D>& shape, const NodeSt
   const auto& x = shape.nodes().positions;
   const auto& w = shape.nodes().weights;
   if (x.empty()) fail("stiffestContact: the shape has no surface nodes");
-  const double depth = options.maxOverlap > 0.0 ? options.maxOverlap : 0.1 * shape.grid().spacing();
+  const double depth = options.maxOverlap > 0.0 ? options.maxOverlap : 0.1 * shape.contactSpacing();
 
   // Mass matrix per unit density, as the scaling M^(-1/2) of the eigenproblem.
   VecQ scale;

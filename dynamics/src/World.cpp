@@ -129,7 +129,7 @@ double World<D>::shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>&
     k = 2.0 * hertzStiffness(effectiveModulus(law), R, kHertzOverlapFraction * R);
   } else {
     NodeStiffness ns;
-    const double w = referenceNodeWeight<D>(shape.grid().spacing());
+    const double w = referenceNodeWeight<D>(shape.contactSpacing());
     ns.perNode = law.formulation == ForceFormulation::PerNode ? law.kn : 0.0;
     ns.perWeight = law.formulation == ForceFormulation::AreaWeighted ? law.kn / w : 0.0;
     ns.tangentialRatio = law.hasFriction ? law.ks / law.kn : 0.0;

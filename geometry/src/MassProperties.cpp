@@ -20,66 +20,6 @@ inline double heaviside(double phi, double epsilon) {
   return 0.5 * (1.0 + phi / epsilon + std::sin(std::numbers::pi * phi / epsilon) / std::numbers::pi);
 }
 
-/// Raw moments of a weight field about a fixed reference point: the sum of w,
-/// of w r and of the upper triangle of w r r^T (r relative to the reference,
-/// world units). Plain arrays so slices can be stored in a std::vector.
-template <int D>
-struct RawMoments {
-  static constexpr int kPairs = D * (D + 1) / 2;
-  double m0 = 0.0;
-  std::array<double, D> m1{};
-  std::array<double, kPairs> m2{};
-
-  void add(double w, const std::array<double, D>& r) {
-    m0 += w;
-    int p = 0;
-    for (int a = 0; a < D; ++a) {
-      const double wr = w * r[a];
-      m1[a] += wr;
-      for (int b = a; b < D; ++b) m2[p++] += wr * r[b];
-    }
-  }
-  void addScaled(const RawMoments& o, double s) {
-    m0 += s * o.m0;
-    for (int a = 0; a < D; ++a) m1[a] += s * o.m1[a];
-    for (int p = 0; p < kPairs; ++p) m2[p] += s * o.m2[p];
-  }
-};
-
-/// The partial sums of one slice of the grid (one value of the last index).
-/// Nodes deep inside (phi <= -2 eps) weigh 1 for both smoothing widths and go to
-/// `core`; nodes in the band (-2 eps, 2 eps) carry H_eps(-phi) in `band1` and
-/// H_2eps(-phi) in `band2`; nodes at phi >= 2 eps weigh 0 for both.
-template <int D>
-struct SliceSums {
-  RawMoments<D> core, band1, band2;
-  bool sawNaN = false;
-};
-
-/// Central properties from raw moments about `reference`, scaled by the cell volume.
-template <int D>
-MassProperties<D> fromRaw(const RawMoments<D>& raw, double cellVolume, const Vec<D>& reference) {
-  MassProperties<D> mp;
-  mp.volume = raw.m0 * cellVolume;
-  if (!(raw.m0 > 0.0)) {
-    mp.centroid = reference;
-    return mp;
-  }
-  // Centroid offset d from the reference, then S = M2 - m0 d d^T (symmetric by construction).
-  Vec<D> d;
-  for (int a = 0; a < D; ++a) d[a] = raw.m1[a] / raw.m0;
-  mp.centroid = reference + d;
-  int p = 0;
-  for (int a = 0; a < D; ++a) {
-    for (int b = a; b < D; ++b) {
-      const double s = (raw.m2[p++] - raw.m0 * d[a] * d[b]) * cellVolume;
-      mp.secondMoment(a, b) = s;
-      mp.secondMoment(b, a) = s;
-    }
-  }
-  return mp;
-}
-
 /// True when the volume is positive and S is positive definite.
 template <int D>
 bool isPhysical(const MassProperties<D>& mp) {
@@ -150,7 +90,6 @@ MassProperties<D> massProperties(const Grid<D>& grid, MassMethod method, double 
   }
   const double h = grid.spacing();
   const double eps = epsilonCells * h;
-  const double eps2 = 2.0 * eps;
   const Index<D>& dims = grid.dims();
   const std::vector<float>& phi = grid.values();
 
@@ -161,73 +100,131 @@ MassProperties<D> massProperties(const Grid<D>& grid, MassMethod method, double 
 
   // One partial sum per slice of the last axis, filled independently.
   const int slices = dims[D - 1];
-  std::vector<SliceSums<D>> partial(static_cast<std::size_t>(slices));
+  std::vector<MassSums<D>> partial(static_cast<std::size_t>(slices), MassSums<D>(eps));
   const std::size_t rowLength = std::size_t(dims[0]);
   const std::size_t rowsPerSlice = (D == 2) ? 1 : std::size_t(dims[1]);
 #ifdef LSDEM_HAVE_OPENMP
 #pragma omp parallel for schedule(static)
 #endif
   for (int s = 0; s < slices; ++s) {
-    SliceSums<D>& out = partial[std::size_t(s)];
-    std::array<double, D> r{};
+    MassSums<D>& out = partial[std::size_t(s)];
+    Vec<D> r = Vec<D>::Zero();
     r[D - 1] = h * (double(s) - centreCells[D - 1]);
     for (std::size_t row = 0; row < rowsPerSlice; ++row) {
       if constexpr (D == 3) r[1] = h * (double(row) - centreCells[1]);
       const std::size_t n0 = (std::size_t(s) * rowsPerSlice + row) * rowLength;
       for (std::size_t i = 0; i < rowLength; ++i) {
-        const double p = phi[n0 + i];
-        // Outside both bands: no weight.
-        if (p >= eps2) continue;
         r[0] = h * (double(i) - centreCells[0]);
-        // Deep inside: weight 1 for both widths.
-        if (p <= -eps2) {
-          out.core.add(1.0, r);
-          continue;
-        }
-        // In the band (NaN lands here too): both smoothed weights.
-        if (std::isnan(p)) {
-          out.sawNaN = true;
-          continue;
-        }
-        const double w1 = heaviside(-p, eps);
-        if (w1 > 0.0) out.band1.add(w1, r);
-        out.band2.add(heaviside(-p, eps2), r);
+        out.add(phi[n0 + i], r);
       }
     }
   }
 
   // Add the slices in slice order (deterministic for any thread count).
-  RawMoments<D> core, band1, band2;
+  MassSums<D> sums(eps);
   for (int s = 0; s < slices; ++s) {
-    const SliceSums<D>& part = partial[std::size_t(s)];
-    if (part.sawNaN) {
+    if (partial[std::size_t(s)].sawNaN()) {
       throw std::invalid_argument("massProperties: the grid holds NaN values (slice " + std::to_string(s) + ")");
     }
-    core.addScaled(part.core, 1.0);
-    band1.addScaled(part.band1, 1.0);
-    band2.addScaled(part.band2, 1.0);
+    sums.add(partial[std::size_t(s)]);
   }
   const double cellVolume = std::pow(h, D);
-
-  // Paper (eq. 25-30): the raw moments with eps.
-  RawMoments<D> withEps = core;
-  withEps.addScaled(band1, 1.0);
-  const MassProperties<D> paper = fromRaw<D>(withEps, cellVolume, reference);
+  const MassProperties<D> paper = sums.properties(MassMethod::Paper, cellVolume, reference);
   if (!(paper.volume > 0.0)) {
     throw std::invalid_argument("massProperties: the shape has no volume (no node with phi < eps; volume " +
                                 std::to_string(paper.volume) + ")");
   }
+  return method == MassMethod::Paper ? paper : sums.properties(method, cellVolume, reference);
+}
+
+template <int D>
+void MassSums<D>::Raw::add(double w, const Vec<D>& r) {
+  m0 += w;
+  for (int a = 0; a < D; ++a) {
+    const double wr = w * r[a];
+    m1[a] += wr;
+    for (int b = a; b < D; ++b) m2(a, b) += wr * r[b];
+  }
+}
+
+template <int D>
+void MassSums<D>::Raw::addScaled(const Raw& o, double s) {
+  m0 += s * o.m0;
+  for (int a = 0; a < D; ++a) m1[a] += s * o.m1[a];
+  for (int a = 0; a < D; ++a) {
+    for (int b = a; b < D; ++b) m2(a, b) += s * o.m2(a, b);
+  }
+}
+
+template <int D>
+void MassSums<D>::add(double phi, const Vec<D>& r, double cells) {
+  const double eps2 = 2.0 * eps_;
+  // Outside both bands: no weight.
+  if (phi >= eps2) return;
+  // Deep inside: weight 1 for both widths.
+  if (phi <= -eps2) {
+    core_.add(cells, r);
+    return;
+  }
+  // In the band (NaN lands here too): both smoothed weights.
+  if (std::isnan(phi)) {
+    sawNaN_ = true;
+    return;
+  }
+  const double w1 = heaviside(-phi, eps_);
+  if (w1 > 0.0) band1_.add(cells * w1, r);
+  band2_.add(cells * heaviside(-phi, eps2), r);
+}
+
+template <int D>
+void MassSums<D>::add(const MassSums& other) {
+  core_.addScaled(other.core_, 1.0);
+  band1_.addScaled(other.band1_, 1.0);
+  band2_.addScaled(other.band2_, 1.0);
+  sawNaN_ = sawNaN_ || other.sawNaN_;
+}
+
+template <int D>
+MassProperties<D> MassSums<D>::fromRaw(const Raw& raw, double cellVolume, const Vec<D>& reference) {
+  MassProperties<D> mp;
+  mp.volume = raw.m0 * cellVolume;
+  if (!(raw.m0 > 0.0)) {
+    mp.centroid = reference;
+    return mp;
+  }
+  // Centroid offset d from the reference, then S = M2 - m0 d d^T (symmetric by construction).
+  Vec<D> d;
+  for (int a = 0; a < D; ++a) d[a] = raw.m1[a] / raw.m0;
+  mp.centroid = reference + d;
+  for (int a = 0; a < D; ++a) {
+    for (int b = a; b < D; ++b) {
+      const double s = (raw.m2(a, b) - raw.m0 * d[a] * d[b]) * cellVolume;
+      mp.secondMoment(a, b) = s;
+      mp.secondMoment(b, a) = s;
+    }
+  }
+  return mp;
+}
+
+template <int D>
+MassProperties<D> MassSums<D>::properties(MassMethod method, double cellVolume, const Vec<D>& reference) const {
+  // Paper (eq. 25-30): the raw moments with eps.
+  Raw withEps = core_;
+  withEps.addScaled(band1_, 1.0);
+  const MassProperties<D> paper = fromRaw(withEps, cellVolume, reference);
   if (method == MassMethod::Paper) return paper;
 
   // Extrapolated: (4 M_eps - M_2eps) / 3 for every raw moment; the core cancels to itself.
-  RawMoments<D> extrapolated = core;
-  extrapolated.addScaled(band1, 4.0 / 3.0);
-  extrapolated.addScaled(band2, -1.0 / 3.0);
-  const MassProperties<D> result = fromRaw<D>(extrapolated, cellVolume, reference);
+  Raw extrapolated = core_;
+  extrapolated.addScaled(band1_, 4.0 / 3.0);
+  extrapolated.addScaled(band2_, -1.0 / 3.0);
+  const MassProperties<D> result = fromRaw(extrapolated, cellVolume, reference);
   // A shape thinner than the band: the expansion is not valid; keep the paper's estimate.
   return isPhysical(result) ? result : paper;
 }
 
+template class MassSums<2>;
+template class MassSums<3>;
 template struct MassProperties<2>;
 template struct MassProperties<3>;
 template MassProperties<2> massProperties<2>(const Grid<2>&, MassMethod, double);

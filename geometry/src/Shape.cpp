@@ -23,19 +23,33 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromGrid(Grid<D> grid, const ShapeOpti
 template <int D>
 std::shared_ptr<const Shape<D>> Shape<D>::fromGridAndNodes(Grid<D> grid, NodeSet<D> nodesGrid,
                                                           const ShapeOptions& options) {
+  // Mass properties in the grid frame from the grid itself (eq. 24-30).
+  const MassProperties<D> massGrid = massProperties(grid, options.massMethod);
+  return fromGridNodesAndMass(std::move(grid), std::move(nodesGrid), massGrid, options);
+}
+
+template <int D>
+std::shared_ptr<const Shape<D>> Shape<D>::fromGridNodesAndMass(Grid<D> grid, NodeSet<D> nodesGrid,
+                                                              const MassProperties<D>& massGrid,
+                                                              const ShapeOptions& options) {
   if (nodesGrid.empty() || nodesGrid.positions.size() != nodesGrid.weights.size()) {
     throw std::invalid_argument("a shape needs surface nodes with one weight each (" +
                                 std::to_string(nodesGrid.positions.size()) + " positions, " +
                                 std::to_string(nodesGrid.weights.size()) + " weights)");
   }
+  if (!(massGrid.volume > 0.0) || !std::isfinite(massGrid.volume)) {
+    throw std::invalid_argument("the level set has no interior (volume " + std::to_string(massGrid.volume) + ")");
+  }
+  if (!massGrid.centroid.allFinite() || !massGrid.secondMoment.allFinite()) {
+    throw std::invalid_argument("the shape's mass properties are not finite");
+  }
+  if (!(options.contactSpacing >= 0.0) || !std::isfinite(options.contactSpacing)) {
+    throw std::invalid_argument("contact spacing must be finite and >= 0, got " + std::to_string(options.contactSpacing));
+  }
   std::shared_ptr<Shape> shape(new Shape());
   shape->options_ = options;
 
-  // Mass properties in the grid frame; the body frame is the principal frame at the centroid.
-  const MassProperties<D> massGrid = massProperties(grid, options.massMethod);
-  if (!(massGrid.volume > 0.0)) {
-    throw std::invalid_argument("the level set has no interior (volume " + std::to_string(massGrid.volume) + ")");
-  }
+  // The body frame is the principal frame at the centroid.
   shape->bodyToGrid_.rotation = massGrid.principalAxes();
   shape->bodyToGrid_.translation = massGrid.centroid;
 

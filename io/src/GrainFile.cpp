@@ -34,7 +34,8 @@ using geometry::Shape;
 using geometry::Vec;
 
 /// Format version written by this code (text key `lsdem_grain`, binary header).
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 1;         // text form (contact_spacing is an optional key)
+constexpr std::uint32_t kBinaryVersion = 2;   // 2 adds options.contactSpacing; version 1 is still read
 /// Binary magic: a non-ASCII first byte (so text and binary are told apart by
 /// one byte), the name, and a newline that catches text-mode line-end mangling.
 constexpr char kMagic[8] = {'\x89', 'L', 'S', 'D', 'E', 'M', 'G', '\n'};
@@ -122,6 +123,7 @@ std::string textGrain(const Shape<D>& shape) {
   // Options the shape was made with.
   o.line("nodes_per_cell", p.options.nodesPerCell);
   o.text(std::string("mass_method ") + massMethodName(p.options.massMethod) + "\n");
+  if (p.options.contactSpacing > 0.0) o.line("contact_spacing", p.options.contactSpacing);
   // Body frame, mass properties per unit density, descriptors.
   o.line("body_to_grid_rotation", flat<D>(p.bodyToGrid.rotation));
   o.line("body_to_grid_translation", flat<D>(p.bodyToGrid.translation));
@@ -187,7 +189,7 @@ std::string binaryGrain(const Shape<D>& shape) {
   b.reserve(p.grid.bytes() + p.nodes.size() * (D + 1) * sizeof(double) + 512);
   // Header.
   b.append(kMagic, sizeof(kMagic));
-  putRaw<std::uint32_t>(b, kVersion);
+  putRaw<std::uint32_t>(b, kBinaryVersion);
   putRaw<std::uint32_t>(b, std::uint32_t(D));
   // Grid.
   for (int a = 0; a < D; ++a) putRaw<std::int32_t>(b, p.grid.dims()[a]);
@@ -216,6 +218,7 @@ std::string binaryGrain(const Shape<D>& shape) {
   putRaw<double>(b, p.boundingRadius);
   putRaw<double>(b, p.options.nodesPerCell);
   putRaw<std::uint32_t>(b, p.options.massMethod == MassMethod::Paper ? 0u : 1u);
+  putRaw<double>(b, p.options.contactSpacing);
   return b;
 }
 
@@ -280,15 +283,16 @@ class BinaryIn {
 };
 
 /// Reads the binary header after the first byte: magic, version, dimension.
-std::uint32_t readBinaryHeader(BinaryIn& b) {
+std::uint32_t readBinaryHeader(BinaryIn& b, std::uint32_t* versionOut = nullptr) {
   char magic[sizeof(kMagic)];
   b.bytes(magic, sizeof(magic), "magic");
   if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) b.fail("magic", "not an lsdem binary grain (bad magic)");
   const auto version = b.raw<std::uint32_t>("version");
-  if (version != kVersion) {
-    b.fail("version", "binary grain version " + std::to_string(version) + " is not supported (this lsdem reads " +
-                          std::to_string(kVersion) + ")");
+  if (version != kBinaryVersion && version != 1) {
+    b.fail("version", "binary grain version " + std::to_string(version) + " is not supported (this lsdem reads 1 and " +
+                          std::to_string(kBinaryVersion) + ")");
   }
+  if (versionOut) *versionOut = version;
   const auto dimension = b.raw<std::uint32_t>("dimension");
   if (dimension != 2 && dimension != 3) b.fail("dimension", "must be 2 or 3, got " + std::to_string(dimension));
   return dimension;
@@ -307,7 +311,8 @@ auto checkedShape(const std::string& source, int line, const std::string& key, F
 template <int D>
 std::shared_ptr<const Shape<D>> readBinary(std::istream& in, const std::string& source) {
   BinaryIn b(in, source);
-  const std::uint32_t dimension = readBinaryHeader(b);
+  std::uint32_t version = 0;
+  const std::uint32_t dimension = readBinaryHeader(b, &version);
   if (int(dimension) != D) {
     b.fail("dimension", "the file holds a " + std::to_string(dimension) + "D grain, a " + std::to_string(D) +
                             "D one is needed");
@@ -363,6 +368,10 @@ std::shared_ptr<const Shape<D>> readBinary(std::istream& in, const std::string& 
   const auto method = b.raw<std::uint32_t>("mass_method");
   if (method > 1) b.fail("mass_method", "unknown method code " + std::to_string(method));
   p.options.massMethod = method == 0 ? MassMethod::Paper : MassMethod::Extrapolated;
+  if (version >= 2) {
+    p.options.contactSpacing = b.real("contact_spacing");
+    if (!(p.options.contactSpacing >= 0.0)) b.fail("contact_spacing", "must be >= 0");
+  }
   return checkedShape(source, 0, "", [&] { return Shape<D>::fromParts(std::move(p)); });
 }
 
@@ -414,7 +423,7 @@ Parsed parseNumber(const std::string& token, T& value) {
 template <int D>
 const std::map<std::string, int>& numberKeys() {
   static const std::map<std::string, int> keys = {
-      {"origin", D},          {"spacing", 1},          {"nodes_per_cell", 1},
+      {"origin", D},          {"spacing", 1},          {"nodes_per_cell", 1},     {"contact_spacing", 1},
       {"body_to_grid_rotation", D * D},                {"body_to_grid_translation", D},
       {"volume", 1},          {"centroid", D},         {"second_moment", D * D},
       {"bounding_radius", 1}, {"descriptor_volume", 1}, {"surface_area", 1},
@@ -659,6 +668,10 @@ class TextGrainReader {
     if (numbers_.count("nodes_per_cell")) {
       options_.nodesPerCell = scalar("nodes_per_cell");
       if (!(options_.nodesPerCell > 0.0)) fail(lines_.at("nodes_per_cell"), "nodes_per_cell", "must be positive");
+    }
+    if (numbers_.count("contact_spacing")) {
+      options_.contactSpacing = scalar("contact_spacing");
+      if (!(options_.contactSpacing > 0.0)) fail(lines_.at("contact_spacing"), "contact_spacing", "must be positive");
     }
     // Which form: any full-form key asks for all of them.
     const bool full = std::any_of(fullFormKeys().begin(), fullFormKeys().end(),

@@ -454,6 +454,18 @@ class SceneReader {
     if (minNodes < 0 || minNodes > 1000000) r.fail("min_nodes", "must be in [0, 1e6]");
     def.minNodes = int(minNodes);
     def.haltBelowMinimum = r.boolean("halt_below_minimum", false);
+    // Re-gridding of small fragments (Split.h, docs/breakage.md).
+    def.split.regridCells = r.number("regrid_cells", def.split.regridCells);
+    if (def.split.regridCells < 0.0 || def.split.regridCells > 1000.0) r.fail("regrid_cells", "must be in [0, 1000] (0 turns re-gridding off)");
+    const std::int64_t maxFactor = r.integer("regrid_max_factor", def.split.regridMaxFactor);
+    if (maxFactor < 1 || maxFactor > 64) r.fail("regrid_max_factor", "must be in [1, 64]");
+    def.split.regridMaxFactor = int(maxFactor);
+    const std::int64_t maxValues = r.integer("regrid_max_values", std::int64_t(def.split.regridMaxNodes));
+    if (maxValues < 64 || maxValues > (std::int64_t(1) << 27)) r.fail("regrid_max_values", "must be in [64, 2^27]");
+    def.split.regridMaxNodes = std::size_t(maxValues);
+    const std::int64_t minFragmentNodes = r.integer("min_fragment_nodes", def.split.minFragmentNodes);
+    if (minFragmentNodes < 1 || minFragmentNodes > 100000) r.fail("min_fragment_nodes", "must be in [1, 1e5]");
+    def.split.minFragmentNodes = int(minFragmentNodes);
     def.buckling = r.boolean("buckling", false);
     def.bucklingRatio = r.number("buckling_ratio", def.bucklingRatio);
     if (!(def.bucklingRatio > 1.0)) r.fail("buckling_ratio", "must be > 1");

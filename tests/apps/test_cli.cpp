@@ -131,8 +131,8 @@ TEST(Cli, SplitSphereGivesSphericalCaps) {
   EXPECT_NEAR(jsonNumber(r.out.substr(second), "volume"), cap, 0.01 * cap);
   EXPECT_GT(jsonNumber(r.out.substr(second), "nodes"), 100);
   const double parent = jsonNumber(r.out, "parent_volume");
-  EXPECT_NEAR(jsonNumber(r.out, "corrected_volume_sum"), parent, 1e-12 * parent);
-  EXPECT_LT(std::abs(jsonNumber(r.out, "raw_volume_error")), 0.01);
+  EXPECT_NEAR(jsonNumber(r.out, "volume_sum"), parent, 1e-12 * parent);
+  EXPECT_LT(std::abs(jsonNumber(r.out, "share_error")), 0.01);
   // The cap's centroid height 3 (2R - h)^2 / (4 (3R - h)) above the centre.
   const std::size_t cz = r.out.find("\"centroid\"", second);
   std::smatch m;

@@ -85,15 +85,25 @@ double worstNodeValue(const Shape<D>& shape) {
   return worst;
 }
 
+// Tolerances of checkBallSplit: the fragment's own-grid volume and its node
+// weights against the analytic cap. Re-gridded fragments' nodes are made on
+// their new grids, whose zero sets round the sharp rim by about a new cell
+// (their weights add up to that rounded surface: a few % short of the sharp
+// boundary); their volume is the partition's either way.
+struct BallTolerances {
+  double gridVolume = 0.01;
+  double boundary = 0.02;
+};
+
 template <int D>
-void checkBallSplit() {
+void checkBallSplit(const SplitOptions& options, const BallTolerances& tol) {
   const double r = 1.0, h = r / 10.0, a = 0.3;
   const auto parent = ball<D>(r);
-  const SplitResult<D> split = splitShape<D>(*parent, flat<D>({Vec<D>::UnitX(), a}));
+  const SplitResult<D> split = splitShape<D>(*parent, flat<D>({Vec<D>::UnitX(), a}), options);
   ASSERT_TRUE(split.isSplit);
   ASSERT_EQ(split.fragments.size(), 2u);
   EXPECT_EQ(split.droppedCount, 0);
-  EXPECT_LT(std::abs(split.rawRelativeError), 0.01);
+  EXPECT_LT(std::abs(split.rawRelativeError), 1e-3);
   EXPECT_LT(split.inertiaRelativeError, 0.01);
   EXPECT_LT(split.centroidShift.norm(), 0.01 * h);
   double sum = 0.0;
@@ -102,28 +112,89 @@ void checkBallSplit() {
     const double signedA = f.side < 0 ? -a : a;
     const double expectedVolume = capVolume<D>(r, signedA);
     const double expectedCentroid = capCentroid<D>(r, signedA) * (f.side < 0 ? -1.0 : 1.0);
-    EXPECT_NEAR(f.rawVolume, expectedVolume, 0.01 * expectedVolume) << "side " << f.side;
+    EXPECT_NEAR(f.rawVolume, expectedVolume, tol.gridVolume * expectedVolume) << "side " << f.side;
     EXPECT_NEAR(f.volume, expectedVolume, 0.01 * expectedVolume) << "side " << f.side;
+    EXPECT_DOUBLE_EQ(f.massScale(), 1.0);
     EXPECT_NEAR(f.childToParent.translation[0], expectedCentroid, 0.01 * r) << "side " << f.side;
     EXPECT_NEAR(f.childToParent.translation.template tail<D - 1>().norm(), 0.0, 0.01 * r);
     // Nodes on the fragment's own surface; weights add up to its boundary.
-    EXPECT_LT(worstNodeValue(*f.shape), 0.1 * h) << "side " << f.side;
+    EXPECT_LT(worstNodeValue(*f.shape), 0.1 * f.shape->grid().spacing()) << "side " << f.side;
     const double boundary = capBoundary<D>(r, signedA);
-    EXPECT_NEAR(f.shape->nodes().totalWeight(), boundary, 0.02 * boundary) << "side " << f.side;
+    EXPECT_NEAR(f.shape->nodes().totalWeight(), boundary, tol.boundary * boundary) << "side " << f.side;
     // The child's body frame really holds the child: its centroid is 0 there.
     EXPECT_LT(f.shape->mass().centroid.norm(), 1e-12);
     // Its bounding sphere holds all its material, the sharp rim included.
     EXPECT_LE(lsdem::test::boundingSphereExcess(*f.shape, 3), 0.0) << "side " << f.side;
+    // Contacts see the parent's stiffness per area.
+    EXPECT_DOUBLE_EQ(f.shape->contactSpacing(), h);
     sum += f.volume;
   }
   EXPECT_NEAR(sum, split.parentVolume, 1e-12 * split.parentVolume);
   EXPECT_DOUBLE_EQ(split.parentVolume, parent->volume());
 }
 
+SplitOptions noRegrid() {
+  SplitOptions o;
+  o.regridCells = 0.0;
+  return o;
+}
+
+// The offset a of a plane x = a that cuts `fraction` of a unit ball's volume (area) off.
+template <int D>
+double capOffset(double fraction) {
+  const double whole = capVolume<D>(1.0, -1.0);
+  double lo = 0.0, hi = 1.0;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (capVolume<D>(1.0, mid) > fraction * whole ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// A cap of 2 % of the ball at 20 cells across (1.7 cells thick): its mass is
+// its share of the parent's, within 3 % (2D) / 5 % (3D, measured +4.0 %: the
+// smoothing band of the parent's surface, 3 cells wide, is wider than the cap
+// where it meets the cut) of the analytic cap; its own grid's estimate would
+// be +20-120 % for such thin pieces. Re-gridded, it holds at least the node floor.
+template <int D>
+void checkSmallCap(const SplitOptions& options, double tolerance) {
+  const double a = capOffset<D>(0.02);
+  const auto parent = ball<D>(1.0);
+  const SplitResult<D> split = splitShape<D>(*parent, flat<D>({Vec<D>::UnitX(), a}), options);
+  ASSERT_EQ(split.fragments.size(), 2u);
+  const Fragment<D>& cap = split.fragments[1];
+  ASSERT_EQ(cap.side, 1);
+  const double expected = capVolume<D>(1.0, a);
+  EXPECT_NEAR(cap.volume, expected, tolerance * expected);
+  EXPECT_NEAR(split.fragments[0].volume, capVolume<D>(1.0, -a), 0.002 * capVolume<D>(1.0, -a));
+  EXPECT_NEAR(cap.childToParent.translation[0], capCentroid<D>(1.0, a), 0.03);
+  if (options.regridCells > 0.0) {
+    EXPECT_TRUE(cap.regridded);
+    EXPECT_LT(cap.shape->grid().spacing(), 0.05);
+    EXPECT_GE(cap.shape->nodes().size(), std::size_t(options.minFragmentNodes));
+    // Nodes on its own (new) surface and not outside the parent.
+    EXPECT_LT(worstNodeValue(*cap.shape), 0.1 * cap.shape->grid().spacing());
+    for (const Vec<D>& x : cap.shape->nodes().positions) {
+      EXPECT_LE(parent->value(cap.childToParent.apply(x)), 1e-4 * 0.1 + 1e-12);
+    }
+  }
+}
+
 }  // namespace
 
-TEST(Split, CircleByLineGivesCircularSegments) { checkBallSplit<2>(); }
-TEST(Split, SphereByPlaneGivesSphericalCaps) { checkBallSplit<3>(); }
+TEST(Split, CircleByLineGivesCircularSegments) { checkBallSplit<2>(noRegrid(), {}); }
+TEST(Split, SphereByPlaneGivesSphericalCaps) { checkBallSplit<3>(noRegrid(), {}); }
+TEST(Split, CircleByLineRegridded) { checkBallSplit<2>(SplitOptions{}, {0.01, 0.04}); }
+TEST(Split, SphereByPlaneRegridded) { checkBallSplit<3>(SplitOptions{}, {0.02, 0.06}); }
+TEST(Split, SmallSegmentMassIsItsShare2D) {
+  checkSmallCap<2>(noRegrid(), 0.03);
+  checkSmallCap<2>(SplitOptions{}, 0.03);
+}
+TEST(Split, SmallCapMassIsItsShare3D) {
+  checkSmallCap<3>(noRegrid(), 0.05);
+  checkSmallCap<3>(SplitOptions{}, 0.05);
+}
+
 
 // A plane through the centre of a box: two equal halves with the half box's inertia.
 TEST(Split, BoxHalves2D) {
@@ -184,12 +255,23 @@ TEST(Split, ConcaveGrainCutThroughBothArmsGivesThreeFragments) {
       const Vec<2> c = parent->bodyToGrid().apply(f.childToParent.translation);
       EXPECT_NEAR(std::abs(c[0]), 2.0, 0.03 * 2.0);
       EXPECT_NEAR(c[1], 2.0, 0.03 * 2.0);
-      EXPECT_NEAR(f.shape->nodes().totalWeight(), 8.0, 0.03 * 8.0);
+      // Re-gridded arms (6.7 parent cells across): nodes on the new grid, whose
+      // zero set rounds the arm's two sharp corners at the cut.
+      EXPECT_TRUE(f.regridded);
+      EXPECT_NEAR(f.shape->nodes().totalWeight(), 8.0, 0.06 * 8.0);
     }
     EXPECT_LT(worstNodeValue(*f.shape), 0.1 * h);
     sum += f.volume;
   }
   EXPECT_NEAR(sum, split.parentVolume, 1e-12 * split.parentVolume);
+  // The same split on a grid 4x finer: each fragment's mass within 1.5 % of it
+  // (the arms, 6.7 cells across, measured +1.1 %).
+  const auto fine = Shape<2>::fromGrid(lsdem::geometry::polygonGrid(u, 0.075));
+  const SplitResult<2> reference = splitShape<2>(*fine, flat<2>(bodyPlane<2>(*fine, Vec<2>::UnitY(), 1.0)));
+  ASSERT_EQ(reference.fragments.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) {
+    EXPECT_NEAR(split.fragments[k].volume, reference.fragments[k].volume, 0.015 * reference.fragments[k].volume) << k;
+  }
 }
 
 // Momentum: the rigid-body rule conserves linear momentum exactly and angular

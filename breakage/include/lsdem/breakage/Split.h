@@ -12,18 +12,40 @@
 /// Each side may fall apart into several face-connected pieces (a cut through
 /// both arms of a U gives three fragments); every piece is its own fragment.
 ///
-/// Mass bookkeeping. A fragment's raw volume comes from its own grid (eq. 24-30);
-/// the raw volumes of the pieces add up to the parent's only to the
-/// discretisation error of the smoothed Heaviside across the new max() kinks
-/// (reported as SplitResult::rawRelativeError). The split carries the parent's
-/// volume exactly by a proportional correction,
-///     volume_k = rawVolume_k * parentVolume / rawVolumeSum,
-/// so the fragments' volumes sum to the parent's to round-off. A user of a
-/// fragment scales its mass AND its inertia by the same factor
-/// s_k = volume_k / rawVolume_k (Fragment::massScale()):
-///     mass_k    = rho * volume_k,
-///     inertia_k = s_k * rho * (the child shape's own inertia per unit density),
-/// which keeps the child's radius of gyration that of its own grid.
+/// Mass bookkeeping (docs/breakage.md, "Mass of a fragment"). Each fragment's
+/// mass properties are its share of the PARENT's mass integrand of eq. 24-30
+/// (the smoothed Heaviside H_eps(-phi) of the parent's grid, both estimators'
+/// sums), not its own grid's estimate: every parent grid node whose cell the
+/// cut cannot cross gives its sample to the piece that owns it; a node whose
+/// cell the cut may cross gives 4^D sub-cell samples of the multilinear
+/// interpolant, each to the side of the cut it lies on (a plane exactly), so
+/// a piece a cell or two thick is not inflated by the smoothing band of its
+/// own cut face. The shares add up to the parent's volume to the quadrature
+/// difference between sub-cell and node samples along the cut (reported as
+/// SplitResult::rawRelativeError, ~1e-4), which one common factor removes:
+///     volume_k = share_k * parentVolume / sum_j share_j,
+/// and the same factor scales the share's second moments. The child shape is
+/// made with these mass properties (Shape::fromGridNodesAndMass), so
+/// Fragment::massScale() is 1 and mass_k = rho * child volume.
+/// Fragment::rawVolume keeps the child grid's own estimate (eq. 24-30 on the
+/// child's grid) for comparison.
+///
+/// Re-gridding (SplitOptions::regridCells). A piece whose smallest extent
+/// (twice the smallest semi-axis of the ellipsoid of its second moments) is
+/// below regridCells cells of the parent's grid gets a grid of its own at
+/// spacing extent / regridCells (at most regridMaxFactor times finer, and
+/// coarser if the grid would exceed regridMaxNodes values), covering its
+/// extent plus the padding: the level set max(phi, -+phi_f) is evaluated at
+/// the new nodes from the parent's multilinear field and the fracture surface
+/// (a plane is exact at any resolution) and reduced to the piece's component
+/// (not reinitialised: the samples are already a distance inside the piece,
+/// see Split.cpp), and surface nodes are made afresh on it at the node
+/// density per new cell, at least minFragmentNodes of them, then moved in to
+/// within 1e-4 parent cells of the parent's surface where the new grid's
+/// interpolation left them outside it. The mass
+/// stays the share above. The child's contact spacing (ShapeOptions::
+/// contactSpacing) stays the parent's, so its contact stiffness per unit area
+/// is that of the parent (area-weighted law).
 ///
 /// Centroids. The fragments stay exactly where the parent's material was
 /// (c_k: child centroid in the parent body frame, from its own grid). Their
@@ -95,13 +117,14 @@ struct Fragment {
   /// (SplitResult::centroidShift); fragmentState() moves it with the parent's
   /// centroid velocity.
   geometry::Vec<D> centreOfMass = geometry::Vec<D>::Zero();
-  double rawVolume = 0.0;  ///< volume (area in 2D) from the child's own grid (eq. 24-30), world units^D
-  double volume = 0.0;     ///< corrected volume rawVolume * parentVolume / rawVolumeSum, world units^D
+  double rawVolume = 0.0;  ///< volume (area in 2D) the child's own grid gives (eq. 24-30), world units^D, for comparison
+  double volume = 0.0;     ///< the child's share of the parent's volume (file comment), world units^D
   int side = 0;            ///< -1: the phi_f < 0 side (eq. 15); +1: the phi_f > 0 side (eq. 14)
+  bool regridded = false;  ///< the child got a finer grid of its own (SplitOptions::regridCells)
 
-  /// @brief volume / rawVolume: the factor applied to the child's mass AND
-  /// inertia per unit density (see the file comment).
-  double massScale() const { return volume / rawVolume; }
+  /// @brief volume / the child shape's volume: the factor applied to the
+  /// child's mass and inertia per unit density; 1 (the shape carries its share).
+  double massScale() const { return volume / shape->volume(); }
 };
 
 /// Options of splitShape().
@@ -113,7 +136,24 @@ struct SplitOptions {
   /// Cells of padding around each fragment's cropped grid, >= 3 (the
   /// smoothed-Heaviside band of the mass properties is 3 cells wide).
   int paddingCells = geometry::kDefaultPaddingCells;
+  /// Re-grid a fragment whose smallest extent is below this many cells of the
+  /// parent's grid (file comment); 0 turns re-gridding off. Default 10.
+  double regridCells = 10.0;
+  /// A re-gridded fragment's grid is at most this many times finer than the parent's, >= 1.
+  int regridMaxFactor = 8;
+  /// A re-gridded fragment's grid holds at most this many values (memory bound:
+  /// 4 bytes each, 1 MiB at the default 2^18); the spacing grows to fit.
+  std::size_t regridMaxNodes = std::size_t(1) << 18;
+  /// A re-gridded fragment gets at least this many surface nodes (its node
+  /// density is raised until it does), >= 1.
+  int minFragmentNodes = 24;
 };
+
+/// @brief Checks SplitOptions: nodesPerCell finite and >= 0, paddingCells >= 3,
+/// regridCells finite and >= 0, regridMaxFactor >= 1, regridMaxNodes >= 64,
+/// minFragmentNodes >= 1.
+/// @note Throws std::invalid_argument naming the option and its value.
+void validateSplitOptions(const SplitOptions& options);
 
 /// Outcome of splitShape().
 template <int D>
@@ -127,11 +167,12 @@ struct SplitResult {
   /// split whose pieces but one are dropped as degenerate.
   bool isSplit = false;
   double parentVolume = 0.0;      ///< the parent's volume, world units^D
-  double rawVolumeSum = 0.0;      ///< sum of the kept fragments' raw volumes, world units^D
-  double droppedRawVolume = 0.0;  ///< raw volume of the pieces dropped as degenerate (no surface nodes), world units^D
+  double rawVolumeSum = 0.0;      ///< sum of the kept fragments' shares before the common factor, world units^D
+  double droppedRawVolume = 0.0;  ///< shares of the pieces dropped as degenerate (no surface nodes), world units^D
   int droppedCount = 0;           ///< number of pieces dropped
   /// (rawVolumeSum + droppedRawVolume - parentVolume) / parentVolume: the
-  /// discretisation error of the split before correction (0 when not split).
+  /// quadrature difference of the shares before the common factor (file
+  /// comment; 0 when not split).
   double rawRelativeError = 0.0;
   /// c_bar: the corrected-volume-weighted centroid of the fragments (their
   /// common centre of mass), parent body frame, world units.
@@ -146,8 +187,7 @@ struct SplitResult {
 ///
 /// Steps: the surface is mapped from the parent's body frame to its grid frame
 /// (parent.bodyToGrid()); phi4 = max(phi, phi_f) and phi3 = max(phi, -phi_f) are
-/// formed node by node on the parent's grid (as csgIntersection and
-/// csgDifference do, in one pass); each is split into face-connected
+/// formed node by node on the parent's grid (geometry::csgSplit); each is split into face-connected
 /// components (connectedComponents; a side in one piece is simply cropped),
 /// each cropped to the piece's extent plus `paddingCells`. Nodes (section 3.3):
 ///   - flat cut: every parent node goes to the side of the sign of phi_f at it
@@ -167,16 +207,17 @@ struct SplitResult {
 ///   max() kink of eq. 14-15 by up to ~h/4); nodes within 1e-4 h of it stay put.
 ///   A piece left with no node (a sliver) gets nodes from its own grid; if it
 ///   still has none it is dropped (droppedCount, droppedRawVolume).
-/// Each piece becomes a shape with Shape::fromGridAndNodes (the parent's mass
-/// method), then volumes are corrected and centroids shifted as the file
-/// comment describes.
+///   A small piece is re-gridded instead (file comment), with nodes made on
+///   its new grid.
+/// Each piece's mass properties are its share of the parent's integrand (file
+/// comment); it becomes a shape with Shape::fromGridNodesAndMass.
 /// @param parent the grain to split.
 /// @param surface the fracture surface in the parent's body frame.
 /// @param options node density and padding.
 /// @return the fragments and the bookkeeping (see SplitResult).
 /// @note Throws std::invalid_argument when the surface has neither a plane nor
 /// a field, the field gives NaN at a grid node, the plane's normal is zero or not finite or its offset not finite,
-/// options.nodesPerCell is negative or not finite, or options.paddingCells < 3.
+/// or the options are out of range (validateSplitOptions).
 /// Deterministic: the same fragments for any number of threads.
 template <int D>
 SplitResult<D> splitShape(const geometry::Shape<D>& parent, const FractureSurface<D>& surface,

@@ -75,6 +75,18 @@ Grid<D> csgIntersection(const Grid<D>& a, const SignedDistance<D>& b);
 template <int D>
 Grid<D> csgUnion(const Grid<D>& a, const SignedDistance<D>& b);
 
+/// @brief eq. 15 and eq. 14 in one pass, as a split by a fracture surface
+/// needs them: `negative` = max(phi_a, phi_b(x)) (the part of a where
+/// phi_b < 0, csgIntersection) and `positive` = max(phi_a, -phi_b(x)) (the
+/// part where phi_b > 0, csgDifference), with phi_b evaluated once per node.
+/// @param a level-set grid (world units); both results have its layout.
+/// @param b signed distance of the fracture surface at a world point, world units.
+/// @param negative receives eq. 15. @param positive receives eq. 14.
+/// @note Throws std::invalid_argument when a is empty, b is an empty function
+/// or b is NaN at a node (the message names the first such node).
+template <int D>
+void csgSplit(const Grid<D>& a, const SignedDistance<D>& b, Grid<D>& negative, Grid<D>& positive);
+
 extern template Grid<2> csgDifference<2>(const Grid<2>&, const Grid<2>&);
 extern template Grid<3> csgDifference<3>(const Grid<3>&, const Grid<3>&);
 extern template Grid<2> csgIntersection<2>(const Grid<2>&, const Grid<2>&);
@@ -87,5 +99,7 @@ extern template Grid<2> csgIntersection<2>(const Grid<2>&, const SignedDistance<
 extern template Grid<3> csgIntersection<3>(const Grid<3>&, const SignedDistance<3>&);
 extern template Grid<2> csgUnion<2>(const Grid<2>&, const SignedDistance<2>&);
 extern template Grid<3> csgUnion<3>(const Grid<3>&, const SignedDistance<3>&);
+extern template void csgSplit<2>(const Grid<2>&, const SignedDistance<2>&, Grid<2>&, Grid<2>&);
+extern template void csgSplit<3>(const Grid<3>&, const SignedDistance<3>&, Grid<3>&, Grid<3>&);
 
 }  // namespace lsdem::geometry

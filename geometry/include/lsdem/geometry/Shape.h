@@ -30,6 +30,11 @@ struct ShapeOptions {
   double nodesPerCell = 2.0;
   /// Mass-property estimator (eq. 24-30 or its eps-extrapolated form).
   MassMethod massMethod = MassMethod::Extrapolated;
+  /// Grid spacing the contact law's reference node weight is taken from
+  /// (ContactLaw.h, AreaWeighted), world units, >= 0; 0 takes the shape's own
+  /// grid spacing. A fragment re-gridded finer than its parent keeps the
+  /// parent's, so its contact stiffness per unit area does not change.
+  double contactSpacing = 0.0;
 };
 
 template <int D>
@@ -51,6 +56,16 @@ class Shape {
   /// set is empty, or positions and weights differ in count.
   static std::shared_ptr<const Shape> fromGridAndNodes(Grid<D> grid, NodeSet<D> nodesInGridFrame,
                                                       const ShapeOptions& options = {});
+
+  /// @brief Makes a shape from a grid, surface nodes and mass properties per
+  /// unit density, all in the grid's frame (breakage: a fragment's mass is its
+  /// share of the parent's, not its own grid's estimate). The principal frame
+  /// and descriptors come from `massGrid`; `options.nodesPerCell` is only recorded.
+  /// @note Throws std::invalid_argument as fromGridAndNodes does, and when
+  /// massGrid's volume is not positive or its moments are not finite.
+  static std::shared_ptr<const Shape> fromGridNodesAndMass(Grid<D> grid, NodeSet<D> nodesInGridFrame,
+                                                          const MassProperties<D>& massGrid,
+                                                          const ShapeOptions& options = {});
 
   /// The stored parts of a shape, exactly as a shape holds them (grain files
   /// and checkpoints write these and read them back bit for bit).
@@ -88,6 +103,8 @@ class Shape {
   /// Radius of a body-frame sphere about the centroid holding every node and
   /// every interior grid node (world units): the broad phase's bounding sphere.
   double boundingRadius() const { return boundingRadius_; }
+  /// Spacing of the contact law's reference node weight (ShapeOptions::contactSpacing), world units.
+  double contactSpacing() const { return options_.contactSpacing > 0.0 ? options_.contactSpacing : grid_.spacing(); }
   /// Options the shape was made with.
   const ShapeOptions& options() const { return options_; }
   /// Bytes held by the shape (grid values and nodes).
