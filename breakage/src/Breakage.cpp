@@ -55,6 +55,8 @@ Breakage<D>::Breakage(const BreakageDef<D>& def) : def_(def), criterion_(makeCri
     throw std::invalid_argument("breakage minVolume must be finite and >= 0, got " + std::to_string(def.minVolume));
   }
   validateSplitOptions(def.split);
+  // Fragments that leave as fines at once need no finer grid.
+  if (!def.haltBelowMinimum) def_.split.regridMinVolume = std::max(def_.split.regridMinVolume, def.minVolume);
   if (def.minNodes < 0) {
     throw std::invalid_argument("breakage minNodes must be >= 0, got " + std::to_string(def.minNodes));
   }

@@ -37,13 +37,26 @@ struct Side {
   std::vector<NodeSet<D>> nodes;   ///< per piece, parent grid frame
 };
 
-/// Index of the piece whose grid is smallest at grid-frame point x (the first on a tie).
+/// Distance from x to a grid's node box (0 inside). A padded piece's grid is
+/// positive on its border, so outside the box its value (Grid::value's
+/// extension phi(c) + |x - c|) is at least this: a lower bound that lets a
+/// look-up be skipped.
+template <int D>
+double distanceToBox(const Grid<D>& grid, const Vec<D>& x) {
+  const geometry::Box<D> box = grid.bounds();
+  return (box.lower - x).cwiseMax(x - box.upper).cwiseMax(0.0).norm();
+}
+
+/// Index of the piece whose grid is smallest at grid-frame point x (the first
+/// on a tie). Pieces whose box is farther than the best value so far cannot
+/// be smaller there and are not looked up.
 template <int D>
 std::size_t owningPiece(const std::vector<Grid<D>>& pieces, const Vec<D>& x) {
   if (pieces.size() == 1) return 0;
   std::size_t best = 0;
   double bestValue = pieces[0].value(x);
   for (std::size_t k = 1; k < pieces.size(); ++k) {
+    if (distanceToBox(pieces[k], x) >= bestValue) continue;
     const double v = pieces[k].value(x);
     if (v < bestValue) {
       bestValue = v;
@@ -368,10 +381,14 @@ double pieceLevelSet(const Grid<D>& parentGrid, const geometry::SignedDistance<D
                      std::size_t piece, const Vec<D>& x) {
   double v = std::max(parentGrid.value(x), -double(side.sign) * psi(x));
   if (side.pieces.size() > 1) {
+    // A piece j matters only if 0.5 (own - phi_j) > v, i.e. phi_j < own - 2 v;
+    // its value is at least its box's distance (distanceToBox).
     const double own = side.pieces[piece].value(x);
+    const double matters = own - 2.0 * v;
     double other = std::numeric_limits<double>::infinity();
     for (std::size_t k = 0; k < side.pieces.size(); ++k) {
-      if (k != piece) other = std::min(other, side.pieces[k].value(x));
+      if (k == piece || distanceToBox(side.pieces[k], x) >= std::min(other, matters)) continue;
+      other = std::min(other, side.pieces[k].value(x));
     }
     v = std::max(v, 0.5 * (own - other));
   }
@@ -463,6 +480,9 @@ void validateSplitOptions(const SplitOptions& options) {
   }
   if (options.regridMaxFactor < 1) fail("regridMaxFactor must be >= 1, got " + std::to_string(options.regridMaxFactor));
   if (options.regridMaxNodes < 64) fail("regridMaxNodes must be >= 64, got " + std::to_string(options.regridMaxNodes));
+  if (!std::isfinite(options.regridMinVolume) || options.regridMinVolume < 0.0) {
+    fail("regridMinVolume must be finite and >= 0, got " + std::to_string(options.regridMinVolume));
+  }
   if (options.minFragmentNodes < 1) {
     fail("minFragmentNodes must be >= 1, got " + std::to_string(options.minFragmentNodes));
   }
@@ -584,7 +604,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
       piece.mass = shares[slotOf(sides, s, k)].properties(childOptions.massMethod, cellVolume, reference);
       // A piece thinner than regridCells of its cells gets a finer grid of its
       // own (within the memory bound) and nodes made afresh on it.
-      if (options.regridCells > 0.0 && piece.mass.volume > 0.0) {
+      if (options.regridCells > 0.0 && piece.mass.volume > options.regridMinVolume) {
         const double extent = smallestExtent(piece.mass);
         double fine = std::max(extent / options.regridCells, h / double(options.regridMaxFactor));
         const PieceExtent<D> where = pieceExtent(side.pieces[k]);

@@ -1,6 +1,7 @@
 #include "lsdem/geometry/Contours.h"
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -314,5 +315,25 @@ TriangleMesh marchingCubes(const Grid<3>& input) {
   }
   return mesh;
 }
+
+template <int D>
+double enclosedVolume(const Grid<D>& grid) {
+  if constexpr (D == 2) {
+    double area = 0.0;
+    for (const std::vector<Vec<2>>& loop : marchingSquares(grid)) {
+      for (std::size_t q = 0; q < loop.size(); ++q) {
+        const Vec<2>& a = loop[q];
+        const Vec<2>& b = loop[(q + 1) % loop.size()];
+        area += 0.5 * (a[0] * b[1] - a[1] * b[0]);
+      }
+    }
+    return std::abs(area);
+  } else {
+    return std::abs(marchingCubes(grid).signedVolume());
+  }
+}
+
+template double enclosedVolume<2>(const Grid<2>&);
+template double enclosedVolume<3>(const Grid<3>&);
 
 }  // namespace lsdem::geometry

@@ -147,11 +147,15 @@ struct SplitOptions {
   /// A re-gridded fragment gets at least this many surface nodes (its node
   /// density is raised until it does), >= 1.
   int minFragmentNodes = 24;
+  /// Pieces whose share of the volume is at most this are not re-gridded,
+  /// world units^D, >= 0 (the breakage effect sets its fines size: such
+  /// pieces leave the simulation at once).
+  double regridMinVolume = 0.0;
 };
 
 /// @brief Checks SplitOptions: nodesPerCell finite and >= 0, paddingCells >= 3,
 /// regridCells finite and >= 0, regridMaxFactor >= 1, regridMaxNodes >= 64,
-/// minFragmentNodes >= 1.
+/// minFragmentNodes >= 1, regridMinVolume finite and >= 0.
 /// @note Throws std::invalid_argument naming the option and its value.
 void validateSplitOptions(const SplitOptions& options);
 

@@ -51,4 +51,14 @@ std::vector<std::vector<Vec<2>>> marchingSquares(const Grid<2>& grid);
 /// independent of the thread count.
 TriangleMesh marchingCubes(const Grid<3>& grid);
 
+/// @brief Area (2D) / volume (3D) enclosed by the zero level set as lsdem
+/// draws it (the surfaces output): the shoelace sum of marchingSquares' loops,
+/// or the signed volume of marchingCubes' mesh; world units^D. 0 when no node
+/// is inside.
+template <int D>
+double enclosedVolume(const Grid<D>& grid);
+
+extern template double enclosedVolume<2>(const Grid<2>&);
+extern template double enclosedVolume<3>(const Grid<3>&);
+
 }  // namespace lsdem::geometry
