@@ -612,7 +612,8 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
         if (count > double(options.regridMaxNodes)) fine *= std::pow(count / double(options.regridMaxNodes), 1.0 / D);
         if (fine < 0.9 * h) {
           Grid<D> refined = regridPiece(grid, psi, side, k, where, fine, options.paddingCells);
-          NodeSet<D> nodes = nodesWithFloor(refined, nodesPerCell, options.minFragmentNodes);
+          const double density = options.regridKeepsNodeSpacing ? nodesPerCell * refined.spacing() / h : nodesPerCell;
+          NodeSet<D> nodes = nodesWithFloor(refined, density, options.minFragmentNodes);
           pullInsideParent(nodes, refined, grid, psi, side, k);
           if (!nodes.empty()) {
             piece.grid = std::move(refined);

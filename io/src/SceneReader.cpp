@@ -466,6 +466,19 @@ class SceneReader {
     const std::int64_t minFragmentNodes = r.integer("min_fragment_nodes", def.split.minFragmentNodes);
     if (minFragmentNodes < 1 || minFragmentNodes > 100000) r.fail("min_fragment_nodes", "must be in [1, 1e5]");
     def.split.minFragmentNodes = int(minFragmentNodes);
+    // Re-gridded fragments' nodes: the parent's spacing in metres (default), or
+    // the node density per new cell (finer contacts, more nodes: Split.h).
+    const std::string regridNodes = r.string("regrid_nodes", "parent_spacing");
+    if (regridNodes == "parent_spacing") {
+      def.split.regridKeepsNodeSpacing = true;
+    } else if (regridNodes == "per_new_cell") {
+      if (scene_.world.contact.formulation == dynamics::ForceFormulation::PerNode) {
+        r.fail("regrid_nodes", "\"per_new_cell\" needs contact.formulation = \"area_weighted\" (per-node springs would stiffen re-gridded fragments)");
+      }
+      def.split.regridKeepsNodeSpacing = false;
+    } else {
+      r.fail("regrid_nodes", "must be \"parent_spacing\" or \"per_new_cell\", got \"" + regridNodes + "\"");
+    }
     def.buckling = r.boolean("buckling", false);
     def.bucklingRatio = r.number("buckling_ratio", def.bucklingRatio);
     if (!(def.bucklingRatio > 1.0)) r.fail("buckling_ratio", "must be > 1");

@@ -147,6 +147,12 @@ struct SplitOptions {
   /// A re-gridded fragment gets at least this many surface nodes (its node
   /// density is raised until it does), >= 1.
   int minFragmentNodes = 24;
+  /// A re-gridded fragment's nodes keep the parent's node spacing in metres
+  /// (nodesPerCell x new spacing / parent spacing per new cell) instead of
+  /// nodesPerCell per new cell. With the per-node contact law every node is a
+  /// full spring, so this keeps a fragment's contact stiffness per unit area
+  /// (and the time step) its parent's; the scene reader sets it for that law.
+  bool regridKeepsNodeSpacing = false;
   /// Pieces whose share of the volume is at most this are not re-gridded,
   /// world units^D, >= 0 (the breakage effect sets its fines size: such
   /// pieces leave the simulation at once).
