@@ -60,6 +60,9 @@ Breakage<D>::Breakage(const BreakageDef<D>& def) : def_(def), criterion_(makeCri
   if (def.minNodes < 0) {
     throw std::invalid_argument("breakage minNodes must be >= 0, got " + std::to_string(def.minNodes));
   }
+  if (!(def.massScalingDt >= 0.0) || !std::isfinite(def.massScalingDt)) {
+    throw std::invalid_argument("breakage massScalingDt must be finite and >= 0, got " + std::to_string(def.massScalingDt));
+  }
   if (!(def.bucklingRatio > 1.0) || !std::isfinite(def.bucklingRatio)) {
     throw std::invalid_argument("breakage bucklingRatio must be finite and > 1, got " +
                                 std::to_string(def.bucklingRatio));
@@ -250,13 +253,25 @@ void Breakage<D>::applyQueue(World<D>& world) {
       def.generation = p.generation[i] + 1;
       def.birthTime = now;
       def.strength = childStrength(p.strength[i], f.shape->descriptors().equivalentDiameter, parentDiameter, m);
+      const bool small = !def_.haltBelowMinimum &&
+                         (f.volume < def_.minVolume || f.shape->nodes().size() < std::size_t(def_.minNodes));
+      // Opt-in density scaling: a kept fragment's own critical step raised to massScalingDt.
+      if (def_.massScalingDt > 0.0 && !small) {
+        const double own = world.criticalDtOf(f.shape, density * f.shape->volume());
+        if (own < def_.massScalingDt) {
+          const double factor = (def_.massScalingDt / own) * (def_.massScalingDt / own);
+          def.massScale *= factor;
+          ++massScaled_;
+          massScalingAdded_ += (factor - 1.0) * density * f.shape->volume();
+          massScalingMax_ = std::max(massScalingMax_, factor);
+        }
+      }
       const double mass = density * def.massScale * f.shape->volume();
       const double kinetic = kineticEnergyOf(def);
       ev.fragmentMass += mass;
       ev.fragmentMomentum += mass * def.velocity;
       ev.fragmentKineticEnergy += kinetic;
-      const bool fines = !def_.haltBelowMinimum &&
-                         (f.volume < def_.minVolume || f.shape->nodes().size() < std::size_t(def_.minNodes));
+      const bool fines = small;
       if (fines) {
         dynamics::RemovedParticle r;
         r.id = p.nextId();
@@ -306,6 +321,9 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
   out.put(std::uint64_t(unsplittable_));
   out.put(std::uint64_t(skipped_));
   out.put(std::uint64_t(removedSeen_));
+  out.put(std::uint64_t(massScaled_));
+  out.put(massScalingAdded_);
+  out.put(massScalingMax_);
   out.put(std::uint64_t(events_.size()));
   for (const BreakageEvent<D>& e : events_) {
     out.put(e.time);
@@ -347,6 +365,9 @@ void Breakage<D>::loadState(dynamics::StateReader& in) {
   unsplittable_ = std::size_t(in.get<std::uint64_t>());
   skipped_ = std::size_t(in.get<std::uint64_t>());
   removedSeen_ = std::size_t(in.get<std::uint64_t>());
+  massScaled_ = std::size_t(in.get<std::uint64_t>());
+  massScalingAdded_ = in.get<double>();
+  massScalingMax_ = in.get<double>();
   events_.resize(std::size_t(in.get<std::uint64_t>()));
   for (BreakageEvent<D>& e : events_) {
     e.time = in.get<double>();

@@ -140,6 +140,12 @@ double World<D>::shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>&
 }
 
 template <int D>
+double World<D>::criticalDtOf(const std::shared_ptr<const geometry::Shape<D>>& shape, double mass) {
+  const double zeta = def_.contact.hasDamping ? def_.contact.dampingRatio : 0.0;
+  return criticalTimeStep({mass}, {shapeStiffness(shape)}, zeta);
+}
+
+template <int D>
 void World<D>::updateTimeStep(bool lastAddedOnly) {
   const double zeta = def_.contact.hasDamping ? def_.contact.dampingRatio : 0.0;
   if (lastAddedOnly) {

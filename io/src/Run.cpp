@@ -200,6 +200,8 @@ class Runner {
   double massIn() const {
     double fed = 0.0;
     for (const auto* f : sw_.feeds) fed += f->droppedMass();
+    // Density scaling of fragments puts (artificial) mass in.
+    if (sw_.breakage) fed += sw_.breakage->massScalingAdded();
     return initialMass_ + fed;
   }
 
@@ -559,11 +561,14 @@ class Runner {
         j.key("breakage").beginObject()
             .field("breakages", b.breakages())
             .field("fines_mass", b.finesMass())
-            .field("fines_percent", massIn() > 0.0 ? 100.0 * b.finesMass() / massIn() : 0.0)
+            .field("fines_percent", massIn() > b.massScalingAdded() ? 100.0 * b.finesMass() / (massIn() - b.massScalingAdded()) : 0.0)
             .field("raw_volume_error", b.rawVolumeError())
             .field("unsplit_failures", b.unsplitFailures())
             .field("unsplittable", b.unsplittable())
             .field("skipped_steps", b.skippedSteps())
+            .field("mass_scaled_fragments", b.massScaledFragments())
+            .field("mass_scaling_added", b.massScalingAdded())
+            .field("mass_scaling_max_factor", b.massScalingMaxFactor())
             .endObject();
         if (final) writeFragmentDensity(j);
       }

@@ -479,6 +479,8 @@ class SceneReader {
     } else {
       r.fail("regrid_nodes", "must be \"parent_spacing\" or \"per_new_cell\", got \"" + regridNodes + "\"");
     }
+    def.massScalingDt = r.number("mass_scaling_dt", 0.0);
+    if (!(def.massScalingDt >= 0.0) || !std::isfinite(def.massScalingDt)) r.fail("mass_scaling_dt", "must be >= 0 s (0: off)");
     def.buckling = r.boolean("buckling", false);
     def.bucklingRatio = r.number("buckling_ratio", def.bucklingRatio);
     if (!(def.bucklingRatio > 1.0)) r.fail("buckling_ratio", "must be > 1");

@@ -94,6 +94,14 @@ struct BreakageDef {
   /// Buckling trigger: circumscribed sphere (circle) volume / grain volume > this (> 1).
   double bucklingRatio = 10.0;
   std::vector<ManualBreak<D>> manual;  ///< prescribed first breaks
+  /// Opt-in density (mass) scaling, s; 0 = off (the default). A kept fragment
+  /// whose own critical time step (its stiffest contact, World::criticalDtOf)
+  /// is below this gets its density raised by (this / its step)^2, so it no
+  /// longer pulls the time step down. The mass (and momentum, kinetic energy)
+  /// it adds is artificial: counted in massScaledFragments(),
+  /// massScalingAdded() and massScalingMaxFactor(), and in the run's mass
+  /// balance as mass put in.
+  double massScalingDt = 0.0;
   /// How grains are split: fragment node density, re-gridding of small
   /// fragments (SplitOptions::regridCells, on by default) and its bounds.
   SplitOptions split;
@@ -163,6 +171,12 @@ class Breakage final : public dynamics::Effect<D> {
   /// resolution through their centroid either; they were made unbreakable
   /// (strength set to infinity).
   std::size_t unsplittable() const { return unsplittable_; }
+  /// @brief Fragments whose density was raised (BreakageDef::massScalingDt).
+  std::size_t massScaledFragments() const { return massScaled_; }
+  /// @brief Artificial mass density scaling added so far, kg.
+  double massScalingAdded() const { return massScalingAdded_; }
+  /// @brief Largest density factor applied so far (1 when none).
+  double massScalingMaxFactor() const { return massScalingMax_; }
   /// @brief Steps whose stress evaluation was skipped for stale contacts (file comment).
   std::size_t skippedSteps() const { return skipped_; }
 
@@ -194,6 +208,9 @@ class Breakage final : public dynamics::Effect<D> {
   std::vector<BreakageEvent<D>> events_;
   double rawVolumeError_ = 0.0;
   double finesMass_ = 0.0;
+  std::size_t massScaled_ = 0;
+  double massScalingAdded_ = 0.0;
+  double massScalingMax_ = 1.0;
   std::size_t unsplit_ = 0;
   std::size_t unsplittable_ = 0;
   std::size_t skipped_ = 0;

@@ -178,6 +178,10 @@ class World {
   double dt() const { return dt_; }
   /// @brief The critical time step of the current particles (s).
   double criticalDt() const { return dtCritical_; }
+  /// @brief The critical time step a particle of `shape` and `mass` (kg) would
+  /// bring, s (its stiffest contact under the world's law, the cached
+  /// per-shape stiffness; +infinity without stiffness).
+  double criticalDtOf(const std::shared_ptr<const geometry::Shape<D>>& shape, double mass);
   std::uint64_t steps() const { return steps_; }
   const WorldDef<D>& def() const { return def_; }
   const ContactSolver<D>& contacts() const { return contacts_; }
