@@ -106,6 +106,9 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
   const double h = s->grid().spacing();
   bdef.minVolume = std::pow(2.5 * h, D);
   bdef.minNodes = 4;
+  // Grains 8 cells across: every fragment is below the default 10 cells and
+  // would be re-gridded; 6 keeps re-gridding in the cascade at a unit test's cost.
+  bdef.split.regridCells = 6.0;
   auto effect = std::make_unique<Breakage<D>>(bdef);
   Breakage<D>& brk = *effect;
   w.addEffect(std::move(effect));
