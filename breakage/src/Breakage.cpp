@@ -148,7 +148,10 @@ void Breakage<D>::queueFailures(World<D>& world) {
     if (manualDone_[m] || now < mb.time) continue;
     manualDone_[m] = true;
     const auto it = std::find(p.id.begin(), p.id.end(), mb.particle);
-    if (it == p.id.end()) continue;
+    if (it == p.id.end()) {
+      ++manualSkipped_;  // the particle is gone (broken or removed before its time)
+      continue;
+    }
     const std::size_t i = std::size_t(it - p.id.begin());
     double value = 0.0;
     if (!stale && i < stress_.size() && !stress_[i].isZero(0.0)) {
@@ -208,6 +211,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
     }
     if (!split.isSplit) {
       ++unsplit_;
+      if (q.manual) ++manualSkipped_;  // the prescribed cut leaves the grain whole
       continue;
     }
 
@@ -252,7 +256,11 @@ void Breakage<D>::applyQueue(World<D>& world) {
       def.parent = q.id;
       def.generation = p.generation[i] + 1;
       def.birthTime = now;
-      def.strength = childStrength(p.strength[i], f.shape->descriptors().equivalentDiameter, parentDiameter, m);
+      // eq. 13; an unbreakable parent (infinite strength: made so, or too
+      // small to cut) split by a manual break leaves unbreakable children.
+      def.strength = std::isfinite(p.strength[i])
+                         ? childStrength(p.strength[i], f.shape->descriptors().equivalentDiameter, parentDiameter, m)
+                         : p.strength[i];
       const bool small = !def_.haltBelowMinimum &&
                          (f.volume < def_.minVolume || f.shape->nodes().size() < std::size_t(def_.minNodes));
       // Opt-in density scaling: a kept fragment's own critical step raised to massScalingDt.
@@ -324,6 +332,7 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
   out.put(std::uint64_t(massScaled_));
   out.put(massScalingAdded_);
   out.put(massScalingMax_);
+  out.put(std::uint64_t(manualSkipped_));
   out.put(std::uint64_t(events_.size()));
   for (const BreakageEvent<D>& e : events_) {
     out.put(e.time);
@@ -368,6 +377,7 @@ void Breakage<D>::loadState(dynamics::StateReader& in) {
   massScaled_ = std::size_t(in.get<std::uint64_t>());
   massScalingAdded_ = in.get<double>();
   massScalingMax_ = in.get<double>();
+  manualSkipped_ = std::size_t(in.get<std::uint64_t>());
   events_.resize(std::size_t(in.get<std::uint64_t>()));
   for (BreakageEvent<D>& e : events_) {
     e.time = in.get<double>();

@@ -566,6 +566,7 @@ class Runner {
             .field("unsplit_failures", b.unsplitFailures())
             .field("unsplittable", b.unsplittable())
             .field("skipped_steps", b.skippedSteps())
+            .field("manual_breaks_skipped", b.manualSkipped())
             .field("mass_scaled_fragments", b.massScaledFragments())
             .field("mass_scaling_added", b.massScalingAdded())
             .field("mass_scaling_max_factor", b.massScalingMaxFactor())

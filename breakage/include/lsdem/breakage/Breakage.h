@@ -171,6 +171,9 @@ class Breakage final : public dynamics::Effect<D> {
   /// resolution through their centroid either; they were made unbreakable
   /// (strength set to infinity).
   std::size_t unsplittable() const { return unsplittable_; }
+  /// @brief Manual breaks that did not split: their particle was gone at
+  /// their time, or their cut left it whole (never an exception).
+  std::size_t manualSkipped() const { return manualSkipped_; }
   /// @brief Fragments whose density was raised (BreakageDef::massScalingDt).
   std::size_t massScaledFragments() const { return massScaled_; }
   /// @brief Artificial mass density scaling added so far, kg.
@@ -209,6 +212,7 @@ class Breakage final : public dynamics::Effect<D> {
   double rawVolumeError_ = 0.0;
   double finesMass_ = 0.0;
   std::size_t massScaled_ = 0;
+  std::size_t manualSkipped_ = 0;
   double massScalingAdded_ = 0.0;
   double massScalingMax_ = 1.0;
   std::size_t unsplit_ = 0;
