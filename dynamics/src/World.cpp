@@ -140,6 +140,21 @@ double World<D>::shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>&
 }
 
 template <int D>
+std::size_t World<D>::stepLimitingParticle() const {
+  std::size_t best = particles_.size();
+  double bestRatio = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < particles_.size() && i < stiffness_.size(); ++i) {
+    if (!(stiffness_[i] > 0.0)) continue;
+    const double ratio = particles_.mass[i] / stiffness_[i];
+    if (ratio < bestRatio) {
+      bestRatio = ratio;
+      best = i;
+    }
+  }
+  return best;
+}
+
+template <int D>
 double World<D>::criticalDtOf(const std::shared_ptr<const geometry::Shape<D>>& shape, double mass) {
   const double zeta = def_.contact.hasDamping ? def_.contact.dampingRatio : 0.0;
   return criticalTimeStep({mass}, {shapeStiffness(shape)}, zeta);

@@ -23,6 +23,24 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
       .field("node_contacts", contacts.nodeContacts().size())
       .field("node_checks_last_step", static_cast<long long>(contacts.nodeChecks()));
 
+  // What limits the time step: the particle with the smallest sqrt(m / k).
+  {
+    const std::size_t i = world.stepLimitingParticle();
+    const auto& p = world.particles();
+    w.key("dt_limit").beginObject();
+    if (i < p.size()) {
+      const geometry::Shape<D>& shape = *p.shape[i];
+      w.field("particle", static_cast<long long>(p.id[i]))
+          .field("generation", static_cast<long long>(p.generation[i]))
+          .field("mass", p.mass[i])
+          .field("stiffness", world.particleStiffness(i))
+          .field("equivalent_diameter", shape.descriptors().equivalentDiameter)
+          .field("cells_across", shape.descriptors().equivalentDiameter / shape.grid().spacing())
+          .field("surface_nodes", shape.nodes().size());
+    }
+    w.endObject();
+  }
+
   // Mass: what is in the world and what left it.
   w.key("mass").beginObject()
       .field("particles", world.particleMass())

@@ -178,6 +178,12 @@ class World {
   double dt() const { return dt_; }
   /// @brief The critical time step of the current particles (s).
   double criticalDt() const { return dtCritical_; }
+  /// @brief The particle whose stiffest contact sets the critical time step
+  /// (smallest sqrt(m / k)), as an index into particles(); particles().size()
+  /// when none has a stiffness. What limits dt (summary.json `dt_limit`).
+  std::size_t stepLimitingParticle() const;
+  /// @brief The stiffest-contact stiffness of particle `index`, N/m (the one the time step uses).
+  double particleStiffness(std::size_t index) const { return stiffness_.at(index); }
   /// @brief The critical time step a particle of `shape` and `mass` (kg) would
   /// bring, s (its stiffest contact under the world's law, the cached
   /// per-shape stiffness; +infinity without stiffness).
