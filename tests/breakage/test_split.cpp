@@ -139,6 +139,12 @@ SplitOptions noRegrid() {
   return o;
 }
 
+SplitOptions regrid() {
+  SplitOptions o;
+  o.regridCells = 10.0;
+  return o;
+}
+
 // The offset a of a plane x = a that cuts `fraction` of a unit ball's volume (area) off.
 template <int D>
 double capOffset(double fraction) {
@@ -184,15 +190,15 @@ void checkSmallCap(const SplitOptions& options, double tolerance) {
 
 TEST(Split, CircleByLineGivesCircularSegments) { checkBallSplit<2>(noRegrid(), {}); }
 TEST(Split, SphereByPlaneGivesSphericalCaps) { checkBallSplit<3>(noRegrid(), {}); }
-TEST(Split, CircleByLineRegridded) { checkBallSplit<2>(SplitOptions{}, {0.01, 0.04}); }
-TEST(Split, SphereByPlaneRegridded) { checkBallSplit<3>(SplitOptions{}, {0.02, 0.06}); }
+TEST(Split, CircleByLineRegridded) { checkBallSplit<2>(regrid(), {0.01, 0.04}); }
+TEST(Split, SphereByPlaneRegridded) { checkBallSplit<3>(regrid(), {0.02, 0.06}); }
 TEST(Split, SmallSegmentMassIsItsShare2D) {
   checkSmallCap<2>(noRegrid(), 0.03);
-  checkSmallCap<2>(SplitOptions{}, 0.03);
+  checkSmallCap<2>(regrid(), 0.03);
 }
 TEST(Split, SmallCapMassIsItsShare3D) {
   checkSmallCap<3>(noRegrid(), 0.05);
-  checkSmallCap<3>(SplitOptions{}, 0.05);
+  checkSmallCap<3>(regrid(), 0.05);
 }
 
 
@@ -240,7 +246,7 @@ TEST(Split, ConcaveGrainCutThroughBothArmsGivesThreeFragments) {
   const std::vector<Vec<2>> u = {{-3, -3}, {3, -3}, {3, 3}, {1, 3}, {1, -1}, {-1, -1}, {-1, 3}, {-3, 3}};
   const auto parent = Shape<2>::fromGrid(lsdem::geometry::polygonGrid(u, 0.3));
   const double h = parent->grid().spacing();
-  const SplitResult<2> split = splitShape<2>(*parent, flat<2>(bodyPlane<2>(*parent, Vec<2>::UnitY(), 1.0)));
+  const SplitResult<2> split = splitShape<2>(*parent, flat<2>(bodyPlane<2>(*parent, Vec<2>::UnitY(), 1.0)), regrid());
   ASSERT_TRUE(split.isSplit);
   ASSERT_EQ(split.fragments.size(), 3u);
   EXPECT_EQ(split.fragments[0].side, -1);

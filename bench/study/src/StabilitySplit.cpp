@@ -100,8 +100,12 @@ SplitResult<D> checkedSplit(const Shape<D>& parent, const HalfSpace<D>& plane, c
   surface.plane = plane;
   SplitResult<D> split;
   ++out.steps;
+  // Every other split re-grids small fragments (regridCells 10, the measured
+  // choice), so both ways of making a fragment meet every case.
+  breakage::SplitOptions options;
+  options.regridCells = out.steps % 2 == 0 ? 10.0 : 0.0;
   try {
-    split = breakage::splitShape(parent, surface);
+    split = breakage::splitShape(parent, surface, options);
   } catch (const std::exception& e) {
     out.violations.push_back(std::string(what) + ": splitShape threw: " + e.what());
     return split;
