@@ -671,7 +671,12 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
     piece.mass.volume *= scale;
     piece.mass.secondMoment *= scale;
     Fragment<D> fragment;
-    fragment.rawVolume = geometry::massProperties(piece.grid, childOptions.massMethod).volume;
+    // The child grid's own estimate, for comparison only (0 where it has none).
+    try {
+      fragment.rawVolume = geometry::massProperties(piece.grid, childOptions.massMethod).volume;
+    } catch (const std::invalid_argument&) {
+      fragment.rawVolume = 0.0;
+    }
     fragment.volume = piece.mass.volume;
     fragment.side = piece.side;
     fragment.regridded = piece.regridded;
