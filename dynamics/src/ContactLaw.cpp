@@ -71,15 +71,27 @@ double dampingCoefficient(double zeta, double effectiveMass, double stiffness) {
 }
 
 double restitutionCoefficient(double zeta) {
-  return std::exp(-std::numbers::pi * zeta / std::sqrt(1.0 - zeta * zeta));
+  return std::exp(-zeta / std::sqrt(1.0 - zeta * zeta) * (std::numbers::pi - 2.0 * std::asin(zeta)));
+}
+
+double contactDuration(double zeta, double omega) {
+  return (std::numbers::pi - 2.0 * std::asin(zeta)) / (omega * std::sqrt(1.0 - zeta * zeta)) + 2.0 * zeta / omega;
 }
 
 double dampingRatioForRestitution(double restitution) {
-  if (!(restitution > 0.0 && restitution <= 1.0)) {
-    throw std::invalid_argument("restitution must be in (0, 1], got " + std::to_string(restitution));
+  if (!(restitution > kMinimumRestitution && restitution <= 1.0)) {
+    throw std::invalid_argument("restitution must be in (exp(-2), 1] = (0.1353, 1] (a dashpot that cannot pull "
+                                "stops at exp(-2) at critical damping), got " + std::to_string(restitution));
   }
-  const double l = std::log(restitution);
-  return -l / std::sqrt(std::numbers::pi * std::numbers::pi + l * l);
+  // e(zeta) falls monotonically from 1 at zeta = 0 to 0 as zeta -> 1: bisection
+  // to the last bit (about 60 halvings).
+  double lo = 0.0, hi = 1.0;
+  while (true) {
+    const double mid = 0.5 * (lo + hi);
+    if (!(mid > lo && mid < hi)) break;
+    (restitutionCoefficient(mid) > restitution ? lo : hi) = mid;
+  }
+  return restitution == 1.0 ? 0.0 : lo;
 }
 
 template <int D>

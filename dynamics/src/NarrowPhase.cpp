@@ -239,14 +239,19 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
       // the step the node is in contact (see boundaryWeight).
       if constexpr (Damping) {
         const double cn = damping * share * boundaryWeight(c.overlap, vn, law.dt);
-        fn -= cn * vn;
-        power += cn * vn * vn;
+        // No tensile contact force: a separating dashpot may cancel the
+        // spring's push but never pull (ContactLaw.h); the ledger books the
+        // dashpot force actually applied.
+        const double fdn = std::max(-cn * vn, -fn);
+        fn += fdn;
+        const double p = -fdn * vn;
+        power += p;
         // The dashpot's own force and moments, for the energy ledger.
-        const Vec<D> fd = (-cn * vn) * c.normal;
+        const Vec<D> fd = fdn * c.normal;
         dash.force += fd;
         dash.torqueA += Rotation<D>::moment(c.point - xa, fd);
         dash.torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-fd));
-        dash.power += cn * vn * vn;
+        dash.power += p;
         dash.boundaryPower += fd.dot(velocityB(c.point));
       }
       force = fn * c.normal;

@@ -13,10 +13,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <string>
+#include <utility>
 
 using namespace lsdem;
 using namespace lsdem::dynamics;
@@ -242,14 +244,49 @@ TEST(ContactLaw, RejectsBadParameters) {
   EXPECT_THROW(solver.compute(p, {}, {}, noShape, 1e-5), std::invalid_argument);
 }
 
+namespace {
+
+// The clipped linear spring-dashpot integrated directly (RK4, omega = 1, v0 = 1):
+// x'' = min(0, -(x + 2 zeta x')) while x > 0; returns the exit speed and the
+// time from touch to parting.
+std::pair<double, double> clippedOscillator(double zeta) {
+  const auto accel = [zeta](double x, double v) { return std::min(0.0, -(x + 2.0 * zeta * v)); };
+  const double h = 1e-5;
+  double x = 0.0, v = 1.0, t = 0.0;
+  while (true) {
+    const double k1x = v, k1v = accel(x, v);
+    const double k2x = v + 0.5 * h * k1v, k2v = accel(x + 0.5 * h * k1x, v + 0.5 * h * k1v);
+    const double k3x = v + 0.5 * h * k2v, k3v = accel(x + 0.5 * h * k2x, v + 0.5 * h * k2v);
+    const double k4x = v + h * k3v, k4v = accel(x + h * k3x, v + h * k3v);
+    const double xn = x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+    const double vn = v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+    if (t > 0.0 && xn <= 0.0) return {-vn, t + h * x / (x - xn)};
+    x = xn;
+    v = vn;
+    t += h;
+  }
+}
+
+}  // namespace
+
 TEST(ContactLaw, ClosedForms) {
-  // Restitution and damping ratio are inverse; e(0) = 1; e(0.4) of the paper's C_res.
+  // Restitution and contact duration of the clipped law against its direct
+  // integration; e(0) = 1; restitution and damping ratio are inverse.
   EXPECT_DOUBLE_EQ(restitutionCoefficient(0.0), 1.0);
-  EXPECT_NEAR(restitutionCoefficient(0.4), std::exp(-std::numbers::pi * 0.4 / std::sqrt(0.84)), 1e-15);
+  for (const double zeta : {0.1, 0.4, 0.8}) {
+    const auto [e, duration] = clippedOscillator(zeta);
+    EXPECT_NEAR(restitutionCoefficient(zeta), e, 1e-6) << zeta;
+    EXPECT_NEAR(contactDuration(zeta, 1.0), duration, 1e-5) << zeta;
+  }
+  // The clip matters: at the paper's C_res = 0.4 the unclipped law would give 0.254.
+  EXPECT_NEAR(restitutionCoefficient(0.4), 0.36353, 1e-5);
+  EXPECT_NEAR(restitutionCoefficient(0.999999), std::exp(-2.0), 1e-2);
   for (const double zeta : {0.05, 0.4, 0.9}) {
     EXPECT_NEAR(dampingRatioForRestitution(restitutionCoefficient(zeta)), zeta, 1e-12);
   }
+  EXPECT_DOUBLE_EQ(dampingRatioForRestitution(1.0), 0.0);
   EXPECT_THROW(dampingRatioForRestitution(0.0), std::invalid_argument);
+  EXPECT_THROW(dampingRatioForRestitution(0.13), std::invalid_argument);  // below exp(-2): out of reach
   // Hertz: E* = E / (2 (1 - nu^2)); F and dF/ddelta at a known point.
   ContactLawDef law;
   law.youngsModulus = 2e9;

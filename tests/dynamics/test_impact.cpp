@@ -94,6 +94,7 @@ struct ImpactResult {
   double peakForce = 0.0;    // N, largest normal force
   std::size_t maxNodes = 0;  // most node contacts of the pair at once
   std::size_t maxPerSide = 0;  // most node contacts of one direction at once
+  double minNormalForce = 0.0;  // N, smallest normal force of any node contact (< 0: attractive)
 };
 
 // A head-on impact at relative speed `speed` along x, either of a sphere on the
@@ -153,6 +154,10 @@ ImpactResult impact(const ContactLawDef& law, bool onPlane, double speed, double
       for (std::uint32_t k = 0; k < pc.nodeCount; ++k) ofB += solver.nodeContacts()[pc.firstNode + k].ownerIsB;
       r.maxPerSide = std::max(r.maxPerSide, std::max<std::size_t>(ofB, pc.nodeCount - ofB));
       r.peakForce = std::max(r.peakForce, onPlane ? pc.force[0] : -pc.force[0]);
+      for (std::uint32_t k = 0; k < pc.nodeCount; ++k) {
+        const NodeContact<D>& c = solver.nodeContacts()[pc.firstNode + k];
+        r.minNormalForce = std::min(r.minNormalForce, c.force.dot(c.normal));
+      }
     }
   }
   // Fly clear, then read the separation speed.
@@ -167,11 +172,12 @@ ImpactResult impact(const ContactLawDef& law, bool onPlane, double speed, double
 
 double sphereMass(double volume) { return 2650.0 * volume; }
 
-// Linear spring-dashpot against its analytic solution, e = exp(-pi zeta /
-// sqrt(1 - zeta^2)) and duration pi / (omega sqrt(1 - zeta^2)), omega =
-// sqrt(K / m_eff): one node touching a plane (K = kn, m_eff = m), or one node
-// per direction between two spheres (weight 1/2 each: K = kn, m_eff = m/2),
-// for several positions of the contact start within a step.
+// Linear spring-dashpot, its tensile part clipped, against its analytic
+// solution, e = exp(-zeta / sqrt(1 - zeta^2) (pi - 2 asin zeta)) and the
+// duration of contactDuration (ContactLaw.h), omega = sqrt(K / m_eff): one
+// node touching a plane (K = kn, m_eff = m), or one node per direction between
+// two spheres (weight 1/2 each: K = kn, m_eff = m/2), for several positions of
+// the contact start within a step. No node's normal force is ever attractive.
 //
 // Time step 1/200 of the contact: the integrator gives forces the half-step
 // velocity, which delays the dashpot by dt/2 and raises the effective damping
@@ -179,14 +185,14 @@ double sphereMass(double volume) { return 2650.0 * volume; }
 // short at 1/50, 0.55 % and 0.3 % at 1/200).
 template <int D>
 void checkLinearImpact(bool onPlane) {
-  for (const double zeta : {0.1, 0.4}) {
+  for (const double zeta : {0.1, 0.4, 0.8}) {
     ContactLawDef law;
     law.kn = 3e7;
     law.hasFriction = false;
     law.dampingRatio = zeta;
     const double mEff = sphereMass(sphere<D>()->volume()) * (onPlane ? 1.0 : 0.5);
     const double omega = std::sqrt(law.kn / mEff);
-    const double duration = std::numbers::pi / (omega * std::sqrt(1.0 - zeta * zeta));
+    const double duration = contactDuration(zeta, omega);
     // Peak overlap ~ speed / omega = 0.5 mm, below the ~1 mm at which the
     // neighbouring nodes would touch.
     const double speed = 0.0005 * omega;
@@ -194,8 +200,12 @@ void checkLinearImpact(bool onPlane) {
       const ImpactResult r = impact<D>(law, onPlane, speed, duration / 200.0, phase);
       EXPECT_EQ(r.maxNodes, onPlane ? 1u : 2u) << "zeta " << zeta;
       EXPECT_EQ(r.maxPerSide, 1u) << "zeta " << zeta;
+      EXPECT_GE(r.minNormalForce, 0.0) << "zeta " << zeta;
       const double e = restitutionCoefficient(zeta);
-      EXPECT_NEAR(r.restitution, e, 0.01 * e) << "zeta " << zeta << " phase " << phase;
+      // (The half-step velocity's extra damping grows with zeta: at 0.8, e is
+      // 1.3 % low between two spheres.)
+      const double tolerance = zeta < 0.5 ? 0.01 : 0.015;
+      EXPECT_NEAR(r.restitution, e, tolerance * e) << "zeta " << zeta << " phase " << phase;
       EXPECT_NEAR(r.duration, duration, 0.01 * duration) << "zeta " << zeta << " phase " << phase;
     }
   }

@@ -32,13 +32,26 @@
 /// per pair (dampingCoefficient), K the pair's current total normal stiffness
 /// (sum of its node stiffnesses; dF/ddelta for Hertz), shared over the node
 /// contacts in proportion to their stiffness (Hertz: to their share of the
-/// force), each part opposing the normal relative velocity at its node; the
-/// linear spring-dashpot restitution is e = exp(-pi zeta / sqrt(1 - zeta^2))
-/// (restitutionCoefficient). The dashpot force does not vanish at the edge of
-/// contact, so in the first and last step of a node contact the solver weights
-/// it by the fraction of the step the node touches (estimated from the overlap
-/// and the normal speed; see NarrowPhase.cpp, boundaryWeight): the restitution
-/// then does not depend on where in a step a contact starts or ends. The
+/// force), each part opposing the normal relative velocity at its node.
+///
+/// No tensile contact forces. While two surfaces separate, the dashpot pulls
+/// them together; near the end of a contact its pull exceeds the spring's
+/// push, and a plain spring-dashpot would then hold the bodies together (an
+/// attraction contact mechanics does not have). lsdem clips the normal force
+/// of every node contact at zero, the usual DEM choice: the dashpot part of a
+/// node's force is max(-c_i v_n, -F_spring,i), so it may cancel the spring's
+/// push but never pull. The dashpot records (PairDashpot) hold the force
+/// actually applied, so the energy ledger books exactly the work the clipped
+/// dashpot did and the budget closes. The clip changes the restitution of the
+/// linear law to e = exp(-zeta / sqrt(1 - zeta^2) (pi - 2 asin zeta))
+/// (restitutionCoefficient; 0.364 at zeta = 0.4, where the unclipped law gives
+/// 0.254), and the bodies part at the speed they have when the force reaches
+/// zero. The dashpot force jumps from zero to c v_n where a contact begins
+/// (and, were it not clipped before, would drop from c v_n where it ends), so
+/// in the first and last step of a node contact the solver weights it by the
+/// fraction of the step the node touches (estimated from the overlap and the
+/// normal speed; see NarrowPhase.cpp, boundaryWeight): the restitution then
+/// does not depend on where in a step a contact starts. The
 /// integrator hands forces the half-step velocity, which raises the effective
 /// damping ratio by ~zeta omega dt / 2 (e is 0.55 % low at zeta = 0.4 with 200
 /// steps per contact, 2.2 % with 50).
@@ -137,13 +150,33 @@ double hertzStiffness(double effectiveModulus, double radius, double overlap);
 /// (ma against a wall or tool), kg. @param stiffness the pair's normal stiffness K, N/m.
 double dampingCoefficient(double zeta, double effectiveMass, double stiffness);
 
-/// @brief Coefficient of restitution of a linear spring-dashpot with damping
-/// ratio zeta: e = exp(-pi zeta / sqrt(1 - zeta^2)).
+/// @brief Coefficient of restitution of lsdem's linear spring-dashpot with
+/// damping ratio zeta (the tensile part clipped, see the file comment):
+/// e = exp(-zeta / sqrt(1 - zeta^2) (pi - 2 asin zeta)).
+///
+/// Derivation: the overlap x = (v0 / omega_d) exp(-zeta omega t) sin(omega_d t)
+/// gives the normal force k x + c x' proportional to sin(omega_d t + 2 alpha),
+/// sin alpha = zeta, which reaches zero at omega_d t* = pi - 2 alpha; the
+/// bodies leave with the speed they have then, v0 exp(-zeta omega t*), and
+/// fly apart with no force. Without the clip the formula would be
+/// exp(-pi zeta / sqrt(1 - zeta^2)) (0.254 instead of 0.364 at zeta = 0.4).
+/// e falls from 1 at zeta = 0 to exp(-2) = 0.135 as zeta -> 1.
 double restitutionCoefficient(double zeta);
 
-/// @brief Inverse of restitutionCoefficient: zeta = -ln e / sqrt(pi^2 + ln^2 e)
-/// for 0 < e <= 1 (a scene may give a restitution instead of C_res).
-/// @note Throws std::invalid_argument unless 0 < e <= 1.
+/// @brief Duration of a linear spring-dashpot impact from the first touch to
+/// the moment the surfaces part (overlap back to zero), s:
+/// (pi - 2 asin zeta) / omega_d + 2 zeta / omega, omega_d = omega sqrt(1 - zeta^2).
+/// The force ends 2 zeta / omega before the overlap does (at the clip).
+/// @param zeta damping ratio. @param omega sqrt(K / m_eff), rad/s.
+double contactDuration(double zeta, double omega);
+
+/// Restitution of the clipped linear spring-dashpot at critical damping: the
+/// lowest it can give (restitutionCoefficient as zeta -> 1).
+inline constexpr double kMinimumRestitution = 0.1353352832366127;  // exp(-2)
+
+/// @brief Inverse of restitutionCoefficient (a scene may give a restitution
+/// instead of C_res), solved by bisection to round-off.
+/// @note Throws std::invalid_argument unless exp(-2) < e <= 1.
 double dampingRatioForRestitution(double restitution);
 
 /// Mean node weight of lsdem's 3D surface nodes at 1 node per cell, in units
