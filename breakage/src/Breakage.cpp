@@ -142,7 +142,10 @@ void Breakage<D>::queueFailures(World<D>& world) {
     if (manualDone_[m] || now < mb.time) continue;
     manualDone_[m] = true;
     const auto it = std::find(p.id.begin(), p.id.end(), mb.particle);
-    if (it == p.id.end()) continue;
+    if (it == p.id.end()) {
+      manualNotApplied_.push_back({now, mb.particle, "no particle with this id (broken or removed earlier)"});
+      continue;
+    }
     const std::size_t i = std::size_t(it - p.id.begin());
     double value = 0.0;
     if (!stale && i < stress_.size() && !stress_[i].isZero(0.0)) {
@@ -187,7 +190,21 @@ void Breakage<D>::applyQueue(World<D>& world) {
     } else {
       surface.plane = HalfSpace<D>{rotation.transpose() * q.plane.normal, q.plane.offset - q.plane.normal.dot(p.position[i])};
     }
-    SplitResult<D> split = splitShape(shape, surface);
+    SplitResult<D> split;
+    try {
+      split = splitShape(shape, surface);
+    } catch (const std::exception& e) {
+      // A manual break is logged and skipped; a failure the criterion found is a bug worth stopping for.
+      if (!q.manual) throw;
+      manualNotApplied_.push_back({now, q.id, std::string("the split failed: ") + e.what()});
+      ++unsplit_;
+      continue;
+    }
+    if (!split.isSplit && q.manual) {
+      manualNotApplied_.push_back(
+          {now, q.id, q.curved ? "the surface does not cut the particle at its grid resolution"
+                               : "the plane does not cut the particle at its grid resolution"});
+    }
     if (!split.isSplit && !q.curved && !q.manual) {
       // The plane through the contacts grazes the grain (one side holds no
       // interior grid node): the same orientation through the centroid.
@@ -246,7 +263,10 @@ void Breakage<D>::applyQueue(World<D>& world) {
       def.parent = q.id;
       def.generation = p.generation[i] + 1;
       def.birthTime = now;
-      def.strength = childStrength(p.strength[i], f.shape->descriptors().equivalentDiameter, parentDiameter, m);
+      // A parent made unbreakable (infinite strength) passes none on: step (i) samples the fragment's.
+      def.strength = std::isfinite(p.strength[i])
+                         ? childStrength(p.strength[i], f.shape->descriptors().equivalentDiameter, parentDiameter, m)
+                         : 0.0;
       const double mass = density * def.massScale * f.shape->volume();
       const double kinetic = kineticEnergyOf(def);
       ev.fragmentMass += mass;
@@ -294,9 +314,15 @@ void Breakage<D>::applyQueue(World<D>& world) {
 
 template <int D>
 void Breakage<D>::saveState(dynamics::StateWriter& out) const {
-  out.putTag("breakage");
+  out.putTag("breakage 2");  // 2: with the manual breaks not applied
   std::vector<std::uint8_t> done(manualDone_.begin(), manualDone_.end());
   out.putVector(done);
+  out.put(std::uint64_t(manualNotApplied_.size()));
+  for (const ManualBreakNotApplied& n : manualNotApplied_) {
+    out.put(n.time);
+    out.put(n.particle);
+    out.putString(n.reason);
+  }
   out.put(rawVolumeError_);
   out.put(finesMass_);
   out.put(std::uint64_t(unsplit_));
@@ -330,9 +356,15 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
 
 template <int D>
 void Breakage<D>::loadState(dynamics::StateReader& in) {
-  in.expectTag("breakage");
+  in.expectTag("breakage 2");
   std::vector<std::uint8_t> done;
   in.getVector(done);
+  manualNotApplied_.resize(std::size_t(in.get<std::uint64_t>()));
+  for (ManualBreakNotApplied& n : manualNotApplied_) {
+    n.time = in.get<double>();
+    n.particle = in.get<std::uint64_t>();
+    n.reason = in.getString();
+  }
   if (done.size() != manualDone_.size()) {
     throw std::runtime_error("checkpoint does not fit this scene: " + std::to_string(done.size()) +
                              " manual breaks in the checkpoint, " + std::to_string(manualDone_.size()) + " in the scene");

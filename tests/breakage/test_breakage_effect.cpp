@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 using namespace lsdem;
 using namespace lsdem::breakage;
@@ -268,6 +269,61 @@ TEST(BreakageEffect, ManualBreakAtGivenTime) {
   // Manual breaks fire once.
   w.run(20);
   EXPECT_EQ(brk.breakages(), 1u);
+}
+
+// Manual breaks never stop a run. Due at the same step: one names a particle
+// that is not there, one a plane that misses its particle, one a particle
+// made unbreakable (infinite strength, as a failed cut leaves it) that the
+// plane does cut. World::step throws nothing; the first two are logged with
+// their reasons and change nothing; the third splits, and its fragments get
+// finite Weibull strengths of their own (eq. 13 would make them infinite).
+TEST(BreakageEffect, ManualBreaksThatCannotBeAppliedAreLoggedNotThrown) {
+  WorldDef<2> def;
+  def.checkFinite = true;
+  World<2> w(def);
+  const auto s = test::sphereShape<2>(0.01, 16);
+  ParticleDef<2> a;
+  a.shape = s;
+  w.addParticle(a);  // id 0: the plane misses it
+  a.position = Vec<2>(0.1, 0.0);
+  w.addParticle(a);  // id 1: unbreakable, cut through its centre
+  BreakageDef<2> bdef;
+  ManualBreak<2> missing, outside, unbreakable;
+  missing.particle = 7;
+  missing.time = 0.001;
+  missing.plane = {Vec<2>(1.0, 0.0), 0.0};
+  outside.particle = 0;
+  outside.time = 0.001;
+  outside.plane = {Vec<2>(1.0, 0.0), 0.05};  // x = 0.05: 4 radii from particle 0
+  unbreakable.particle = 1;
+  unbreakable.time = 0.001;
+  unbreakable.plane = {Vec<2>(0.0, 1.0), 0.0};
+  bdef.manual = {missing, outside, unbreakable};
+  auto effect = std::make_unique<Breakage<2>>(bdef);
+  Breakage<2>& brk = *effect;
+  w.addEffect(std::move(effect));
+  w.step();
+  w.particles().strength[1] = std::numeric_limits<double>::infinity();
+
+  const double mass = w.particleMass();
+  while (w.time() < 0.001 + 1.5 * w.dt()) ASSERT_NO_THROW(w.step());
+  ASSERT_EQ(brk.manualNotApplied().size(), 2u);
+  EXPECT_EQ(brk.manualNotApplied()[0].particle, 7u);
+  EXPECT_NE(brk.manualNotApplied()[0].reason.find("no particle"), std::string::npos);
+  EXPECT_EQ(brk.manualNotApplied()[1].particle, 0u);
+  EXPECT_NE(brk.manualNotApplied()[1].reason.find("does not cut"), std::string::npos);
+  EXPECT_GE(brk.manualNotApplied()[0].time, 0.001);
+  ASSERT_EQ(brk.breakages(), 1u);
+  EXPECT_EQ(brk.events()[0].parent, 1u);
+  const auto& p = w.particles();
+  EXPECT_EQ(p.size(), 3u);
+  EXPECT_EQ(std::count(p.id.begin(), p.id.end(), 0u), 1);
+  w.step();  // strengths are sampled at the start of the next step's breakage
+  for (std::uint64_t id : brk.events()[0].children) {
+    const std::size_t i = std::size_t(std::find(p.id.begin(), p.id.end(), id) - p.id.begin());
+    EXPECT_TRUE(std::isfinite(p.strength[i]) && p.strength[i] > 0.0) << p.strength[i];
+  }
+  EXPECT_NEAR(w.particleMass(), mass, 1e-12 * mass);
 }
 
 TEST(BreakageEffect, RejectsBadDefinitions) {

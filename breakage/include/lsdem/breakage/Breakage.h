@@ -23,10 +23,17 @@
 ///      matter lives on) and each fragment is added with the parent's density
 ///      (parent mass / parent shape volume), the split's exact-mass factor,
 ///      the rigid-body pose and velocity of fragmentState(), generation + 1,
-///      birth time now and strength childStrength() (eq. 13); a fragment below
+///      birth time now and strength childStrength() (eq. 13; a parent made
+///      unbreakable, strength infinite, gives its fragments none, so step 1
+///      samples theirs); a fragment below
 ///      minVolume or minNodes is recorded with World::recordRemoval as "fines"
 ///      with its kinetic energy instead;
 ///   4. world.particlesChanged() once after the batch (the time step is re-checked).
+///
+/// Manual breaks never stop a run: one that is due for a particle that is no
+/// longer there, whose surface does not cut the particle (a plane or surface
+/// outside it, or a cut the grid cannot resolve), or whose split throws is
+/// recorded in manualNotApplied() and skipped.
 ///
 /// Mass: fragments + fines carry the parent's mass exactly (to round-off;
 /// Split.h). Energy: the kinetic energy of a broken parent leaves the ledger's
@@ -125,6 +132,14 @@ struct BreakageEvent {
   double fragmentKineticEnergy = 0.0;          ///< of all fragments incl. fines, J
 };
 
+/// A manual break that was due but could not be applied: it is logged here
+/// (and in the run summary), never thrown out of World::step.
+struct ManualBreakNotApplied {
+  double time = 0.0;          ///< s, when it was due
+  std::uint64_t particle = 0; ///< global id it named
+  std::string reason;         ///< one line: why it was not applied
+};
+
 /// @brief The breakage effect (see the file comment).
 template <int D>
 class Breakage final : public dynamics::Effect<D> {
@@ -161,6 +176,11 @@ class Breakage final : public dynamics::Effect<D> {
   std::size_t unsplittable() const { return unsplittable_; }
   /// @brief Steps whose stress evaluation was skipped for stale contacts (file comment).
   std::size_t skippedSteps() const { return skipped_; }
+  /// @brief Manual breaks that were due but not applied, in order: the
+  /// particle was no longer there (broken or removed earlier), the surface
+  /// does not cut it at its grid resolution, or the split failed (the
+  /// reason names the error). The run goes on without them.
+  const std::vector<ManualBreakNotApplied>& manualNotApplied() const { return manualNotApplied_; }
 
  private:
   struct Pending {
@@ -194,6 +214,7 @@ class Breakage final : public dynamics::Effect<D> {
   std::size_t unsplittable_ = 0;
   std::size_t skipped_ = 0;
   std::size_t removedSeen_ = 0;
+  std::vector<ManualBreakNotApplied> manualNotApplied_;
 };
 
 extern template class Breakage<2>;
