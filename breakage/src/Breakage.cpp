@@ -234,8 +234,8 @@ void Breakage<D>::applyQueue(World<D>& world) {
     ev.planeOffset = q.plane.offset;
     ev.rawVolumeError = split.rawRelativeError;
     ev.inertiaRelativeError = split.inertiaRelativeError;
-    ev.parentMass = p.mass[i];
-    ev.parentMomentum = p.mass[i] * p.velocity[i];
+    ev.parentMass = world.unscaledMass(i);  // the true mass (World::densityScale)
+    ev.parentMomentum = ev.parentMass * p.velocity[i];
     ev.parentKineticEnergy = p.kineticEnergy(i);
     if constexpr (D == 2) {
       ev.inertiaEnergyBound =
@@ -247,7 +247,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
     rawVolumeError_ += std::abs(split.rawRelativeError) * split.parentVolume;
 
     // Fragments: the parent's density and motion, eq. 13 strengths; small ones leave as fines.
-    const double density = p.mass[i] / shape.volume();
+    const double density = ev.parentMass / shape.volume();
     const double parentDiameter = shape.descriptors().equivalentDiameter;
     for (const Fragment<D>& f : split.fragments) {
       const FragmentState<D> st = fragmentState(f, p.position[i], rotation, p.velocity[i], p.angularVelocity[i]);
