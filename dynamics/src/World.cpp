@@ -154,7 +154,7 @@ typename World<D>::ShapeStiffness World<D>::shapeStiffness(const std::shared_ptr
   const ContactLawDef& law = def_.contact;
 
   // The stiffest contact of one kind: its constants, and whether the partner is a particle.
-  const auto stiffnessOf = [&](const ContactConstants& c, bool particlePairs) {
+  const auto stiffnessOf = [&](const ContactConstants& c, bool particlePairs) -> ShapeStiffness {
     if (law.normal == NormalModel::Hertz) {
       // Pair-level: the tangent stiffness at a deep overlap (and the Mindlin
       // spring's, through the rotation it drives), doubled for two particles.
@@ -164,7 +164,7 @@ typename World<D>::ShapeStiffness World<D>::shapeStiffness(const std::shared_ptr
       if (law.hasFriction && c.gStar > 0.0) {
         k = std::max(k, tangentialLeverage(shape) * mindlinStiffness(c.gStar, R, kHertzOverlapFraction * R));
       }
-      return (particlePairs ? 2.0 : 1.0) * k;
+      return {(particlePairs ? 2.0 : 1.0) * k, -1, 0};
     }
     NodeStiffness ns;
     const double w = referenceNodeWeight<D>(shape.grid().spacing());
@@ -173,16 +173,18 @@ typename World<D>::ShapeStiffness World<D>::shapeStiffness(const std::shared_ptr
     ns.tangentialRatio = law.hasFriction ? c.ks / c.kn : 0.0;
     ContactStiffnessOptions options;
     options.particlePairs = particlePairs;
-    return stiffestContact(shape, ns, options).stiffness;
+    const StiffestContact<D> patch = stiffestContact(shape, ns, options);
+    return {patch.stiffness, -1, patch.nodeCount};
   };
 
   // Particle on particle, then every boundary with its own material (a
   // boundary of the grains' material is never stiffer than a particle pair).
-  ShapeStiffness k{stiffnessOf(lawConstants(law), true), -1};
+  ShapeStiffness k = stiffnessOf(lawConstants(law), true);
   const auto consider = [&](const ContactConstants* c, std::size_t boundary) {
     if (c == nullptr) return;
-    const double kb = stiffnessOf(*c, false);
-    if (kb > k.stiffness) k = {kb, std::int32_t(boundary)};
+    ShapeStiffness kb = stiffnessOf(*c, false);
+    kb.boundary = std::int32_t(boundary);
+    if (kb.stiffness > k.stiffness) k = kb;
   };
   for (std::size_t j = 0; j < planes_.size(); ++j) consider(contacts_.planeConstants(j), j);
   for (std::size_t j = 0; j < tools_.size(); ++j) consider(contacts_.toolConstants(j), planes_.size() + j);
@@ -197,6 +199,7 @@ TimeStepLimit World<D>::limitOf(std::size_t i) const {
   l.id = particles_.id[i];
   l.mass = particles_.mass[i];
   l.stiffness = stiffness_[i].stiffness;
+  l.patchNodes = stiffness_[i].patchNodes;
   l.diameter = shape.descriptors().equivalentDiameter;
   l.spacing = shape.grid().spacing();
   l.nodes = shape.nodes().size();
@@ -308,6 +311,7 @@ void World<D>::anticipateParticle(const ParticleDef<D>& def) {
     limit_.id = kNoParent;
     limit_.mass = mass;
     limit_.stiffness = k.stiffness;
+    limit_.patchNodes = k.patchNodes;
     limit_.diameter = def.shape->descriptors().equivalentDiameter;
     limit_.spacing = def.shape->grid().spacing();
     limit_.nodes = def.shape->nodes().size();

@@ -326,6 +326,88 @@ TEST(BreakageEffect, ManualBreaksThatCannotBeAppliedAreLoggedNotThrown) {
   EXPECT_NEAR(w.particleMass(), mass, 1e-12 * mass);
 }
 
+// Opt-in density scaling: a disc cut near its edge leaves a small cap and a
+// big piece with a flat face, both of which would shorten the step. Scaled
+// (fragments below 1.25 disc diameters: both), their masses and inertias
+// grow by the factors that bring their omega^2 = k / m down to the unbroken
+// disc's, so the critical step after the split is the disc's (without
+// scaling it halves); true masses still balance; the kinetic energy the
+// scaling adds is booked, so the ledger closes.
+TEST(BreakageEffect, DensityScalingKeepsSmallFragmentsFromSettingTheStep) {
+  struct Outcome {
+    double dtBefore = 0.0, dtAfter = 0.0, mass = 0.0, massBefore = 0.0, ledger = 0.0;
+    double capScale = 0.0, capMass = 0.0, capTrueMass = 0.0, bigScale = 0.0;
+    dynamics::TimeStepLimit limit;
+    dynamics::DensityScalingStats stats;
+  };
+  const auto run = [](bool scaled) {
+    WorldDef<2> def;
+    def.contact.kn = 1e5;
+    def.contact.ks = 0.8e5;
+    const auto disc = test::sphereShape<2>(0.01, 16);
+    if (scaled) def.densityScaling = dynamics::DensityScalingDef{0.025, 100.0};
+    World<2> w(def);
+    ParticleDef<2> a;
+    a.shape = disc;
+    a.velocity = Vec<2>(0.2, 0.1);
+    a.angularVelocity = 3.0;
+    w.addParticle(a);
+    a.position = Vec<2>(0.05, 0.0);
+    w.addParticle(a);
+    BreakageDef<2> bdef;
+    ManualBreak<2> cap;
+    cap.particle = 0;
+    cap.time = 0.002;
+    cap.plane = {Vec<2>(0.0, 1.0), 0.006};  // y = 0.006 at the start: a cap 0.4 radii thick
+    bdef.manual.push_back(cap);
+    auto effect = std::make_unique<Breakage<2>>(bdef);
+    Breakage<2>& brk = *effect;
+    w.addEffect(std::move(effect));
+    Outcome o;
+    w.step();
+    o.dtBefore = w.criticalDt();
+    o.massBefore = w.particleMass();
+    while (brk.breakages() == 0) w.step();
+    w.run(20);
+    o.dtAfter = w.criticalDt();
+    o.mass = w.particleMass();
+    o.ledger = std::abs(w.energy().relativeBalanceError());
+    o.limit = w.timeStepLimit();
+    o.stats = w.densityScaling();
+    const auto& p = w.particles();
+    for (std::uint64_t id : brk.events()[0].children) {
+      const std::size_t i = std::size_t(std::find(p.id.begin(), p.id.end(), id) - p.id.begin());
+      if (p.shape[i]->descriptors().equivalentDiameter < 0.012) {
+        o.capScale = w.densityScale(i);
+        o.capMass = p.mass[i];
+        o.capTrueMass = w.unscaledMass(i);
+      } else {
+        o.bigScale = w.densityScale(i);
+      }
+    }
+    return o;
+  };
+  const Outcome plain = run(false), scaled = run(true);
+  // Without scaling the cap sets a shorter step; with it the step stays the discs'.
+  EXPECT_LT(plain.dtAfter, 0.8 * plain.dtBefore);
+  EXPECT_GT(plain.limit.generation, 0);
+  EXPECT_EQ(plain.capScale, 1.0);
+  EXPECT_NEAR(scaled.dtAfter, scaled.dtBefore, 1e-12 * scaled.dtBefore);
+  EXPECT_EQ(scaled.dtBefore, plain.dtBefore);
+  EXPECT_GT(scaled.capScale, 1.5);
+  EXPECT_GT(scaled.bigScale, 1.0);
+  EXPECT_GT(scaled.capScale, scaled.bigScale);
+  EXPECT_NEAR(scaled.capMass, scaled.capScale * scaled.capTrueMass, 1e-15 * scaled.capMass);
+  EXPECT_NEAR(scaled.capTrueMass, plain.capTrueMass, 1e-12 * plain.capTrueMass);
+  EXPECT_EQ(scaled.stats.scaled, 2u);
+  EXPECT_EQ(scaled.stats.capped, 0u);
+  EXPECT_EQ(scaled.stats.largestFactor, scaled.capScale);
+  // True masses balance; the ledger closes in both.
+  EXPECT_NEAR(scaled.mass, scaled.massBefore, 1e-12 * scaled.massBefore);
+  EXPECT_LT(plain.ledger, 1e-6);
+  EXPECT_LT(scaled.ledger, 1e-6);
+}
+
 TEST(BreakageEffect, RejectsBadDefinitions) {
   BreakageDef<2> d;
   d.minVolume = -1.0;

@@ -77,6 +77,9 @@ struct TimeStepLimit {
   std::uint64_t id = 0;          ///< global id of the particle
   double mass = 0.0;             ///< its mass as the dynamics see it (density scaling included), kg
   double stiffness = 0.0;        ///< k_eff of its stiffest contact, N/m
+  /// Linear law: the surface nodes of that contact's patch (a flat face
+  /// engages all its nodes at once; TimeStep.h); 0 for Hertz.
+  std::uint64_t patchNodes = 0;
   double diameter = 0.0;         ///< its equivalent diameter, m
   double spacing = 0.0;          ///< its grid spacing, m
   std::uint64_t nodes = 0;       ///< its surface nodes
@@ -285,6 +288,7 @@ class World {
   struct ShapeStiffness {
     double stiffness = 0.0;
     std::int32_t boundary = -1;
+    std::uint64_t patchNodes = 0;
   };
   /// The effective contact stiffness of a shape, from the cache when the
   /// shape is one it still holds. Entries are keyed by the live shape, not by
