@@ -60,9 +60,6 @@ Breakage<D>::Breakage(const BreakageDef<D>& def) : def_(def), criterion_(makeCri
   if (def.minNodes < 0) {
     throw std::invalid_argument("breakage minNodes must be >= 0, got " + std::to_string(def.minNodes));
   }
-  if (!(def.massScalingDt >= 0.0) || !std::isfinite(def.massScalingDt)) {
-    throw std::invalid_argument("breakage massScalingDt must be finite and >= 0, got " + std::to_string(def.massScalingDt));
-  }
   if (!(def.bucklingRatio > 1.0) || !std::isfinite(def.bucklingRatio)) {
     throw std::invalid_argument("breakage bucklingRatio must be finite and > 1, got " +
                                 std::to_string(def.bucklingRatio));
@@ -149,7 +146,7 @@ void Breakage<D>::queueFailures(World<D>& world) {
     manualDone_[m] = true;
     const auto it = std::find(p.id.begin(), p.id.end(), mb.particle);
     if (it == p.id.end()) {
-      ++manualSkipped_;  // the particle is gone (broken or removed before its time)
+      manualNotApplied_.push_back({now, mb.particle, "no particle with this id (broken or removed earlier)"});
       continue;
     }
     const std::size_t i = std::size_t(it - p.id.begin());
@@ -196,7 +193,21 @@ void Breakage<D>::applyQueue(World<D>& world) {
     } else {
       surface.plane = HalfSpace<D>{rotation.transpose() * q.plane.normal, q.plane.offset - q.plane.normal.dot(p.position[i])};
     }
-    SplitResult<D> split = splitShape(shape, surface, def_.split);
+    SplitResult<D> split;
+    try {
+      split = splitShape(shape, surface, def_.split);
+    } catch (const std::exception& e) {
+      // A manual break is logged and skipped; a failure the criterion found is a bug worth stopping for.
+      if (!q.manual) throw;
+      manualNotApplied_.push_back({now, q.id, std::string("the split failed: ") + e.what()});
+      ++unsplit_;
+      continue;
+    }
+    if (!split.isSplit && q.manual) {
+      manualNotApplied_.push_back(
+          {now, q.id, q.curved ? "the surface does not cut the particle at its grid resolution"
+                               : "the plane does not cut the particle at its grid resolution"});
+    }
     if (!split.isSplit && !q.curved && !q.manual) {
       // The plane through the contacts grazes the grain (one side holds no
       // interior grid node): the same orientation through the centroid.
@@ -211,7 +222,6 @@ void Breakage<D>::applyQueue(World<D>& world) {
     }
     if (!split.isSplit) {
       ++unsplit_;
-      if (q.manual) ++manualSkipped_;  // the prescribed cut leaves the grain whole
       continue;
     }
 
@@ -227,8 +237,8 @@ void Breakage<D>::applyQueue(World<D>& world) {
     ev.planeOffset = q.plane.offset;
     ev.rawVolumeError = split.rawRelativeError;
     ev.inertiaRelativeError = split.inertiaRelativeError;
-    ev.parentMass = p.mass[i];
-    ev.parentMomentum = p.mass[i] * p.velocity[i];
+    ev.parentMass = world.unscaledMass(i);  // the true mass (World::densityScale)
+    ev.parentMomentum = ev.parentMass * p.velocity[i];
     ev.parentKineticEnergy = p.kineticEnergy(i);
     if constexpr (D == 2) {
       ev.inertiaEnergyBound =
@@ -240,7 +250,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
     rawVolumeError_ += std::abs(split.rawRelativeError) * split.parentVolume;
 
     // Fragments: the parent's density and motion, eq. 13 strengths; small ones leave as fines.
-    const double density = p.mass[i] / shape.volume();
+    const double density = ev.parentMass / shape.volume();
     const double parentDiameter = shape.descriptors().equivalentDiameter;
     for (const Fragment<D>& f : split.fragments) {
       const FragmentState<D> st = fragmentState(f, p.position[i], rotation, p.velocity[i], p.angularVelocity[i]);
@@ -256,24 +266,13 @@ void Breakage<D>::applyQueue(World<D>& world) {
       def.parent = q.id;
       def.generation = p.generation[i] + 1;
       def.birthTime = now;
-      // eq. 13; an unbreakable parent (infinite strength: made so, or too
-      // small to cut) split by a manual break leaves unbreakable children.
+      // eq. 13; a parent made unbreakable (infinite strength) passes none on:
+      // step (i) samples the fragment's own.
       def.strength = std::isfinite(p.strength[i])
                          ? childStrength(p.strength[i], f.shape->descriptors().equivalentDiameter, parentDiameter, m)
-                         : p.strength[i];
+                         : 0.0;
       const bool small = !def_.haltBelowMinimum &&
                          (f.volume < def_.minVolume || f.shape->nodes().size() < std::size_t(def_.minNodes));
-      // Opt-in density scaling: a kept fragment's own critical step raised to massScalingDt.
-      if (def_.massScalingDt > 0.0 && !small) {
-        const double own = world.criticalDtOf(f.shape, density * f.shape->volume());
-        if (own < def_.massScalingDt) {
-          const double factor = (def_.massScalingDt / own) * (def_.massScalingDt / own);
-          def.massScale *= factor;
-          ++massScaled_;
-          massScalingAdded_ += (factor - 1.0) * density * f.shape->volume();
-          massScalingMax_ = std::max(massScalingMax_, factor);
-        }
-      }
       const double mass = density * def.massScale * f.shape->volume();
       const double kinetic = kineticEnergyOf(def);
       ev.fragmentMass += mass;
@@ -320,19 +319,21 @@ void Breakage<D>::applyQueue(World<D>& world) {
 
 template <int D>
 void Breakage<D>::saveState(dynamics::StateWriter& out) const {
-  out.putTag("breakage");
+  out.putTag("breakage 2");  // 2: with the manual breaks not applied
   std::vector<std::uint8_t> done(manualDone_.begin(), manualDone_.end());
   out.putVector(done);
+  out.put(std::uint64_t(manualNotApplied_.size()));
+  for (const ManualBreakNotApplied& n : manualNotApplied_) {
+    out.put(n.time);
+    out.put(n.particle);
+    out.putString(n.reason);
+  }
   out.put(rawVolumeError_);
   out.put(finesMass_);
   out.put(std::uint64_t(unsplit_));
   out.put(std::uint64_t(unsplittable_));
   out.put(std::uint64_t(skipped_));
   out.put(std::uint64_t(removedSeen_));
-  out.put(std::uint64_t(massScaled_));
-  out.put(massScalingAdded_);
-  out.put(massScalingMax_);
-  out.put(std::uint64_t(manualSkipped_));
   out.put(std::uint64_t(events_.size()));
   for (const BreakageEvent<D>& e : events_) {
     out.put(e.time);
@@ -360,9 +361,15 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
 
 template <int D>
 void Breakage<D>::loadState(dynamics::StateReader& in) {
-  in.expectTag("breakage");
+  in.expectTag("breakage 2");
   std::vector<std::uint8_t> done;
   in.getVector(done);
+  manualNotApplied_.resize(std::size_t(in.get<std::uint64_t>()));
+  for (ManualBreakNotApplied& n : manualNotApplied_) {
+    n.time = in.get<double>();
+    n.particle = in.get<std::uint64_t>();
+    n.reason = in.getString();
+  }
   if (done.size() != manualDone_.size()) {
     throw std::runtime_error("checkpoint does not fit this scene: " + std::to_string(done.size()) +
                              " manual breaks in the checkpoint, " + std::to_string(manualDone_.size()) + " in the scene");
@@ -374,10 +381,6 @@ void Breakage<D>::loadState(dynamics::StateReader& in) {
   unsplittable_ = std::size_t(in.get<std::uint64_t>());
   skipped_ = std::size_t(in.get<std::uint64_t>());
   removedSeen_ = std::size_t(in.get<std::uint64_t>());
-  massScaled_ = std::size_t(in.get<std::uint64_t>());
-  massScalingAdded_ = in.get<double>();
-  massScalingMax_ = in.get<double>();
-  manualSkipped_ = std::size_t(in.get<std::uint64_t>());
   events_.resize(std::size_t(in.get<std::uint64_t>()));
   for (BreakageEvent<D>& e : events_) {
     e.time = in.get<double>();

@@ -51,11 +51,23 @@ std::uint32_t nodeKey(const NodeContact<D>& c) {
   return (c.ownerIsB ? kOwnerIsBBit : 0u) | c.node;
 }
 
-// Law constants of one compute() call.
+// Law constants of one compute() call (gStar > 0: Mindlin's tangential stiffness).
 struct LawConstants {
-  double kn = 0.0, ks = 0.0, mu = 0.0, zeta = 0.0, eStar = 0.0, dt = 0.0;
+  double kn = 0.0, ks = 0.0, mu = 0.0, zeta = 0.0, eStar = 0.0, gStar = 0.0, dt = 0.0;
   double shearDt = 0.0;  // dt, or 0 when re-evaluating an unchanged state
 };
+
+// The constants of contacts with a boundary: its own material's, or (null) the law's.
+LawConstants boundaryLaw(const LawConstants& law, const ContactConstants* material) {
+  if (material == nullptr) return law;
+  LawConstants out = law;
+  out.kn = material->kn;
+  out.ks = material->ks;
+  out.mu = material->friction;
+  out.eStar = material->eStar;
+  out.gStar = law.gStar > 0.0 ? material->gStar : 0.0;
+  return out;
+}
 
 // A pair's node contacts of the previous step (its shear history), by node key.
 template <int D>
@@ -201,6 +213,9 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
     hertz = hertzForce(law.eStar, hertzRadius, deepest);
     stiffness = hertzStiffness(law.eStar, hertzRadius, deepest);
   }
+  // Mindlin: the pair's no-slip tangential stiffness, shared like the Hertz force.
+  double mindlin = 0.0;
+  if constexpr (Normal == NormalModel::Hertz && Friction) mindlin = mindlinStiffness(law.gStar, hertzRadius, deepest);
   // Dashpot of the pair, C = 2 zeta sqrt(m_eff K), shared like the stiffness.
   double damping = 0.0;
   if constexpr (Damping) {
@@ -239,14 +254,19 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
       // the step the node is in contact (see boundaryWeight).
       if constexpr (Damping) {
         const double cn = damping * share * boundaryWeight(c.overlap, vn, law.dt);
-        fn -= cn * vn;
-        power += cn * vn * vn;
+        // No tensile contact force: a separating dashpot may cancel the
+        // spring's push but never pull (ContactLaw.h); the ledger books the
+        // dashpot force actually applied.
+        const double fdn = std::max(-cn * vn, -fn);
+        fn += fdn;
+        const double p = -fdn * vn;
+        power += p;
         // The dashpot's own force and moments, for the energy ledger.
-        const Vec<D> fd = (-cn * vn) * c.normal;
+        const Vec<D> fd = fdn * c.normal;
         dash.force += fd;
         dash.torqueA += Rotation<D>::moment(c.point - xa, fd);
         dash.torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-fd));
-        dash.power += cn * vn * vn;
+        dash.power += p;
         dash.boundaryPower += fd.dot(velocityB(c.point));
       }
       force = fn * c.normal;
@@ -254,17 +274,33 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
         // Previous shear of this node contact (both lists ascend by node key),
         // turned into the current tangent plane with its length kept.
         Vec<D> shear = Vec<D>::Zero();
+        double oldEnergy = 0.0, old2 = 0.0;  // Mindlin: the spring's energy at its old stiffness, |s|^2
         const std::uint32_t key = nodeKey(c);
         while (cursor < history.count && nodeKey(history.nodes[cursor]) < key) ++cursor;
         if (cursor < history.count && nodeKey(history.nodes[cursor]) == key) {
           const Vec<D>& old = history.shear[cursor];
           shear = old - old.dot(c.normal) * c.normal;
+          old2 = old.squaredNorm();
           const double projected2 = shear.squaredNorm();
-          if (projected2 > 0.0) shear *= std::sqrt(old.squaredNorm() / projected2);
+          if (projected2 > 0.0) shear *= std::sqrt(old2 / projected2);
+          if constexpr (Normal == NormalModel::Hertz) {
+            // The old spring force is k_t,old s_old (also when it slid), so its
+            // energy k_t,old |s_old|^2 / 2 = |f_t,old| |s_old| / 2.
+            if (mindlin > 0.0) {
+              const NodeContact<D>& prev = history.nodes[cursor];
+              const Vec<D> ftOld = prev.force - prev.force.dot(prev.normal) * prev.normal;
+              oldEnergy = 0.5 * ftOld.norm() * std::sqrt(old2);
+            }
+          }
         }
         // Add this step's tangential displacement; spring force capped by Coulomb.
         shear += law.shearDt * (vrel - vn * c.normal);
-        const double kt = law.ks * w.stiffness;
+        const double kt = law.ks * w.stiffness + mindlin * share;
+        // Mindlin: the stiffness change's energy at the old displacement is a
+        // loss of the contact, not work of the bodies (ContactLaw.h).
+        if constexpr (Normal == NormalModel::Hertz) {
+          if (mindlin > 0.0) power += (oldEnergy - 0.5 * kt * old2) / law.dt;
+        }
         Vec<D> ft = -kt * shear;
         const double cap = law.mu * std::max(fn, 0.0);
         const double ftNorm = ft.norm();
@@ -313,6 +349,30 @@ bool keyLess(const HistoryPair& h, std::uint64_t idA, std::uint64_t other) {
 template <int D>
 ContactSolver<D>::ContactSolver(const ContactLawDef& law) : law_(law) {
   validateContactLaw(law_);
+}
+
+template <int D>
+void ContactSolver<D>::setPlaneMaterial(std::size_t index, const BoundaryMaterial& material) {
+  const ContactConstants c = boundaryConstants(law_, material);
+  if (planeConstants_.size() <= index) planeConstants_.resize(index + 1);
+  planeConstants_[index] = c;
+}
+
+template <int D>
+void ContactSolver<D>::setToolMaterial(std::size_t index, const BoundaryMaterial& material) {
+  const ContactConstants c = boundaryConstants(law_, material);
+  if (toolConstants_.size() <= index) toolConstants_.resize(index + 1);
+  toolConstants_[index] = c;
+}
+
+template <int D>
+const ContactConstants* ContactSolver<D>::planeConstants(std::size_t index) const {
+  return index < planeConstants_.size() && planeConstants_[index] ? &*planeConstants_[index] : nullptr;
+}
+
+template <int D>
+const ContactConstants* ContactSolver<D>::toolConstants(std::size_t index) const {
+  return index < toolConstants_.size() && toolConstants_[index] ? &*toolConstants_[index] : nullptr;
 }
 
 template <int D>
@@ -387,12 +447,14 @@ template <int D>
 template <NormalModel Normal, ForceFormulation Formulation, bool Friction, bool Damping>
 void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
                            const std::vector<ToolPose<D>>& tools, double dt, double shearDt) {
+  const ContactConstants grains = lawConstants(law_);
   LawConstants law;
-  law.kn = law_.kn;
-  law.ks = law_.ks;
-  law.mu = law_.friction;
+  law.kn = grains.kn;
+  law.ks = grains.ks;
+  law.mu = grains.friction;
   law.zeta = law_.dampingRatio;
-  law.eStar = Normal == NormalModel::Hertz ? effectiveModulus(law_) : 0.0;
+  law.eStar = Normal == NormalModel::Hertz ? grains.eStar : 0.0;
+  law.gStar = Normal == NormalModel::Hertz && Friction ? grains.gStar : 0.0;
   law.dt = dt;
   law.shearDt = shearDt;
 
@@ -505,7 +567,8 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         const double radius = Normal == NormalModel::Hertz ? equivalentRadius<D>(s.volume()) : 0.0;
         const auto velocityB = [&](const Vec<D>&) { return plane.velocity; };
         PairDashpot<D> dash;
-      applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, law, p.invMass[std::size_t(i)], radius, x,
+        const LawConstants planeLaw = boundaryLaw(law, planeConstants(j));
+        applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, planeLaw, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
                                                plane.point, velocityB,
                                                historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)));
@@ -544,7 +607,8 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         }
         const auto velocityB = [&](const Vec<D>& at) { return tool.velocityAt(at); };
         PairDashpot<D> dash;
-      applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, law, p.invMass[std::size_t(i)], radius, x,
+        const LawConstants toolLaw = boundaryLaw(law, toolConstants(j));
+        applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, toolLaw, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
                                                tool.position, velocityB,
                                                historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)));

@@ -100,6 +100,17 @@ World<D>::World(const WorldDef<D>& def) : def_(def), broad_(def.broadPhase), con
   if (!(def.dt >= 0.0) || !std::isfinite(def.dt)) {
     throw std::invalid_argument("dt must be >= 0 (0: automatic), got " + std::to_string(def.dt));
   }
+  if (def.densityScaling) {
+    const DensityScalingDef& ds = *def.densityScaling;
+    if (!(ds.belowDiameter > 0.0) || !std::isfinite(ds.belowDiameter)) {
+      throw std::invalid_argument("density scaling: the size below which fragments are scaled must be > 0 m, got " +
+                                  std::to_string(ds.belowDiameter));
+    }
+    if (!(ds.maxFactor >= 1.0) || !std::isfinite(ds.maxFactor)) {
+      throw std::invalid_argument("density scaling: the largest factor must be >= 1, got " +
+                                  std::to_string(ds.maxFactor));
+    }
+  }
   if (!(def.dtSafety > 0.0 && def.dtSafety <= 1.0)) {
     throw std::invalid_argument("dt safety factor must be in (0, 1], got " + std::to_string(def.dtSafety));
   }
@@ -113,8 +124,26 @@ World<D>::World(const WorldDef<D>& def) : def_(def), broad_(def.broadPhase), con
 
 // ---------------------------------------------------------------- building --
 
+namespace {
+
+// How much more a tangential spring at the surface shakes a body than a
+// normal one through its centre: 1 + m r^2 / I_min per unit density (r the
+// bounding radius; 3.5 for a sphere), the rotation the spring drives.
 template <int D>
-double World<D>::shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>& shapePtr) {
+double tangentialLeverage(const geometry::Shape<D>& shape) {
+  const auto& mp = shape.mass();
+  const double r = shape.boundingRadius();
+  if constexpr (D == 2) {
+    return 1.0 + mp.volume * r * r / mp.polarMoment();
+  } else {
+    return 1.0 + mp.volume * r * r / mp.principalInertia().minCoeff();
+  }
+}
+
+}  // namespace
+
+template <int D>
+typename World<D>::ShapeStiffness World<D>::shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>& shapePtr) {
   // A hit needs the cached shape alive: an expired entry's address may now
   // hold another shape. Expired entries are dropped on a miss.
   for (const CachedStiffness& c : shapeStiffness_) {
@@ -123,55 +152,146 @@ double World<D>::shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>&
   std::erase_if(shapeStiffness_, [](const CachedStiffness& c) { return c.alive.expired(); });
   const geometry::Shape<D>& shape = *shapePtr;
   const ContactLawDef& law = def_.contact;
-  double k = 0.0;
-  if (law.normal == NormalModel::Hertz) {
-    const double R = combinedRadius(equivalentRadius<D>(shape.volume()), equivalentRadius<D>(shape.volume()));
-    k = 2.0 * hertzStiffness(effectiveModulus(law), R, kHertzOverlapFraction * R);
-  } else {
+
+  // The stiffest contact of one kind: its constants, and whether the partner is a particle.
+  const auto stiffnessOf = [&](const ContactConstants& c, bool particlePairs) -> ShapeStiffness {
+    if (law.normal == NormalModel::Hertz) {
+      // Pair-level: the tangent stiffness at a deep overlap (and the Mindlin
+      // spring's, through the rotation it drives), doubled for two particles.
+      const double own = equivalentRadius<D>(shape.volume());
+      const double R = particlePairs ? combinedRadius(own, own) : own;
+      double k = hertzStiffness(c.eStar, R, kHertzOverlapFraction * R);
+      if (law.hasFriction && c.gStar > 0.0) {
+        k = std::max(k, tangentialLeverage(shape) * mindlinStiffness(c.gStar, R, kHertzOverlapFraction * R));
+      }
+      return {(particlePairs ? 2.0 : 1.0) * k, -1, 0};
+    }
     NodeStiffness ns;
     const double w = referenceNodeWeight<D>(shape.contactSpacing());
-    ns.perNode = law.formulation == ForceFormulation::PerNode ? law.kn : 0.0;
-    ns.perWeight = law.formulation == ForceFormulation::AreaWeighted ? law.kn / w : 0.0;
-    ns.tangentialRatio = law.hasFriction ? law.ks / law.kn : 0.0;
-    k = stiffestContact(shape, ns).stiffness;
-  }
+    ns.perNode = law.formulation == ForceFormulation::PerNode ? c.kn : 0.0;
+    ns.perWeight = law.formulation == ForceFormulation::AreaWeighted ? c.kn / w : 0.0;
+    ns.tangentialRatio = law.hasFriction ? c.ks / c.kn : 0.0;
+    ContactStiffnessOptions options;
+    options.particlePairs = particlePairs;
+    const StiffestContact<D> patch = stiffestContact(shape, ns, options);
+    return {patch.stiffness, -1, patch.nodeCount};
+  };
+
+  // Particle on particle, then every boundary with its own material (a
+  // boundary of the grains' material is never stiffer than a particle pair).
+  ShapeStiffness k = stiffnessOf(lawConstants(law), true);
+  const auto consider = [&](const ContactConstants* c, std::size_t boundary) {
+    if (c == nullptr) return;
+    ShapeStiffness kb = stiffnessOf(*c, false);
+    kb.boundary = std::int32_t(boundary);
+    if (kb.stiffness > k.stiffness) k = kb;
+  };
+  for (std::size_t j = 0; j < planes_.size(); ++j) consider(contacts_.planeConstants(j), j);
+  for (std::size_t j = 0; j < tools_.size(); ++j) consider(contacts_.toolConstants(j), planes_.size() + j);
   shapeStiffness_.push_back({shapePtr.get(), shapePtr, k});
   return k;
 }
 
 template <int D>
-std::size_t World<D>::stepLimitingParticle() const {
-  std::size_t best = particles_.size();
-  double bestRatio = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < particles_.size() && i < stiffness_.size(); ++i) {
-    if (!(stiffness_[i] > 0.0)) continue;
-    const double ratio = particles_.mass[i] / stiffness_[i];
-    if (ratio < bestRatio) {
-      bestRatio = ratio;
-      best = i;
-    }
-  }
-  return best;
-}
-
-template <int D>
-double World<D>::criticalDtOf(const std::shared_ptr<const geometry::Shape<D>>& shape, double mass) {
-  const double zeta = def_.contact.hasDamping ? def_.contact.dampingRatio : 0.0;
-  return criticalTimeStep({mass}, {shapeStiffness(shape)}, zeta);
+TimeStepLimit World<D>::limitOf(std::size_t i) const {
+  const geometry::Shape<D>& shape = *particles_.shape[i];
+  TimeStepLimit l;
+  l.id = particles_.id[i];
+  l.mass = particles_.mass[i];
+  l.stiffness = stiffness_[i].stiffness;
+  l.patchNodes = stiffness_[i].patchNodes;
+  l.diameter = shape.descriptors().equivalentDiameter;
+  l.spacing = shape.grid().spacing();
+  l.nodes = shape.nodes().size();
+  l.generation = particles_.generation[i];
+  l.boundary = stiffness_[i].boundary;
+  l.densityScale = densityScale(i);
+  return l;
 }
 
 template <int D>
 void World<D>::updateTimeStep(bool lastAddedOnly) {
   const double zeta = def_.contact.hasDamping ? def_.contact.dampingRatio : 0.0;
+  // The particle with the largest omega^2 = k / m sets the step; the minimum
+  // over particles of criticalTimeStep is that particle's.
+  const auto criticalOf = [&](std::size_t i) {
+    return criticalTimeStep({particles_.mass[i]}, {stiffness_[i].stiffness}, zeta);
+  };
   if (lastAddedOnly) {
     // One particle more: the minimum over particles takes one more term (O(1)
     // per add, so building a world of N particles stays O(N)).
-    const double last = criticalTimeStep({particles_.mass.back()}, {stiffness_.back()}, zeta);
-    dtCritical_ = std::min(dtCritical_, last);
+    const std::size_t i = particles_.size() - 1;
+    const double last = criticalOf(i);
+    if (last < dtCritical_) {
+      dtCritical_ = last;
+      limit_ = limitOf(i);
+      limit_.criticalDt = last;
+    }
   } else {
-    dtCritical_ = criticalTimeStep(particles_.mass, stiffness_, zeta);
+    std::size_t stiffest = particles_.size();
+    double omega2 = 0.0;
+    for (std::size_t i = 0; i < particles_.size(); ++i) {
+      const double w2 = stiffness_[i].stiffness / particles_.mass[i];
+      if (w2 > omega2) {
+        omega2 = w2;
+        stiffest = i;
+      }
+    }
+    dtCritical_ = stiffest < particles_.size() ? criticalOf(stiffest) : std::numeric_limits<double>::infinity();
+    if (stiffest < particles_.size()) {
+      limit_ = limitOf(stiffest);
+      limit_.criticalDt = dtCritical_;
+    }
   }
   stepFromCritical();
+}
+
+template <int D>
+void World<D>::boundaryMaterialsChanged() {
+  shapeStiffness_.clear();
+  if (particles_.empty()) return;
+  for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(particles_.shape[i]);
+  updateTimeStep(false);
+}
+
+template <int D>
+double World<D>::densityScale(std::size_t i) const {
+  if (densityScales_.empty()) return 1.0;
+  const auto it = densityScales_.find(particles_.id[i]);
+  return it == densityScales_.end() ? 1.0 : it->second;
+}
+
+template <int D>
+double World<D>::unscaledMass(std::size_t i) const {
+  return particles_.mass[i] / densityScale(i);
+}
+
+template <int D>
+void World<D>::scaleDensity(std::size_t i) {
+  // Only small fragments, each decided once.
+  const DensityScalingDef& ds = *def_.densityScaling;
+  Particles<D>& p = particles_;
+  if (p.parentId[i] == kNoParent || !(p.shape[i]->descriptors().equivalentDiameter < ds.belowDiameter)) return;
+  if (!densityScales_.emplace(p.id[i], 1.0).second) return;
+  // The factor that brings its omega^2 down to the reference, within [1, maxFactor].
+  const double omega2 = stiffness_[i].stiffness / p.mass[i];
+  const double ref = scalingStats_.referenceOmega2;
+  const double factor = ref > 0.0 ? std::clamp(omega2 / ref, 1.0, ds.maxFactor) : 1.0;
+  if (!(factor > 1.0)) return;
+  densityScales_[p.id[i]] = factor;
+  const double before = p.kineticEnergy(i);
+  p.mass[i] *= factor;
+  p.invMass[i] = 1.0 / p.mass[i];
+  p.inertia[i] *= factor;
+  if constexpr (D == 2) {
+    p.invInertia[i] = 1.0 / p.inertia[i];
+  } else {
+    p.invInertia[i] = p.inertia[i].cwiseInverse();
+  }
+  if (steps_ > 0) energy_.addedEnergy += p.kineticEnergy(i) - before;
+  ++scalingStats_.scaled;
+  scalingStats_.largestFactor = std::max(scalingStats_.largestFactor, factor);
+  if (factor == ds.maxFactor) ++scalingStats_.capped;
 }
 
 template <int D>
@@ -182,13 +302,29 @@ void World<D>::anticipateParticle(const ParticleDef<D>& def) {
     throw std::invalid_argument("anticipateParticle: mass must be positive, got " + std::to_string(mass));
   }
   const double zeta = def_.contact.hasDamping ? def_.contact.dampingRatio : 0.0;
-  dtCritical_ = std::min(dtCritical_, criticalTimeStep({mass}, {shapeStiffness(def.shape)}, zeta));
+  const ShapeStiffness k = shapeStiffness(def.shape);
+  const double critical = criticalTimeStep({mass}, {k.stiffness}, zeta);
+  if (critical < dtCritical_) {
+    // A grain still to come: no id yet.
+    dtCritical_ = critical;
+    limit_ = TimeStepLimit{};
+    limit_.id = kNoParent;
+    limit_.mass = mass;
+    limit_.stiffness = k.stiffness;
+    limit_.patchNodes = k.patchNodes;
+    limit_.diameter = def.shape->descriptors().equivalentDiameter;
+    limit_.spacing = def.shape->grid().spacing();
+    limit_.nodes = def.shape->nodes().size();
+    limit_.boundary = k.boundary;
+    limit_.criticalDt = critical;
+  }
   stepFromCritical();
 }
 
 template <int D>
 void World<D>::stepFromCritical() {
   if (!std::isfinite(dtCritical_)) return;  // no contacts possible yet
+  const double before = dt_;
   if (def_.dt > 0.0) {
     checkUserTimeStep(def_.dt, dtCritical_, def_.forceDt, def_.dtSafety);
     dt_ = def_.dt;
@@ -197,12 +333,14 @@ void World<D>::stepFromCritical() {
     const double stable = stableTimeStep(dtCritical_, def_.dtSafety);
     dt_ = dt_ > 0.0 ? std::min(dt_, stable) : stable;
   }
+  if (dt_ != before || dtChanges_.empty()) dtChanges_.push_back({time_, dt_, limit_});
 }
 
 template <int D>
 std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
   const std::size_t i = particles_.add(def);
   stiffness_.push_back(shapeStiffness(def.shape));
+  if (def_.densityScaling) scaleDensity(i);
   updateTimeStep(true);
   broad_.invalidate();
   forcesValid_ = false;
@@ -215,7 +353,8 @@ void World<D>::removeParticle(std::size_t index, const std::string& reason) {
   RemovedParticle r;
   r.id = particles_.id[index];
   r.time = time_;
-  r.mass = particles_.mass[index];
+  r.mass = unscaledMass(index);
+  if (!densityScales_.empty()) densityScales_.erase(r.id);
   r.volume = particles_.shape[index]->volume();
   r.sieveSize = particles_.shape[index]->descriptors().sieveSize;
   r.reason = reason;
@@ -242,11 +381,13 @@ void World<D>::recordRemoval(const RemovedParticle& r, double kineticEnergy) {
 template <int D>
 std::size_t World<D>::addTool(const ToolDef<D>& def) {
   if (!def.shape) throw std::invalid_argument("tool '" + def.name + "' needs a shape");
+  if (def.material) contacts_.setToolMaterial(tools_.size(), *def.material);
   tools_.push_back(def);
   toolPoses_.emplace_back();
   toolPoses_.back().shape = def.shape.get();
   moveKinematicBodies(time_);
   forcesValid_ = false;
+  if (def.material) boundaryMaterialsChanged();
   return tools_.size() - 1;
 }
 
@@ -256,12 +397,14 @@ std::size_t World<D>::addPlane(const PlaneDef<D>& def) {
   if (!(std::abs(n - 1.0) < 1e-6)) {
     throw std::invalid_argument("plane '" + def.name + "' needs a unit normal, |n| = " + std::to_string(n));
   }
+  if (def.material) contacts_.setPlaneMaterial(planes_.size(), *def.material);
   Plane<D> atStart = def.plane;
   planesAtStart_.push_back(atStart);
   atStart.point += time_ * atStart.velocity;
   planes_.push_back(atStart);
   planeNames_.push_back(def.name);
   forcesValid_ = false;
+  if (def.material) boundaryMaterialsChanged();
   return planes_.size() - 1;
 }
 
@@ -277,6 +420,20 @@ void World<D>::particlesChanged() {
   forcesValid_ = false;
   stiffness_.resize(particles_.size());
   for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(particles_.shape[i]);
+  if (def_.densityScaling) {
+    // The reference: the fastest particle the scaling leaves alone (so far);
+    // then the new small fragments; then forget the particles that left.
+    Particles<D>& p = particles_;
+    const double below = def_.densityScaling->belowDiameter;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (p.parentId[i] != kNoParent && p.shape[i]->descriptors().equivalentDiameter < below) continue;
+      scalingStats_.referenceOmega2 = std::max(scalingStats_.referenceOmega2, stiffness_[i].stiffness / p.mass[i]);
+    }
+    for (std::size_t i = 0; i < p.size(); ++i) scaleDensity(i);
+    std::vector<std::uint64_t> present(p.id.begin(), p.id.end());
+    std::sort(present.begin(), present.end());
+    std::erase_if(densityScales_, [&](const auto& e) { return !std::binary_search(present.begin(), present.end(), e.first); });
+  }
   updateTimeStep(false);
 }
 
@@ -447,7 +604,7 @@ void World<D>::run(std::uint64_t n) {
 template <int D>
 void World<D>::saveState(
     StateWriter& out, const std::function<std::uint32_t(const std::shared_ptr<const geometry::Shape<D>>&)>& shapeIndex) const {
-  out.putTag("world 2");  // 2: ledger with half-step works and split release
+  out.putTag("world 3");  // 3: with the time-step limits and density scaling
   out.put(std::int32_t(D));
   out.put(std::uint64_t(planes_.size()));
   out.put(std::uint64_t(tools_.size()));
@@ -456,6 +613,14 @@ void World<D>::saveState(
   out.put(steps_);
   out.put(dt_);
   out.put(dtCritical_);
+  out.put(limit_);
+  out.putVector(dtChanges_);
+  out.put(std::uint64_t(densityScales_.size()));
+  for (const auto& [id, factor] : densityScales_) {
+    out.put(id);
+    out.put(factor);
+  }
+  out.put(scalingStats_);
   out.put(energy_);
   out.put(lastPower_);
   out.put(stageSeconds_);
@@ -493,7 +658,7 @@ void World<D>::saveState(
 template <int D>
 void World<D>::loadState(StateReader& in,
                          const std::function<std::shared_ptr<const geometry::Shape<D>>(std::uint32_t)>& shapeAt) {
-  in.expectTag("world 2");
+  in.expectTag("world 3");
   const auto mismatch = [](const std::string& what, std::uint64_t saved, std::uint64_t here) {
     throw std::runtime_error("checkpoint does not fit this scene: " + what + " " + std::to_string(saved) +
                              " in the checkpoint, " + std::to_string(here) + " in the scene");
@@ -508,6 +673,14 @@ void World<D>::loadState(StateReader& in,
   steps_ = in.get<std::uint64_t>();
   dt_ = in.get<double>();
   dtCritical_ = in.get<double>();
+  limit_ = in.get<TimeStepLimit>();
+  in.getVector(dtChanges_);
+  densityScales_.clear();
+  for (std::uint64_t k = 0, n = in.get<std::uint64_t>(); k < n; ++k) {
+    const std::uint64_t id = in.get<std::uint64_t>();
+    densityScales_[id] = in.get<double>();
+  }
+  scalingStats_ = in.get<DensityScalingStats>();
   energy_ = in.get<EnergyLedger>();
   lastPower_ = in.get<std::array<double, 2>>();
   stageSeconds_ = in.get<std::array<double, std::size_t(Stage::Count)>>();
@@ -583,7 +756,7 @@ void World<D>::checkFinite() const {
 template <int D>
 double World<D>::particleMass() const {
   double m = 0.0;
-  for (double x : particles_.mass) m += x;
+  for (std::size_t i = 0; i < particles_.size(); ++i) m += unscaledMass(i);
   return m;
 }
 

@@ -200,8 +200,6 @@ class Runner {
   double massIn() const {
     double fed = 0.0;
     for (const auto* f : sw_.feeds) fed += f->droppedMass();
-    // Density scaling of fragments puts (artificial) mass in.
-    if (sw_.breakage) fed += sw_.breakage->massScalingAdded();
     return initialMass_ + fed;
   }
 
@@ -263,8 +261,10 @@ class Runner {
     };
     // history.csv
     std::string header =
-        "step,time_s,dt_s,particles,contacts,breakages,removed_mass_kg,kinetic_J,elastic_J,gravity_work_J,"
-        "boundary_work_J,damping_loss_J,contact_loss_J,split_release_J,energy_error_J";
+        "step,time_s,dt_s,critical_dt_s,dt_limit_id,dt_limit_generation,dt_limit_diameter_m,dt_limit_nodes,"
+        "dt_limit_mass_kg,dt_limit_stiffness_N_per_m,dt_limit_patch_nodes,dt_limit_contact,particles,contacts,breakages,removed_mass_kg,"
+        "kinetic_J,elastic_J,gravity_work_J,boundary_work_J,damping_loss_J,contact_loss_J,split_release_J,"
+        "energy_error_J";
     const char* axes[3] = {"x", "y", "z"};
     for (const std::string& name : sw_.world->planeNames()) {
       for (int a = 0; a < D; ++a) header += "," + name + "_force_" + axes[a] + "_N";
@@ -309,7 +309,14 @@ class Runner {
   void writeHistoryRow() {
     const World& w = *sw_.world;
     const dynamics::EnergyLedger& e = w.energy();
-    std::string row = std::to_string(w.steps()) + "," + num(w.time()) + "," + num(w.dt()) + "," +
+    // What set the time step (a grain still to come has no id: -1).
+    const dynamics::TimeStepLimit& lim = stepLimit(w);
+    const std::string limit = num(w.criticalDt()) + "," +
+                              (lim.id == dynamics::kNoParent ? std::string("-1") : std::to_string(lim.id)) + "," +
+                              std::to_string(lim.generation) + "," + num(lim.diameter) + "," +
+                              std::to_string(lim.nodes) + "," + num(lim.mass) + "," + num(lim.stiffness) + "," +
+                              std::to_string(lim.patchNodes) + "," + limitContactName(w, lim.boundary);
+    std::string row = std::to_string(w.steps()) + "," + num(w.time()) + "," + num(w.dt()) + "," + limit + "," +
                       std::to_string(w.particles().size()) + "," + std::to_string(w.contacts().pairContacts().size()) +
                       "," + std::to_string(sw_.breakage ? sw_.breakage->breakages() : 0) + "," + num(w.removedMass()) +
                       "," + num(e.kineticTranslational + e.kineticRotational) + "," + num(e.elastic) + "," +
@@ -416,8 +423,8 @@ class Runner {
     std::vector<std::size_t> resolved;
     for (std::size_t i = 0; i < p.size(); ++i) {
       const auto& d = p.shape[i]->descriptors();
-      sizes.emplace_back(d.sieveSize, p.mass[i]);
-      total += p.mass[i];
+      sizes.emplace_back(d.sieveSize, w.unscaledMass(i));
+      total += w.unscaledMass(i);
       sieve += d.sieveSize;
       if (d.equivalentDiameter >= scene_.output.shapeMinCells * p.shape[i]->grid().spacing()) {
         resolved.push_back(i);
@@ -561,16 +568,16 @@ class Runner {
         j.key("breakage").beginObject()
             .field("breakages", b.breakages())
             .field("fines_mass", b.finesMass())
-            .field("fines_percent", massIn() > b.massScalingAdded() ? 100.0 * b.finesMass() / (massIn() - b.massScalingAdded()) : 0.0)
+            .field("fines_percent", massIn() > 0.0 ? 100.0 * b.finesMass() / massIn() : 0.0)
             .field("raw_volume_error", b.rawVolumeError())
             .field("unsplit_failures", b.unsplitFailures())
             .field("unsplittable", b.unsplittable())
-            .field("skipped_steps", b.skippedSteps())
-            .field("manual_breaks_skipped", b.manualSkipped())
-            .field("mass_scaled_fragments", b.massScaledFragments())
-            .field("mass_scaling_added", b.massScalingAdded())
-            .field("mass_scaling_max_factor", b.massScalingMaxFactor())
-            .endObject();
+            .field("skipped_steps", b.skippedSteps());
+        j.key("manual_not_applied").beginArray();
+        for (const breakage::ManualBreakNotApplied& n : b.manualNotApplied()) {
+          j.beginObject().field("time", n.time).field("particle", n.particle).field("reason", n.reason).endObject();
+        }
+        j.endArray().endObject();
         if (final) writeFragmentDensity(j);
       }
     });

@@ -3,6 +3,44 @@
 #include "lsdem/io/JsonWriter.h"
 
 namespace lsdem::io {
+namespace {
+
+// The most recent time-step changes the summary lists (the first is always kept).
+constexpr std::size_t kListedStepChanges = 200;
+
+template <int D>
+void writeLimit(JsonWriter& w, const dynamics::World<D>& world, const dynamics::TimeStepLimit& l) {
+  w.beginObject()
+      .field("particle", l.id == dynamics::kNoParent ? -1LL : static_cast<long long>(l.id))
+      .field("generation", int(l.generation))
+      .field("diameter", l.diameter)
+      .field("grid_spacing", l.spacing)
+      .field("nodes", static_cast<long long>(l.nodes))
+      .field("mass", l.mass)
+      .field("density_scale", l.densityScale)
+      .field("stiffness", l.stiffness)
+      .field("patch_nodes", static_cast<long long>(l.patchNodes))
+      .field("contact", limitContactName(world, l.boundary))
+      .field("critical_dt", l.criticalDt)
+      .endObject();
+}
+
+}  // namespace
+
+template <int D>
+std::string limitContactName(const dynamics::World<D>& world, std::int32_t boundary) {
+  if (boundary < 0) return "particles";
+  const std::size_t b = std::size_t(boundary);
+  if (b < world.planeNames().size()) return world.planeNames()[b];
+  const std::size_t t = b - world.planeNames().size();
+  return t < world.tools().size() ? world.tools()[t].name : "?";
+}
+
+template <int D>
+const dynamics::TimeStepLimit& stepLimit(const dynamics::World<D>& world) {
+  const auto& changes = world.timeStepChanges();
+  return world.def().dt > 0.0 || changes.empty() ? world.timeStepLimit() : changes.back().limit;
+}
 
 template <int D>
 void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::ostream& out,
@@ -22,24 +60,6 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
       .field("contacts", contacts.pairContacts().size())
       .field("node_contacts", contacts.nodeContacts().size())
       .field("node_checks_last_step", static_cast<long long>(contacts.nodeChecks()));
-
-  // What limits the time step: the particle with the smallest sqrt(m / k).
-  {
-    const std::size_t i = world.stepLimitingParticle();
-    const auto& p = world.particles();
-    w.key("dt_limit").beginObject();
-    if (i < p.size()) {
-      const geometry::Shape<D>& shape = *p.shape[i];
-      w.field("particle", static_cast<long long>(p.id[i]))
-          .field("generation", static_cast<long long>(p.generation[i]))
-          .field("mass", p.mass[i])
-          .field("stiffness", world.particleStiffness(i))
-          .field("equivalent_diameter", shape.descriptors().equivalentDiameter)
-          .field("cells_across", shape.descriptors().equivalentDiameter / shape.grid().spacing())
-          .field("surface_nodes", shape.nodes().size());
-    }
-    w.endObject();
-  }
 
   // Mass: what is in the world and what left it.
   w.key("mass").beginObject()
@@ -66,6 +86,50 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
       .field("relative_balance_error", e.relativeBalanceError())
       .endObject();
 
+  // The time step over the run and what limited it.
+  const auto& changes = world.timeStepChanges();
+  w.key("time_step").beginObject()
+      .field("automatic", !(world.def().dt > 0.0))
+      .field("safety", world.def().dtSafety)
+      .field("first", changes.empty() ? world.dt() : changes.front().dt)
+      .field("now", world.dt())
+      .field("changes", changes.size());
+  w.key("limit");
+  writeLimit(w, world, stepLimit(world));
+  w.key("history").beginArray();
+  const std::size_t from = changes.size() > kListedStepChanges ? changes.size() - kListedStepChanges : 0;
+  for (std::size_t k = 0; k < changes.size(); ++k) {
+    if (k != 0 && k < from) continue;
+    w.beginObject().field("time", changes[k].time).field("dt", changes[k].dt).key("limit");
+    writeLimit(w, world, changes[k].limit);
+    w.endObject();
+  }
+  w.endArray();
+  w.endObject();
+
+  // Density scaling of small fragments, when the scene asked for it.
+  if (const auto& ds = world.def().densityScaling) {
+    double extra = 0.0, truth = 0.0;
+    std::size_t scaledNow = 0;
+    for (std::size_t i = 0; i < world.particles().size(); ++i) {
+      const double m = world.unscaledMass(i);
+      truth += m;
+      extra += world.particles().mass[i] - m;
+      scaledNow += world.densityScale(i) > 1.0;
+    }
+    const dynamics::DensityScalingStats& st = world.densityScaling();
+    w.key("density_scaling").beginObject()
+        .field("below_diameter", ds->belowDiameter)
+        .field("max_factor", ds->maxFactor)
+        .field("fragments_scaled", static_cast<long long>(st.scaled))
+        .field("fragments_capped", static_cast<long long>(st.capped))
+        .field("largest_factor", st.largestFactor)
+        .field("particles_scaled_now", scaledNow)
+        .field("added_mass_now", extra)
+        .field("added_mass_fraction_now", truth > 0.0 ? extra / truth : 0.0)
+        .endObject();
+  }
+
   // Effects that ran and where the time went.
   w.key("effects").beginArray();
   const std::vector<std::string> names = world.effectNames();
@@ -82,6 +146,10 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
   w.endObject();
 }
 
+template std::string limitContactName<2>(const dynamics::World<2>&, std::int32_t);
+template std::string limitContactName<3>(const dynamics::World<3>&, std::int32_t);
+template const dynamics::TimeStepLimit& stepLimit<2>(const dynamics::World<2>&);
+template const dynamics::TimeStepLimit& stepLimit<3>(const dynamics::World<3>&);
 template void writeRunSummary<2>(const dynamics::World<2>&, double, std::ostream&,
                                  const std::function<void(JsonWriter&)>&);
 template void writeRunSummary<3>(const dynamics::World<3>&, double, std::ostream&,

@@ -165,6 +165,17 @@ class SceneReader {
       if (scene_.world.broadPhase.skin < 0.0) r.fail("skin", "must be >= 0 m");
     }
     if (r.has("domain")) scene_.domain = box<D>(r, "domain");
+    // Opt-in density scaling of small fragments.
+    if (r.has("density_scaling_max") && !r.has("density_scaling_below")) {
+      r.fail("density_scaling_max", "needs `density_scaling_below` (the fragment size it applies below)");
+    }
+    if (r.has("density_scaling_below")) {
+      dynamics::DensityScalingDef ds;
+      ds.belowDiameter = r.positive("density_scaling_below");
+      ds.maxFactor = r.number("density_scaling_max", ds.maxFactor);
+      if (!(ds.maxFactor >= 1.0)) r.fail("density_scaling_max", "must be >= 1, got " + std::to_string(ds.maxFactor));
+      scene_.world.densityScaling = ds;
+    }
     r.finish();
   }
 
@@ -207,6 +218,18 @@ class SceneReader {
     }
     law.ks = r.number("ks", 0.8 * law.kn);
     if (law.ks < 0.0) r.fail("ks", "must be >= 0 N/m, got " + std::to_string(law.ks));
+    // The friction spring: Hertz without ks takes Mindlin's, from the material.
+    const bool hertz = law.normal == dynamics::NormalModel::Hertz;
+    const std::string tangential = r.string("tangential", hertz && !r.has("ks") ? "mindlin" : "linear");
+    if (tangential == "mindlin") {
+      if (!hertz) r.fail("tangential", "\"mindlin\" needs model = \"hertz\" (its stiffness comes from E and nu)");
+      if (r.has("ks")) r.fail("ks", "has no meaning with tangential = \"mindlin\" (drop it, or choose \"linear\")");
+      law.tangential = dynamics::TangentialModel::Mindlin;
+    } else if (tangential == "linear") {
+      law.tangential = dynamics::TangentialModel::Linear;
+    } else {
+      r.fail("tangential", "must be \"linear\" or \"mindlin\", got \"" + tangential + "\"");
+    }
     law.hasDamping = r.has("damping_ratio");
     law.dampingRatio = r.number("damping_ratio", 0.0);
     if (law.dampingRatio < 0.0 || law.dampingRatio >= 1.0) {
@@ -290,10 +313,56 @@ class SceneReader {
       p.plane.point = vec<D>(r, "point");
       p.plane.normal = unitVec<D>(r, "normal", Vec<D>::UnitY());
       p.plane.velocity = vec<D>(r, "velocity", Vec<D>::Zero());
+      p.material = readBoundaryMaterial(r);
       r.finish();
       checkName(r, p.name);
       scene_.planes.push_back(p);
     }
+  }
+
+  // A boundary's own contact material (`material = { ... }` of a plane or
+  // tool), checked against the [contact] law; absent: the grains'.
+  std::optional<dynamics::BoundaryMaterial> readBoundaryMaterial(TomlReader& parent) {
+    const toml::table* t = parent.optionalTable("material");
+    if (!t) return std::nullopt;
+    TomlReader r(*t, file_, parent.pathOf("material"));
+    const dynamics::ContactLawDef& law = scene_.world.contact;
+    const bool hertz = law.normal == dynamics::NormalModel::Hertz;
+    dynamics::BoundaryMaterial m;
+    m.rigid = r.boolean("rigid", false);
+    // Stiffness: none for a rigid wall; E and nu (Hertz) or kn (linear) otherwise.
+    const char* hertzKeys[] = {"youngs_modulus", "poisson_ratio"};
+    const char* linearKeys[] = {"kn", "ks"};
+    for (const char* key : hertz ? linearKeys : hertzKeys) {
+      if (r.has(key)) {
+        r.fail(key, std::string("is not read by the ") + (hertz ? "hertz" : "linear") + " model of [contact]");
+      }
+    }
+    for (const char* key : hertz ? hertzKeys : linearKeys) {
+      if (m.rigid && r.has(key)) r.fail(key, "has no meaning for a rigid wall (rigid = true)");
+    }
+    if (!m.rigid) {
+      if (hertz) {
+        m.youngsModulus = r.positive("youngs_modulus");
+        m.poissonRatio = r.number("poisson_ratio");
+        if (!(m.poissonRatio >= 0.0 && m.poissonRatio <= 0.499)) {
+          r.fail("poisson_ratio", "must be in [0, 0.499], got " + std::to_string(m.poissonRatio));
+        }
+      } else {
+        m.kn = r.positive("kn");
+        if (r.has("ks")) {
+          m.ks = r.number("ks");
+          if (*m.ks < 0.0) r.fail("ks", "must be >= 0 N/m, got " + std::to_string(*m.ks));
+        }
+      }
+    }
+    if (r.has("friction")) {
+      if (!law.hasFriction) r.fail("friction", "needs `friction` in [contact] (0 for frictionless grains)");
+      m.friction = r.number("friction");
+      if (*m.friction < 0.0) r.fail("friction", "must be >= 0, got " + std::to_string(*m.friction));
+    }
+    r.finish();
+    return m;
   }
 
   void checkName(TomlReader& r, const std::string& name) {
@@ -323,6 +392,7 @@ class SceneReader {
         r0 = rotation<D>(r);
         placeBody(*tool.shape, vec<D>(r, "position", Vec<D>::Zero()), r0, p0, q0);
       }
+      tool.material = readBoundaryMaterial(r);
       r.finish();
       tool.motion = readMotion(m, r.pathOf("motion"), type, *tool.shape, p0, q0);
       scene_.tools.push_back(std::move(tool));
@@ -479,8 +549,6 @@ class SceneReader {
     } else {
       r.fail("regrid_nodes", "must be \"parent_spacing\" or \"per_new_cell\", got \"" + regridNodes + "\"");
     }
-    def.massScalingDt = r.number("mass_scaling_dt", 0.0);
-    if (!(def.massScalingDt >= 0.0) || !std::isfinite(def.massScalingDt)) r.fail("mass_scaling_dt", "must be >= 0 s (0: off)");
     def.buckling = r.boolean("buckling", false);
     def.bucklingRatio = r.number("buckling_ratio", def.bucklingRatio);
     if (!(def.bucklingRatio > 1.0)) r.fail("buckling_ratio", "must be > 1");

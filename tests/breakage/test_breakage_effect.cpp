@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 using namespace lsdem;
 using namespace lsdem::breakage;
@@ -198,7 +199,7 @@ TEST(BreakageEffect, CrushingCascade3D) {
   EXPECT_GT(r.splitRelease, 0.01);
 }
 
-// Manual breaks that cannot split are counted, never thrown out of World::step:
+// Manual breaks that cannot split are logged, never thrown out of World::step:
 // a plane that misses the grain, a particle that does not exist, a grain of
 // three cells and one made unbreakable (infinite strength: a manual break
 // does not ask its strength).
@@ -233,14 +234,14 @@ TEST(BreakageEffect, ManualBreaksThatCannotSplitAreCountedNotThrown) {
   w.addEffect(std::move(effect));
   const double mass = w.particleMass();
   EXPECT_NO_THROW(while (w.time() < 0.002) w.step());
-  // Every manual break either split its grain or was counted as skipped; the
+  // Every manual break either split its grain or was logged as not applied; the
   // unbreakable grain split (manual breaks ignore strength); the plane that
   // misses and the missing id were skipped (the 3-cell grain may go either way).
-  EXPECT_EQ(brk.breakages() + brk.manualSkipped(), 4u);
+  EXPECT_EQ(brk.breakages() + brk.manualNotApplied().size(), 4u);
   const bool unbreakableSplit = std::any_of(brk.events().begin(), brk.events().end(),
                                             [](const BreakageEvent<2>& e) { return e.parent == 2u && e.manual; });
   EXPECT_TRUE(unbreakableSplit);
-  EXPECT_GE(brk.manualSkipped(), 2u);
+  EXPECT_GE(brk.manualNotApplied().size(), 2u);
   EXPECT_NEAR(w.particleMass() + w.removedMass(), mass, 1e-12 * mass);
 }
 
@@ -317,6 +318,143 @@ TEST(BreakageEffect, ManualBreakAtGivenTime) {
   // Manual breaks fire once.
   w.run(20);
   EXPECT_EQ(brk.breakages(), 1u);
+}
+
+// Manual breaks never stop a run. Due at the same step: one names a particle
+// that is not there, one a plane that misses its particle, one a particle
+// made unbreakable (infinite strength, as a failed cut leaves it) that the
+// plane does cut. World::step throws nothing; the first two are logged with
+// their reasons and change nothing; the third splits, and its fragments get
+// finite Weibull strengths of their own (eq. 13 would make them infinite).
+TEST(BreakageEffect, ManualBreaksThatCannotBeAppliedAreLoggedNotThrown) {
+  WorldDef<2> def;
+  def.checkFinite = true;
+  World<2> w(def);
+  const auto s = test::sphereShape<2>(0.01, 16);
+  ParticleDef<2> a;
+  a.shape = s;
+  w.addParticle(a);  // id 0: the plane misses it
+  a.position = Vec<2>(0.1, 0.0);
+  w.addParticle(a);  // id 1: unbreakable, cut through its centre
+  BreakageDef<2> bdef;
+  ManualBreak<2> missing, outside, unbreakable;
+  missing.particle = 7;
+  missing.time = 0.001;
+  missing.plane = {Vec<2>(1.0, 0.0), 0.0};
+  outside.particle = 0;
+  outside.time = 0.001;
+  outside.plane = {Vec<2>(1.0, 0.0), 0.05};  // x = 0.05: 4 radii from particle 0
+  unbreakable.particle = 1;
+  unbreakable.time = 0.001;
+  unbreakable.plane = {Vec<2>(0.0, 1.0), 0.0};
+  bdef.manual = {missing, outside, unbreakable};
+  auto effect = std::make_unique<Breakage<2>>(bdef);
+  Breakage<2>& brk = *effect;
+  w.addEffect(std::move(effect));
+  w.step();
+  w.particles().strength[1] = std::numeric_limits<double>::infinity();
+
+  const double mass = w.particleMass();
+  while (w.time() < 0.001 + 1.5 * w.dt()) ASSERT_NO_THROW(w.step());
+  ASSERT_EQ(brk.manualNotApplied().size(), 2u);
+  EXPECT_EQ(brk.manualNotApplied()[0].particle, 7u);
+  EXPECT_NE(brk.manualNotApplied()[0].reason.find("no particle"), std::string::npos);
+  EXPECT_EQ(brk.manualNotApplied()[1].particle, 0u);
+  EXPECT_NE(brk.manualNotApplied()[1].reason.find("does not cut"), std::string::npos);
+  EXPECT_GE(brk.manualNotApplied()[0].time, 0.001);
+  ASSERT_EQ(brk.breakages(), 1u);
+  EXPECT_EQ(brk.events()[0].parent, 1u);
+  const auto& p = w.particles();
+  EXPECT_EQ(p.size(), 3u);
+  EXPECT_EQ(std::count(p.id.begin(), p.id.end(), 0u), 1);
+  w.step();  // strengths are sampled at the start of the next step's breakage
+  for (std::uint64_t id : brk.events()[0].children) {
+    const std::size_t i = std::size_t(std::find(p.id.begin(), p.id.end(), id) - p.id.begin());
+    EXPECT_TRUE(std::isfinite(p.strength[i]) && p.strength[i] > 0.0) << p.strength[i];
+  }
+  EXPECT_NEAR(w.particleMass(), mass, 1e-12 * mass);
+}
+
+// Opt-in density scaling: a disc cut near its edge leaves a small cap and a
+// big piece with a flat face, both of which would shorten the step. Scaled
+// (fragments below 1.25 disc diameters: both), their masses and inertias
+// grow by the factors that bring their omega^2 = k / m down to the unbroken
+// disc's, so the critical step after the split is the disc's (without
+// scaling it halves); true masses still balance; the kinetic energy the
+// scaling adds is booked, so the ledger closes.
+TEST(BreakageEffect, DensityScalingKeepsSmallFragmentsFromSettingTheStep) {
+  struct Outcome {
+    double dtBefore = 0.0, dtAfter = 0.0, mass = 0.0, massBefore = 0.0, ledger = 0.0;
+    double capScale = 0.0, capMass = 0.0, capTrueMass = 0.0, bigScale = 0.0;
+    dynamics::TimeStepLimit limit;
+    dynamics::DensityScalingStats stats;
+  };
+  const auto run = [](bool scaled) {
+    WorldDef<2> def;
+    def.contact.kn = 1e5;
+    def.contact.ks = 0.8e5;
+    const auto disc = test::sphereShape<2>(0.01, 16);
+    if (scaled) def.densityScaling = dynamics::DensityScalingDef{0.025, 100.0};
+    World<2> w(def);
+    ParticleDef<2> a;
+    a.shape = disc;
+    a.velocity = Vec<2>(0.2, 0.1);
+    a.angularVelocity = 3.0;
+    w.addParticle(a);
+    a.position = Vec<2>(0.05, 0.0);
+    w.addParticle(a);
+    BreakageDef<2> bdef;
+    ManualBreak<2> cap;
+    cap.particle = 0;
+    cap.time = 0.002;
+    cap.plane = {Vec<2>(0.0, 1.0), 0.006};  // y = 0.006 at the start: a cap 0.4 radii thick
+    bdef.manual.push_back(cap);
+    auto effect = std::make_unique<Breakage<2>>(bdef);
+    Breakage<2>& brk = *effect;
+    w.addEffect(std::move(effect));
+    Outcome o;
+    w.step();
+    o.dtBefore = w.criticalDt();
+    o.massBefore = w.particleMass();
+    while (brk.breakages() == 0) w.step();
+    w.run(20);
+    o.dtAfter = w.criticalDt();
+    o.mass = w.particleMass();
+    o.ledger = std::abs(w.energy().relativeBalanceError());
+    o.limit = w.timeStepLimit();
+    o.stats = w.densityScaling();
+    const auto& p = w.particles();
+    for (std::uint64_t id : brk.events()[0].children) {
+      const std::size_t i = std::size_t(std::find(p.id.begin(), p.id.end(), id) - p.id.begin());
+      if (p.shape[i]->descriptors().equivalentDiameter < 0.012) {
+        o.capScale = w.densityScale(i);
+        o.capMass = p.mass[i];
+        o.capTrueMass = w.unscaledMass(i);
+      } else {
+        o.bigScale = w.densityScale(i);
+      }
+    }
+    return o;
+  };
+  const Outcome plain = run(false), scaled = run(true);
+  // Without scaling the cap sets a shorter step; with it the step stays the discs'.
+  EXPECT_LT(plain.dtAfter, 0.8 * plain.dtBefore);
+  EXPECT_GT(plain.limit.generation, 0);
+  EXPECT_EQ(plain.capScale, 1.0);
+  EXPECT_NEAR(scaled.dtAfter, scaled.dtBefore, 1e-12 * scaled.dtBefore);
+  EXPECT_EQ(scaled.dtBefore, plain.dtBefore);
+  EXPECT_GT(scaled.capScale, 1.5);
+  EXPECT_GT(scaled.bigScale, 1.0);
+  EXPECT_GT(scaled.capScale, scaled.bigScale);
+  EXPECT_NEAR(scaled.capMass, scaled.capScale * scaled.capTrueMass, 1e-15 * scaled.capMass);
+  EXPECT_NEAR(scaled.capTrueMass, plain.capTrueMass, 1e-12 * plain.capTrueMass);
+  EXPECT_EQ(scaled.stats.scaled, 2u);
+  EXPECT_EQ(scaled.stats.capped, 0u);
+  EXPECT_EQ(scaled.stats.largestFactor, scaled.capScale);
+  // True masses balance; the ledger closes in both.
+  EXPECT_NEAR(scaled.mass, scaled.massBefore, 1e-12 * scaled.massBefore);
+  EXPECT_LT(plain.ledger, 1e-6);
+  EXPECT_LT(scaled.ledger, 1e-6);
 }
 
 TEST(BreakageEffect, RejectsBadDefinitions) {

@@ -13,10 +13,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
+#include <utility>
 
 using namespace lsdem;
 using namespace lsdem::dynamics;
@@ -90,8 +93,10 @@ struct InclineResult {
 // A block resting on the plane y = 0 under gravity tilted by theta (the
 // incline's frame: x down the slope, y its normal), for 1 s. The stiffness is
 // scaled to a contact period of ~4 ms (3D blocks have ~300 nodes on a face).
+// With `wallMu`, the incline is a wall of its own material of that friction
+// (and the grains' stiffness).
 template <int D>
-InclineResult incline(double theta, double mu) {
+InclineResult incline(double theta, double mu, std::optional<double> wallMu = std::nullopt) {
   const auto shape = block<D>(1.0);
   ContactLawDef law;
   law.kn = D == 2 ? 3e7 : 3e5;
@@ -99,6 +104,12 @@ InclineResult incline(double theta, double mu) {
   law.friction = mu;
   law.dampingRatio = 0.4;
   ContactSolver<D> solver(law);
+  if (wallMu) {
+    BoundaryMaterial wall;
+    wall.kn = law.kn;
+    wall.friction = *wallMu;
+    solver.setPlaneMaterial(0, wall);
+  }
   Particles<D> p;
   ParticleDef<D> def;
   def.shape = shape;
@@ -242,14 +253,49 @@ TEST(ContactLaw, RejectsBadParameters) {
   EXPECT_THROW(solver.compute(p, {}, {}, noShape, 1e-5), std::invalid_argument);
 }
 
+namespace {
+
+// The clipped linear spring-dashpot integrated directly (RK4, omega = 1, v0 = 1):
+// x'' = min(0, -(x + 2 zeta x')) while x > 0; returns the exit speed and the
+// time from touch to parting.
+std::pair<double, double> clippedOscillator(double zeta) {
+  const auto accel = [zeta](double x, double v) { return std::min(0.0, -(x + 2.0 * zeta * v)); };
+  const double h = 1e-5;
+  double x = 0.0, v = 1.0, t = 0.0;
+  while (true) {
+    const double k1x = v, k1v = accel(x, v);
+    const double k2x = v + 0.5 * h * k1v, k2v = accel(x + 0.5 * h * k1x, v + 0.5 * h * k1v);
+    const double k3x = v + 0.5 * h * k2v, k3v = accel(x + 0.5 * h * k2x, v + 0.5 * h * k2v);
+    const double k4x = v + h * k3v, k4v = accel(x + h * k3x, v + h * k3v);
+    const double xn = x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+    const double vn = v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+    if (t > 0.0 && xn <= 0.0) return {-vn, t + h * x / (x - xn)};
+    x = xn;
+    v = vn;
+    t += h;
+  }
+}
+
+}  // namespace
+
 TEST(ContactLaw, ClosedForms) {
-  // Restitution and damping ratio are inverse; e(0) = 1; e(0.4) of the paper's C_res.
+  // Restitution and contact duration of the clipped law against its direct
+  // integration; e(0) = 1; restitution and damping ratio are inverse.
   EXPECT_DOUBLE_EQ(restitutionCoefficient(0.0), 1.0);
-  EXPECT_NEAR(restitutionCoefficient(0.4), std::exp(-std::numbers::pi * 0.4 / std::sqrt(0.84)), 1e-15);
+  for (const double zeta : {0.1, 0.4, 0.8}) {
+    const auto [e, duration] = clippedOscillator(zeta);
+    EXPECT_NEAR(restitutionCoefficient(zeta), e, 1e-6) << zeta;
+    EXPECT_NEAR(contactDuration(zeta, 1.0), duration, 1e-5) << zeta;
+  }
+  // The clip matters: at the paper's C_res = 0.4 the unclipped law would give 0.254.
+  EXPECT_NEAR(restitutionCoefficient(0.4), 0.36353, 1e-5);
+  EXPECT_NEAR(restitutionCoefficient(0.999999), std::exp(-2.0), 1e-2);
   for (const double zeta : {0.05, 0.4, 0.9}) {
     EXPECT_NEAR(dampingRatioForRestitution(restitutionCoefficient(zeta)), zeta, 1e-12);
   }
+  EXPECT_DOUBLE_EQ(dampingRatioForRestitution(1.0), 0.0);
   EXPECT_THROW(dampingRatioForRestitution(0.0), std::invalid_argument);
+  EXPECT_THROW(dampingRatioForRestitution(0.13), std::invalid_argument);  // below exp(-2): out of reach
   // Hertz: E* = E / (2 (1 - nu^2)); F and dF/ddelta at a known point.
   ContactLawDef law;
   law.youngsModulus = 2e9;
@@ -286,9 +332,10 @@ TEST(ContactLaw, BlockSticksBelowFrictionAngle3D) {
 // mu cos theta), friction dissipates mu N v, and kinetic + potential + elastic
 // energy plus the reported dissipation stays constant.
 template <int D>
-void checkSliding() {
+void checkSliding(bool onWallMaterial) {
+  // On a wall of its own material, the wall's mu counts, not the grains'.
   const double mu = 0.6, theta = std::atan(1.5 * mu);
-  const InclineResult r = incline<D>(theta, mu);
+  const InclineResult r = onWallMaterial ? incline<D>(theta, 0.95, mu) : incline<D>(theta, mu);
   const double a = kGravity * (std::sin(theta) - mu * std::cos(theta));
   EXPECT_NEAR(r.acceleration, a, 0.03 * a);
   EXPECT_NEAR(r.speed, a * 1.0, 0.05 * a);
@@ -297,8 +344,75 @@ void checkSliding() {
   EXPECT_NEAR(r.dissipatedPower, frictionPower, 0.03 * frictionPower);
   EXPECT_LT(std::abs(r.energyError), 0.01 * r.dissipated);
 }
-TEST(ContactLaw, BlockSlidesAboveFrictionAngle2D) { checkSliding<2>(); }
-TEST(ContactLaw, BlockSlidesAboveFrictionAngle3D) { checkSliding<3>(); }
+TEST(ContactLaw, BlockSlidesAboveFrictionAngle2D) { checkSliding<2>(false); }
+TEST(ContactLaw, BlockSlidesAboveFrictionAngle3D) { checkSliding<3>(false); }
+TEST(ContactLaw, BlockSlidesOnAWallOfLowerFriction2D) { checkSliding<2>(true); }
+TEST(ContactLaw, BlockHoldsOnAWallOfHigherFriction2D) {
+  // Grains of mu 0.1 would slide at tan theta = 0.3; the wall's 0.6 holds them.
+  const InclineResult r = incline<2>(std::atan(0.3), 0.1, 0.6);
+  EXPECT_LT(std::abs(r.displacement), 1e-5);
+}
+
+// A wall's own material: the constants of its contacts (Hertz: compliances
+// add, a rigid wall has none; linear: its own kn and ks, a rigid wall 2 kn and
+// 2 ks), and the checks.
+TEST(ContactLaw, BoundaryMaterialConstants) {
+  ContactLawDef hertz;
+  hertz.normal = NormalModel::Hertz;
+  hertz.tangential = TangentialModel::Mindlin;
+  hertz.youngsModulus = 70e9;
+  hertz.poissonRatio = 0.25;
+  hertz.friction = 0.3;
+  const double g = 70e9 / 2.5;
+  const ContactConstants grains = lawConstants(hertz);
+  EXPECT_NEAR(grains.eStar, 70e9 / (2.0 * 0.9375), 1e-3);
+  EXPECT_NEAR(grains.gStar, g / (2.0 * 1.75), 1e-3);
+  EXPECT_EQ(grains.ks, 0.0);  // Mindlin's spring replaces ks
+  BoundaryMaterial rigid;
+  rigid.rigid = true;
+  ContactConstants c = boundaryConstants(hertz, rigid);
+  EXPECT_NEAR(c.eStar, 70e9 / 0.9375, 1e-3);  // twice the grains' E*
+  EXPECT_NEAR(c.gStar, g / 1.75, 1e-3);
+  EXPECT_EQ(c.friction, 0.3);
+  BoundaryMaterial steel;
+  steel.youngsModulus = 210e9;
+  steel.poissonRatio = 0.3;
+  steel.friction = 0.5;
+  c = boundaryConstants(hertz, steel);
+  EXPECT_NEAR(c.eStar, 1.0 / (0.9375 / 70e9 + 0.91 / 210e9), 1e-3);
+  EXPECT_NEAR(c.gStar, 1.0 / (1.75 / g + 1.7 / (210e9 / 2.6)), 1e-3);
+  EXPECT_EQ(c.friction, 0.5);
+  EXPECT_NEAR(mindlinStiffness(2.0, 4.0, 0.25), 8.0 * 2.0 * 1.0, 1e-15);
+
+  ContactLawDef linear;
+  linear.kn = 1e6;
+  linear.ks = 5e5;
+  c = boundaryConstants(linear, rigid);
+  EXPECT_EQ(c.kn, 2e6);
+  EXPECT_EQ(c.ks, 1e6);
+  BoundaryMaterial wall;
+  wall.kn = 4e6;
+  c = boundaryConstants(linear, wall);
+  EXPECT_EQ(c.kn, 4e6);
+  EXPECT_EQ(c.ks, 2e6);  // the grains' ks / kn
+  wall.ks = 1e5;
+  EXPECT_EQ(boundaryConstants(linear, wall).ks, 1e5);
+
+  // Refused: a wall without its stiffness, friction on a frictionless law, Mindlin ks.
+  EXPECT_THROW(boundaryConstants(linear, BoundaryMaterial{}), std::invalid_argument);
+  EXPECT_THROW(boundaryConstants(hertz, BoundaryMaterial{}), std::invalid_argument);
+  BoundaryMaterial slippery = rigid;
+  slippery.friction = 0.2;
+  ContactLawDef frictionless = linear;
+  frictionless.hasFriction = false;
+  EXPECT_THROW(boundaryConstants(frictionless, slippery), std::invalid_argument);
+  BoundaryMaterial withKs = rigid;
+  withKs.ks = 1e5;
+  EXPECT_THROW(boundaryConstants(hertz, withKs), std::invalid_argument);
+  ContactLawDef mindlinLinear = linear;
+  mindlinLinear.tangential = TangentialModel::Mindlin;
+  EXPECT_THROW(validateContactLaw(mindlinLinear), std::invalid_argument);
+}
 
 // The tangential spring: a sphere pressed on a plane and moved sideways at
 // constant speed carries F_t = -ks s per node (s = v t accumulated in the

@@ -143,3 +143,47 @@ TEST(EnergyLedger, ReEvaluationBetweenStepsChangesNothing) {
   EXPECT_EQ(again.released, 0.0);
   EXPECT_EQ(again.error, plain.error);
 }
+
+// No tensile contact forces: a heavily damped disc (C_res = 0.7) thrown at the
+// floor and at another disc. While they part, the dashpot would pull the
+// surfaces together; the law clips every node's normal force at zero (and
+// some nodes are clipped: their normal force is exactly 0 while they still
+// overlap), and the ledger, which books the dashpot force actually applied,
+// still closes step by step.
+TEST(EnergyLedger, ClippedDashpotNeverPullsAndTheLedgerCloses) {
+  WorldDef<2> def;
+  def.contact.kn = 1e6;
+  def.contact.ks = 0.8e6;
+  def.contact.dampingRatio = 0.7;
+  World<2> w(def);
+  addFloor(w);
+  const auto disc = test::sphereShape<2>(0.01, 12);
+  ParticleDef<2> a;
+  a.shape = disc;
+  a.position = Vec<2>(0.0, 0.0105);
+  a.velocity = Vec<2>(0.5, -2.0);
+  a.angularVelocity = 30.0;
+  w.addParticle(a);
+  ParticleDef<2> b = a;
+  b.position = Vec<2>(0.05, 0.03);
+  b.velocity = Vec<2>(-1.5, 0.0);
+  b.angularVelocity = -10.0;
+  w.addParticle(b);
+  w.step();
+  const double initial = w.energy().initial;
+  double worst = 0.0, smallest = 0.0;
+  std::size_t clipped = 0;
+  for (int s = 0; s < 4000; ++s) {
+    w.step();
+    worst = std::max(worst, std::abs(w.energy().balanceError()) / initial);
+    for (const auto& c : w.contacts().nodeContacts()) {
+      const double fn = c.force.dot(c.normal);
+      smallest = std::min(smallest, fn);
+      clipped += fn == 0.0 && c.overlap > 0.0;
+    }
+  }
+  EXPECT_GE(smallest, 0.0);  // never attractive
+  EXPECT_GT(clipped, 0u);    // and the clip did act
+  EXPECT_GT(w.energy().contactLoss / initial, 0.1);
+  EXPECT_LT(worst, 1e-2);
+}

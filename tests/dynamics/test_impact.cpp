@@ -5,6 +5,7 @@
 
 #include "lsdem/dynamics/Integrator.h"
 #include "lsdem/dynamics/NarrowPhase.h"
+#include "lsdem/dynamics/World.h"
 #include "lsdem/geometry/Primitives.h"
 #include "lsdem/geometry/Shape.h"
 #include "lsdem/geometry/ShapeDef.h"
@@ -12,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 
@@ -94,6 +96,7 @@ struct ImpactResult {
   double peakForce = 0.0;    // N, largest normal force
   std::size_t maxNodes = 0;  // most node contacts of the pair at once
   std::size_t maxPerSide = 0;  // most node contacts of one direction at once
+  double minNormalForce = 0.0;  // N, smallest normal force of any node contact (< 0: attractive)
 };
 
 // A head-on impact at relative speed `speed` along x, either of a sphere on the
@@ -103,7 +106,8 @@ struct ImpactResult {
 // contact begins. The contact begins and ends where the gap crosses zero
 // (interpolated linearly between steps).
 template <int D>
-ImpactResult impact(const ContactLawDef& law, bool onPlane, double speed, double dt, double phase) {
+ImpactResult impact(const ContactLawDef& law, bool onPlane, double speed, double dt, double phase,
+                    const BoundaryMaterial* wall = nullptr) {
   const auto shape = sphere<D>();
   const std::uint32_t node = contactNode(*shape);
   const Vec<D> xb = shape->nodes().positions[node];
@@ -134,6 +138,7 @@ ImpactResult impact(const ContactLawDef& law, bool onPlane, double speed, double
   const auto gap = [&] { return onPlane ? tip(0) : tip(1) - tip(0); };
   const auto approach = [&] { return onPlane ? -p.velocity[0][0] : p.velocity[0][0] - p.velocity[1][0]; };
   ContactSolver<D> solver(law);
+  if (wall) solver.setPlaneMaterial(0, *wall);
 
   // Integrate through the contact.
   ImpactResult r;
@@ -153,6 +158,10 @@ ImpactResult impact(const ContactLawDef& law, bool onPlane, double speed, double
       for (std::uint32_t k = 0; k < pc.nodeCount; ++k) ofB += solver.nodeContacts()[pc.firstNode + k].ownerIsB;
       r.maxPerSide = std::max(r.maxPerSide, std::max<std::size_t>(ofB, pc.nodeCount - ofB));
       r.peakForce = std::max(r.peakForce, onPlane ? pc.force[0] : -pc.force[0]);
+      for (std::uint32_t k = 0; k < pc.nodeCount; ++k) {
+        const NodeContact<D>& c = solver.nodeContacts()[pc.firstNode + k];
+        r.minNormalForce = std::min(r.minNormalForce, c.force.dot(c.normal));
+      }
     }
   }
   // Fly clear, then read the separation speed.
@@ -167,11 +176,12 @@ ImpactResult impact(const ContactLawDef& law, bool onPlane, double speed, double
 
 double sphereMass(double volume) { return 2650.0 * volume; }
 
-// Linear spring-dashpot against its analytic solution, e = exp(-pi zeta /
-// sqrt(1 - zeta^2)) and duration pi / (omega sqrt(1 - zeta^2)), omega =
-// sqrt(K / m_eff): one node touching a plane (K = kn, m_eff = m), or one node
-// per direction between two spheres (weight 1/2 each: K = kn, m_eff = m/2),
-// for several positions of the contact start within a step.
+// Linear spring-dashpot, its tensile part clipped, against its analytic
+// solution, e = exp(-zeta / sqrt(1 - zeta^2) (pi - 2 asin zeta)) and the
+// duration of contactDuration (ContactLaw.h), omega = sqrt(K / m_eff): one
+// node touching a plane (K = kn, m_eff = m), or one node per direction between
+// two spheres (weight 1/2 each: K = kn, m_eff = m/2), for several positions of
+// the contact start within a step. No node's normal force is ever attractive.
 //
 // Time step 1/200 of the contact: the integrator gives forces the half-step
 // velocity, which delays the dashpot by dt/2 and raises the effective damping
@@ -179,14 +189,14 @@ double sphereMass(double volume) { return 2650.0 * volume; }
 // short at 1/50, 0.55 % and 0.3 % at 1/200).
 template <int D>
 void checkLinearImpact(bool onPlane) {
-  for (const double zeta : {0.1, 0.4}) {
+  for (const double zeta : {0.1, 0.4, 0.8}) {
     ContactLawDef law;
     law.kn = 3e7;
     law.hasFriction = false;
     law.dampingRatio = zeta;
     const double mEff = sphereMass(sphere<D>()->volume()) * (onPlane ? 1.0 : 0.5);
     const double omega = std::sqrt(law.kn / mEff);
-    const double duration = std::numbers::pi / (omega * std::sqrt(1.0 - zeta * zeta));
+    const double duration = contactDuration(zeta, omega);
     // Peak overlap ~ speed / omega = 0.5 mm, below the ~1 mm at which the
     // neighbouring nodes would touch.
     const double speed = 0.0005 * omega;
@@ -194,8 +204,12 @@ void checkLinearImpact(bool onPlane) {
       const ImpactResult r = impact<D>(law, onPlane, speed, duration / 200.0, phase);
       EXPECT_EQ(r.maxNodes, onPlane ? 1u : 2u) << "zeta " << zeta;
       EXPECT_EQ(r.maxPerSide, 1u) << "zeta " << zeta;
+      EXPECT_GE(r.minNormalForce, 0.0) << "zeta " << zeta;
       const double e = restitutionCoefficient(zeta);
-      EXPECT_NEAR(r.restitution, e, 0.01 * e) << "zeta " << zeta << " phase " << phase;
+      // (The half-step velocity's extra damping grows with zeta: at 0.8, e is
+      // 1.3 % low between two spheres.)
+      const double tolerance = zeta < 0.5 ? 0.01 : 0.015;
+      EXPECT_NEAR(r.restitution, e, tolerance * e) << "zeta " << zeta << " phase " << phase;
       EXPECT_NEAR(r.duration, duration, 0.01 * duration) << "zeta " << zeta << " phase " << phase;
     }
   }
@@ -227,6 +241,52 @@ void checkHertzImpact(bool onPlane) {
   EXPECT_NEAR(r.peakForce, fMax, 0.02 * fMax);
   EXPECT_NEAR(r.restitution, 1.0, 1e-3);
   EXPECT_NEAR(r.duration, duration, 0.02 * duration);
+}
+
+// A plane with its own material. Hertz on a rigid wall: E* = E / (1 - nu^2)
+// (twice the E* of two grains), and on a wall of another material
+// 1/E* = (1 - nu^2)/E + (1 - nu_w^2)/E_w: the peak force and the contact time
+// follow. Linear on a wall with its own kn: the restitution and the contact
+// time of omega = sqrt(kn_wall / m).
+template <int D>
+void checkWallMaterial() {
+  ContactLawDef law;
+  law.normal = NormalModel::Hertz;
+  law.youngsModulus = 70e9;
+  law.poissonRatio = 0.25;
+  law.hasFriction = false;
+  law.hasDamping = false;
+  const auto shape = sphere<D>();
+  const double radius = equivalentRadius<D>(shape->volume());
+  const double mass = sphereMass(shape->volume());
+  BoundaryMaterial rigid;
+  rigid.rigid = true;
+  BoundaryMaterial steel;
+  steel.youngsModulus = 210e9;
+  steel.poissonRatio = 0.3;
+  const double rigidStar = 70e9 / (1.0 - 0.0625);
+  const double steelStar = 1.0 / ((1.0 - 0.0625) / 70e9 + (1.0 - 0.09) / 210e9);
+  for (const auto& [wall, eStar] : {std::pair{&rigid, rigidStar}, std::pair{&steel, steelStar}}) {
+    const double deltaMax = 0.0005;
+    const double speed = std::sqrt(std::pow(deltaMax, 2.5) * 16.0 * eStar * std::sqrt(radius) / (15.0 * mass));
+    const double fMax = 4.0 / 3.0 * eStar * std::sqrt(radius) * std::pow(deltaMax, 1.5);
+    const double duration = 2.94 * deltaMax / speed;
+    const ImpactResult r = impact<D>(law, true, speed, duration / 200.0, 1.5, wall);
+    EXPECT_NEAR(r.peakForce, fMax, 0.02 * fMax) << "E* " << eStar;
+    EXPECT_NEAR(r.duration, duration, 0.02 * duration) << "E* " << eStar;
+  }
+  // Linear: a wall 4 times stiffer than the grains' kn, damped.
+  ContactLawDef linear;
+  linear.kn = 3e7;
+  linear.hasFriction = false;
+  linear.dampingRatio = 0.2;
+  BoundaryMaterial stiff;
+  stiff.kn = 1.2e8;
+  const double omega = std::sqrt(stiff.kn / mass);
+  const double duration = contactDuration(0.2, omega);
+  const ImpactResult r = impact<D>(linear, true, 0.0005 * omega, duration / 200.0, 1.5, &stiff);
+  EXPECT_NEAR(r.restitution, restitutionCoefficient(0.2), 0.01 * restitutionCoefficient(0.2));
+  EXPECT_NEAR(r.duration, duration, 0.01 * duration);
 }
 
 // Undamped, frictionless: a rough grain bouncing inside a box of planes
@@ -280,7 +340,157 @@ void checkEnergyConservation() {
   EXPECT_LT(worst, 1e-3) << bounces << " bounces";
 }
 
+// ---- oblique impact: Hertz normal, no-slip Mindlin tangential, Coulomb ----
+
+// The material of Chung & Ooi's oblique-impact tests (aluminium oxide on a
+// rigid wall; their 2.55 mm sphere is our 0.5 m one: the normalised rebound
+// depends on the incidence, nu, mu and the inertia only).
+constexpr double kOxideE = 3.8e11, kOxideNu = 0.23, kOxideDensity = 4000.0, kOxideMu = 0.092;
+
+struct ObliqueResult {
+  double tangentialRestitution = 0.0;  // contact point's tangential speed out / in
+  double spinOut = 0.0;                // rad/s about z after the impact
+  double normalRestitution = 0.0;
+  double ledgerError = 0.0;            // largest |balance error| / initial energy
+};
+
+// The contact reduced to its point (what lsdem's law is for one node): overlap
+// delta, normal speed, the centre's tangential speed, the spin about z and the
+// Mindlin spring's displacement xi, integrated in steps of 1/100000 of the
+// contact. F_n = 4/3 E* sqrt(R*) delta^3/2, k_t = 8 G* sqrt(R* delta),
+// F_t = -k_t xi capped at mu F_n; the contact point (lever L below the
+// centre) moves at v_t + L w, the force turns the body by L F_t / I.
+ObliqueResult pointModel(double eStar, double gStar, double mu, double radius, double mass, double inertia, double lever,
+                         double normalSpeed, double tangentialSpeed) {
+  const double duration = 2.94 * std::pow(15.0 * mass * normalSpeed * normalSpeed / (16.0 * eStar * std::sqrt(radius)), 0.4) /
+                          normalSpeed;
+  const double h = duration / 100000.0;
+  double delta = 0.0, vn = normalSpeed, vt = tangentialSpeed, w = 0.0, xi = 0.0;
+  do {
+    const double fn = hertzForce(eStar, radius, delta);
+    const double kt = mindlinStiffness(gStar, radius, delta);
+    xi += (vt + lever * w) * h;
+    double ft = -kt * xi;
+    if (std::abs(ft) > mu * fn) {
+      ft = ft > 0.0 ? mu * fn : -mu * fn;
+      xi = kt > 0.0 ? -ft / kt : 0.0;
+    }
+    vn -= fn / mass * h;
+    vt += ft / mass * h;
+    w += lever * ft / inertia * h;
+    delta += vn * h;
+  } while (delta > 0.0);
+  ObliqueResult r;
+  r.tangentialRestitution = (vt + lever * w) / tangentialSpeed;
+  r.spinOut = w;
+  r.normalRestitution = -vn / normalSpeed;
+  return r;
+}
+
+// lsdem: the test sphere (20 cells across) dropped at `angle` from the normal
+// onto a rigid plane (its own material: rigid = true), Hertz with friction
+// and no ks, so Mindlin's spring; through World, whose ledger must close.
+ObliqueResult worldImpact(double angle, double normalSpeed, double dt) {
+  const auto shape = sphere<3>();
+  const std::uint32_t node = contactNode(*shape);
+  const Vec<3> xb = shape->nodes().positions[node];
+  WorldDef<3> def;
+  def.contact.normal = NormalModel::Hertz;
+  def.contact.tangential = TangentialModel::Mindlin;
+  def.contact.youngsModulus = kOxideE;
+  def.contact.poissonRatio = kOxideNu;
+  def.contact.friction = kOxideMu;
+  def.contact.hasDamping = false;
+  def.dt = dt;
+  def.forceDt = true;
+  World<3> w(def);
+  PlaneDef<3> floor;
+  floor.plane.normal = Vec<3>::UnitY();
+  floor.material = BoundaryMaterial{};
+  floor.material->rigid = true;
+  w.addPlane(floor);
+  ParticleDef<3> p;
+  p.shape = shape;
+  p.density = kOxideDensity;
+  p.orientation = turning<3>(xb, Vec<3>(-Vec<3>::UnitY()));
+  p.position = Vec<3>::UnitY() * (xb.norm() + 1.5 * normalSpeed * dt);
+  const double tangentialSpeed = normalSpeed * std::tan(angle);
+  p.velocity = Vec<3>(tangentialSpeed, -normalSpeed, 0.0);
+  w.addParticle(p);
+  const auto contactPointSpeed = [&] {
+    const Vec<3> at = w.particles().position[0] + w.particles().rotation(0) * xb;
+    return w.particles().velocityAt(0, at).x();
+  };
+  // Through the contact, then clear of it.
+  bool touched = false;
+  ObliqueResult r;
+  w.step();
+  const double initial = w.energy().initial;
+  for (int s = 0; s < 100000; ++s) {
+    w.step();
+    r.ledgerError = std::max(r.ledgerError, std::abs(w.energy().balanceError()) / initial);
+    const bool touching = !w.contacts().pairContacts().empty();
+    EXPECT_LE(touching ? w.contacts().pairContacts()[0].nodeCount : 0u, 1u);
+    if (touching) touched = true;
+    if (touched && !touching) break;
+  }
+  EXPECT_TRUE(touched);
+  r.tangentialRestitution = contactPointSpeed() / tangentialSpeed;
+  r.spinOut = w.particles().angularVelocity[0].z();
+  r.normalRestitution = w.particles().velocity[0].y() / normalSpeed;
+  return r;
+}
+
 }  // namespace
+
+// Oblique impacts of a sphere on a rigid wall (Chung & Ooi 2011's oblique-
+// impact benchmark; Maw, Barber & Fawcett 1976): Hertz with friction and no
+// ks works through Mindlin's no-slip spring. Over incidences from 5 to 80
+// degrees the tangential restitution of the contact point (its tangential
+// speed out / in: 0.84 at 5 degrees, down to -0.33 at 20 where the spring
+// throws the contact point back, and 1 - 2 mu (1 + m L^2 / I) / tan(angle)
+// under gross sliding) and the spin after the impact agree with the point
+// model of the same law (integrated 500x finer) within 0.05 and 5 %
+// (measured: 0.004 and 2.2 %); under gross sliding both meet the
+// impulse-momentum result. The normal restitution stays 1 and the energy
+// ledger, which books the Mindlin spring's stiffness changes, closes within
+// 1 % (measured 0.08 %). Without Mindlin's spring (ks = 0.8 N/m, the old
+// default) the contact point would keep its speed: e_t = 1 at every angle.
+TEST(Impact, ObliqueHertzMindlinOnRigidWall3D) {
+  const auto shape = sphere<3>();
+  const std::uint32_t node = contactNode(*shape);
+  const double lever = shape->nodes().positions[node].norm();
+  const double mass = kOxideDensity * shape->volume();
+  const double inertia = kOxideDensity * shape->mass().principalInertia().mean();
+  const double radius = equivalentRadius<3>(shape->volume());
+  // Rigid wall: 1/E* = (1 - nu^2)/E and 1/G* = (2 - nu)/G of the sphere alone.
+  const double eStar = kOxideE / (1.0 - kOxideNu * kOxideNu);
+  const double gStar = kOxideE / (2.0 * (1.0 + kOxideNu)) / (2.0 - kOxideNu);
+  // A normal speed for a peak overlap of 0.5 mm (one node touches).
+  const double deltaMax = 0.0005;
+  const double normalSpeed = std::sqrt(std::pow(deltaMax, 2.5) * 16.0 * eStar * std::sqrt(radius) / (15.0 * mass));
+  const double duration = 2.94 * deltaMax / normalSpeed;
+  std::printf("angle_deg  e_t(lsdem)  e_t(point)  spin(lsdem)  spin(point)  e_n(lsdem)  ledger\n");
+  for (const double degrees : {5.0, 10.0, 20.0, 30.0, 45.0, 60.0, 80.0}) {
+    const double angle = degrees * std::numbers::pi / 180.0;
+    const ObliqueResult dem = worldImpact(angle, normalSpeed, duration / 200.0);
+    const ObliqueResult ref = pointModel(eStar, gStar, kOxideMu, radius, mass, inertia, lever, normalSpeed,
+                                         normalSpeed * std::tan(angle));
+    std::printf("%9.0f  %10.4f  %10.4f  %11.5f  %11.5f  %10.4f  %.1e\n", degrees, dem.tangentialRestitution,
+                ref.tangentialRestitution, dem.spinOut, ref.spinOut, dem.normalRestitution, dem.ledgerError);
+    EXPECT_NEAR(dem.tangentialRestitution, ref.tangentialRestitution, 0.05) << degrees << " deg";
+    EXPECT_NEAR(dem.spinOut, ref.spinOut, 0.05 * std::abs(ref.spinOut)) << degrees << " deg";
+    EXPECT_NEAR(dem.normalRestitution, 1.0, 0.01) << degrees << " deg";
+    EXPECT_LT(dem.ledgerError, 0.01) << degrees << " deg";
+    // Gross sliding throughout: the impulse mu (1 + e) m v_n changes the
+    // contact point's speed by (1/m + L^2/I) times it.
+    if (degrees >= 45.0) {
+      const double slide = 1.0 - kOxideMu * 2.0 * (1.0 + mass * lever * lever / inertia) / std::tan(angle);
+      EXPECT_NEAR(ref.tangentialRestitution, slide, 2e-3) << degrees << " deg";
+      EXPECT_NEAR(dem.tangentialRestitution, slide, 0.01) << degrees << " deg";
+    }
+  }
+}
 
 TEST(Impact, LinearSphereOnPlane2D) { checkLinearImpact<2>(true); }
 TEST(Impact, LinearSphereOnPlane3D) { checkLinearImpact<3>(true); }
@@ -290,5 +500,7 @@ TEST(Impact, HertzSphereOnPlane2D) { checkHertzImpact<2>(true); }
 TEST(Impact, HertzSphereOnPlane3D) { checkHertzImpact<3>(true); }
 TEST(Impact, HertzSphereOnSphere2D) { checkHertzImpact<2>(false); }
 TEST(Impact, HertzSphereOnSphere3D) { checkHertzImpact<3>(false); }
+TEST(Impact, WallWithItsOwnMaterial2D) { checkWallMaterial<2>(); }
+TEST(Impact, WallWithItsOwnMaterial3D) { checkWallMaterial<3>(); }
 TEST(Impact, UndampedBouncesConserveEnergy2D) { checkEnergyConservation<2>(); }
 TEST(Impact, UndampedBouncesConserveEnergy3D) { checkEnergyConservation<3>(); }

@@ -8,6 +8,8 @@
 #include <cstring>
 #include <memory>
 #include <new>
+#include <optional>
+#include <tuple>
 #include <random>
 
 #ifdef LSDEM_HAVE_OPENMP
@@ -166,8 +168,12 @@ TEST(World, DeterministicAcrossThreads) {
       p.velocity = Vec<3>(u(rng) - 0.5, -u(rng), u(rng) - 0.5);
       w.addParticle(p);
     }
-    w.run(400);
-    EXPECT_GT(w.contacts().pairContacts().size(), 0u);
+    std::size_t touching = 0;  // steps with contacts: the threads had pairs to share
+    for (int s = 0; s < 400; ++s) {
+      w.step();
+      touching += !w.contacts().pairContacts().empty();
+    }
+    EXPECT_GT(touching, 50u);
     return stateHash(w.particles());
   };
   const std::uint64_t one = runScene(1);
@@ -285,4 +291,60 @@ TEST(World, TimeStepIgnoresTheStiffnessOfAFreedShapeAtTheSameAddress) {
   EXPECT_EQ(w.dt(), stiffDt);
   w.removeParticle(0, "test");
   p.shape.reset();
+}
+
+// The automatic step and what sets it. A plane of its own, stiffer material
+// is a stiffer contact than two grains: the linear law's wall of 10 kn
+// (stiffest patch without the pair factor 2: 5x a pair's), the Hertz law's
+// rigid wall (E* doubled at twice R*: 2x a pair's tangent stiffness). The
+// world names the particle and the contact that limit the step, and logs
+// each change of the step.
+TEST(World, TimeStepCountsWallMaterialsAndNamesItsLimit) {
+  const auto disc = test::sphereShape<2>(0.01, 12);
+  const auto criticalOf = [&](const dynamics::ContactLawDef& law, const std::optional<dynamics::BoundaryMaterial>& m) {
+    WorldDef<2> def;
+    def.contact = law;
+    World<2> w(def);
+    PlaneDef<2> floor;
+    floor.name = "floor";
+    floor.plane.normal = Vec<2>::UnitY();
+    floor.material = m;
+    ParticleDef<2> p;
+    p.shape = disc;
+    p.position = Vec<2>(0.0, 0.05);
+    w.addParticle(p);
+    w.addPlane(floor);  // after the particle: the step is re-checked
+    p.position = Vec<2>(0.0, 0.08);
+    w.addParticle(p);
+    return std::tuple{w.criticalDt(), w.timeStepLimit(), w.timeStepChanges()};
+  };
+  dynamics::ContactLawDef linear;
+  linear.kn = 1e5;
+  linear.ks = 0.8e5;
+  dynamics::BoundaryMaterial stiff;
+  stiff.kn = 1e6;
+  const auto [grains, grainLimit, grainChanges] = criticalOf(linear, std::nullopt);
+  const auto [walled, wallLimit, wallChanges] = criticalOf(linear, stiff);
+  EXPECT_EQ(grainLimit.boundary, -1);
+  EXPECT_EQ(wallLimit.boundary, 0);
+  EXPECT_NEAR(wallLimit.stiffness / grainLimit.stiffness, 5.0, 1e-9);
+  EXPECT_NEAR(walled, grains / std::sqrt(5.0), 1e-12 * grains);
+  EXPECT_EQ(wallLimit.id, 0u);
+  EXPECT_EQ(wallLimit.nodes, disc->nodes().size());
+  EXPECT_EQ(wallLimit.diameter, disc->descriptors().equivalentDiameter);
+  EXPECT_EQ(wallLimit.criticalDt, walled);
+  ASSERT_EQ(wallChanges.size(), 2u);  // the first particle, then the wall
+  EXPECT_GT(wallChanges[0].dt, wallChanges[1].dt);
+  EXPECT_EQ(wallChanges[1].limit.boundary, 0);
+
+  dynamics::ContactLawDef hertz;
+  hertz.normal = dynamics::NormalModel::Hertz;
+  hertz.youngsModulus = 1e7;
+  hertz.hasFriction = false;
+  dynamics::BoundaryMaterial rigid;
+  rigid.rigid = true;
+  const auto [soft, softLimit, softChanges] = criticalOf(hertz, std::nullopt);
+  const auto [hard, hardLimit, hardChanges] = criticalOf(hertz, rigid);
+  EXPECT_NEAR(hardLimit.stiffness / softLimit.stiffness, 2.0, 1e-12);
+  EXPECT_NEAR(hard, soft / std::sqrt(2.0), 1e-12 * soft);
 }

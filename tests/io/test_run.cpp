@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -158,6 +160,29 @@ TEST(Run, WritesEveryOutputWithExactMassBalance) {
   // The platen's travel over the initial height.
   EXPECT_NEAR(std::stod(last[strainColumn]), 0.15 * std::stod(last[1]) / 0.0052, 1e-9);
 
+  // The time step and what set it: each row's dt is the safety factor times
+  // the critical step of the limiting particle's mass and stiffness (damping
+  // ratio 0.3); it only falls, and after the splits a fragment sets it.
+  const auto column = [&](const char* name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(it, header.end()) << name;
+    return std::size_t(it - header.begin());
+  };
+  const std::size_t dtCol = column("dt_s"), massCol = column("dt_limit_mass_kg"),
+                    kCol = column("dt_limit_stiffness_N_per_m"), genCol = column("dt_limit_generation");
+  column("critical_dt_s");
+  column("dt_limit_contact");
+  double previous = 1.0;
+  for (std::size_t k = 1; k < history.size(); ++k) {
+    const auto row = split(history[k]);
+    const double dt = std::stod(row[dtCol]);
+    const double critical = 2.0 * std::sqrt(std::stod(row[massCol]) / std::stod(row[kCol])) * (std::sqrt(1.09) - 0.3);
+    EXPECT_NEAR(dt, 0.2 * critical, 1e-12 * dt) << history[k];
+    EXPECT_LE(dt, previous);
+    previous = dt;
+  }
+  EXPECT_GT(std::stoi(last[genCol]), 0);
+
   // The particles frame at the end: one point per particle, ids match the summary count.
   const test::VtpFile frame = test::readVtp((dir.path / "out" / "frames" / "particles_000006.vtp").string());
   EXPECT_EQ(frame.points, r.particles);
@@ -174,6 +199,9 @@ TEST(Run, WritesEveryOutputWithExactMassBalance) {
   // summary.json names the mass balance.
   const std::string summary = readFile(dir.path / "out" / "summary.json");
   EXPECT_NE(summary.find("\"mass_balance\""), std::string::npos);
+  EXPECT_NE(summary.find("\"time_step\""), std::string::npos);
+  EXPECT_NE(summary.find("\"manual_not_applied\""), std::string::npos);
+  EXPECT_EQ(summary.find("\"density_scaling\""), std::string::npos);  // not asked for
   EXPECT_NE(summary.find("\"stopped_early\": false"), std::string::npos);
 }
 

@@ -145,6 +145,50 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "output.shape_min_cells", "must be >= 0"},
       {"discharge_alone", std::string(kBase) + "[effects]\ndischarge = { min = [0.0, 0.0], max = [1.0, 1.0] }\n", 22,
        "effects.discharge", "needs an outflow box"},
+      // Contact materials of walls and tools.
+      {"wall_without_kn", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { ks = 1.0 }\n", 23,
+       "planes[0].material", "missing key 'kn'"},
+      {"hertz_wall_without_nu",
+       edit("kn = 1e5", "model = \"hertz\"\nyoungs_modulus = 1e9") +
+           "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { youngs_modulus = 2e9 }\n",
+       24, "planes[0].material", "missing key 'poisson_ratio'"},
+      {"hertz_wall_bad_nu",
+       edit("kn = 1e5", "model = \"hertz\"\nyoungs_modulus = 1e9") +
+           "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { youngs_modulus = 2e9, poisson_ratio = 0.7 }\n",
+       24, "planes[0].material.poisson_ratio", "must be in [0, 0.499]"},
+      {"tool_without_kn", std::string(kBase) + "[[tools]]\nshape = \"disc\"\nmaterial = { ks = 1.0 }\n", 23,
+       "tools[0].material", "missing key 'kn'"},
+      {"wall_friction_without_law_friction",
+       std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { rigid = true, friction = 0.3 }\n", 23,
+       "planes[0].material.friction", "needs `friction` in [contact]"},
+      {"negative_wall_friction",
+       edit("kn = 1e5", "kn = 1e5\nfriction = 0.3") +
+           "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { kn = 1e6, friction = -0.1 }\n",
+       24, "planes[0].material.friction", "must be >= 0"},
+      {"rigid_wall_with_kn", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { rigid = true, kn = 1e6 }\n",
+       23, "planes[0].material.kn", "no meaning for a rigid wall"},
+      {"linear_wall_with_e", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { youngs_modulus = 1e9 }\n",
+       23, "planes[0].material.youngs_modulus", "not read by the linear model"},
+      {"negative_wall_kn", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { kn = -1.0 }\n", 23,
+       "planes[0].material.kn", "must be positive"},
+      {"unknown_wall_key", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { kn = 1.0, stiff = 2 }\n",
+       23, "planes[0].material.stiff", "unknown key"},
+      // The tangential model.
+      {"bad_tangential", edit("kn = 1e5", "kn = 1e5\ntangential = \"coulomb\""), 7, "contact.tangential",
+       "must be \"linear\" or \"mindlin\""},
+      {"mindlin_without_hertz", edit("kn = 1e5", "kn = 1e5\ntangential = \"mindlin\""), 7, "contact.tangential",
+       "needs model = \"hertz\""},
+      {"mindlin_with_ks",
+       edit("kn = 1e5", "model = \"hertz\"\nyoungs_modulus = 1e9\nks = 5.0\ntangential = \"mindlin\""), 8,
+       "contact.ks", "no meaning with tangential = \"mindlin\""},
+      // Density scaling.
+      {"negative_scaling_size", edit("steps = 10", "steps = 10\ndensity_scaling_below = -0.001"), 4,
+       "simulation.density_scaling_below", "must be positive"},
+      {"scaling_factor_below_one",
+       edit("steps = 10", "steps = 10\ndensity_scaling_below = 0.001\ndensity_scaling_max = 0.5"), 5,
+       "simulation.density_scaling_max", "must be >= 1"},
+      {"scaling_factor_alone", edit("steps = 10", "steps = 10\ndensity_scaling_max = 5.0"), 4,
+       "simulation.density_scaling_max", "needs `density_scaling_below`"},
   };
   for (const BadCase& c : cases) {
     const fs::path file = writeScene(c.name, c.scene);
@@ -161,6 +205,38 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
   }
 }
 
+// Walls and tools with their own contact material, Hertz with friction and
+// no ks (Mindlin's spring), and density scaling.
+TEST(Scene, WallMaterialsMindlinAndDensityScaling) {
+  const std::string scene = edit("kn = 1e5", "model = \"hertz\"\nyoungs_modulus = 1e9\nfriction = 0.4") +
+                            "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { rigid = true, friction = 0.2 }\n"
+                            "[[planes]]\npoint = [0.1, 0.0]\nnormal = [-1.0, 0.0]\n"
+                            "[[tools]]\nshape = \"disc\"\nposition = [0.5, 0.5]\n"
+                            "[tools.material]\nyoungs_modulus = 2e11\npoisson_ratio = 0.3\n";
+  const auto any = io::readScene(writeScene("materials", scene).string());
+  const auto& s = as<2>(any);
+  EXPECT_EQ(s.world.contact.tangential, dynamics::TangentialModel::Mindlin);
+  ASSERT_EQ(s.planes.size(), 2u);
+  ASSERT_TRUE(s.planes[0].material);
+  EXPECT_TRUE(s.planes[0].material->rigid);
+  EXPECT_EQ(s.planes[0].material->friction, 0.2);
+  EXPECT_FALSE(s.planes[1].material);  // the grains' material
+  ASSERT_TRUE(s.tools[0].material);
+  EXPECT_EQ(s.tools[0].material->youngsModulus, 2e11);
+  EXPECT_EQ(s.tools[0].material->poissonRatio, 0.3);
+  EXPECT_FALSE(s.world.densityScaling);  // not asked for
+  // With ks the Hertz law keeps the linear spring; density scaling read.
+  const auto linear = io::readScene(
+      writeScene("hertz_ks", edit("kn = 1e5", "model = \"hertz\"\nyoungs_modulus = 1e9\nfriction = 0.4\nks = 50.0"))
+          .string());
+  EXPECT_EQ(as<2>(linear).world.contact.tangential, dynamics::TangentialModel::Linear);
+  const auto scaled = io::readScene(writeScene(
+      "scaled", edit("steps = 10", "steps = 10\ndensity_scaling_below = 0.004\ndensity_scaling_max = 20")).string());
+  ASSERT_TRUE(as<2>(scaled).world.densityScaling);
+  EXPECT_EQ(as<2>(scaled).world.densityScaling->belowDiameter, 0.004);
+  EXPECT_EQ(as<2>(scaled).world.densityScaling->maxFactor, 20.0);
+}
+
 TEST(Scene, LsdemRunExitsWithCodeTwoAndOneLine) {
   const fs::path file = writeScene("cli_bad", edit("kn = 1e5", "kn = -3"));
   const std::string cmd = std::string(LSDEM_BINARY) + " run " + file.string() + " --out " +
@@ -173,6 +249,19 @@ TEST(Scene, LsdemRunExitsWithCodeTwoAndOneLine) {
   const int status = pclose(pipe);
   EXPECT_EQ(WEXITSTATUS(status), 2);
   EXPECT_EQ(out, "lsdem: " + file.string() + ":6: contact.kn: must be positive, got -3\n");
+
+  // A wall's material missing its stiffness: the same, and nothing written.
+  const fs::path wall =
+      writeScene("cli_bad_wall", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nmaterial = { friction = 0.1 }\n");
+  const fs::path outDir = file.parent_path() / "cli_out_wall";
+  fs::remove_all(outDir);
+  pipe = popen((std::string(LSDEM_BINARY) + " run " + wall.string() + " --out " + outDir.string() + " 2>&1").c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  out.clear();
+  while (fgets(buf, sizeof(buf), pipe)) out += buf;
+  EXPECT_EQ(WEXITSTATUS(pclose(pipe)), 2);
+  EXPECT_EQ(out, "lsdem: " + wall.string() + ":23: planes[0].material: missing key 'kn'\n");
+  EXPECT_FALSE(fs::exists(outDir));
 }
 
 TEST(Scene, CloudAndGridPlacementsAreDeterministicAndDoNotOverlap) {

@@ -23,10 +23,17 @@
 ///      matter lives on) and each fragment is added with the parent's density
 ///      (parent mass / parent shape volume), the split's exact-mass factor,
 ///      the rigid-body pose and velocity of fragmentState(), generation + 1,
-///      birth time now and strength childStrength() (eq. 13); a fragment below
+///      birth time now and strength childStrength() (eq. 13; a parent made
+///      unbreakable, strength infinite, gives its fragments none, so step 1
+///      samples theirs); a fragment below
 ///      minVolume or minNodes is recorded with World::recordRemoval as "fines"
 ///      with its kinetic energy instead;
 ///   4. world.particlesChanged() once after the batch (the time step is re-checked).
+///
+/// Manual breaks never stop a run: one that is due for a particle that is no
+/// longer there, whose surface does not cut the particle (a plane or surface
+/// outside it, or a cut the grid cannot resolve), or whose split throws is
+/// recorded in manualNotApplied() and skipped.
 ///
 /// Mass: fragments + fines carry the parent's mass exactly (to round-off;
 /// Split.h). Energy: the kinetic energy of a broken parent leaves the ledger's
@@ -94,14 +101,6 @@ struct BreakageDef {
   /// Buckling trigger: circumscribed sphere (circle) volume / grain volume > this (> 1).
   double bucklingRatio = 10.0;
   std::vector<ManualBreak<D>> manual;  ///< prescribed first breaks
-  /// Opt-in density (mass) scaling, s; 0 = off (the default). A kept fragment
-  /// whose own critical time step (its stiffest contact, World::criticalDtOf)
-  /// is below this gets its density raised by (this / its step)^2, so it no
-  /// longer pulls the time step down. The mass (and momentum, kinetic energy)
-  /// it adds is artificial: counted in massScaledFragments(),
-  /// massScalingAdded() and massScalingMaxFactor(), and in the run's mass
-  /// balance as mass put in.
-  double massScalingDt = 0.0;
   /// How grains are split: fragment node density, re-gridding of small
   /// fragments (SplitOptions::regridCells, on by default) and its bounds.
   SplitOptions split;
@@ -134,6 +133,14 @@ struct BreakageEvent {
   /// moments, which bounds the quadratic form).
   double inertiaEnergyBound = 0.0;
   double fragmentKineticEnergy = 0.0;          ///< of all fragments incl. fines, J
+};
+
+/// A manual break that was due but could not be applied: it is logged here
+/// (and in the run summary), never thrown out of World::step.
+struct ManualBreakNotApplied {
+  double time = 0.0;          ///< s, when it was due
+  std::uint64_t particle = 0; ///< global id it named
+  std::string reason;         ///< one line: why it was not applied
 };
 
 /// @brief The breakage effect (see the file comment).
@@ -171,17 +178,13 @@ class Breakage final : public dynamics::Effect<D> {
   /// resolution through their centroid either; they were made unbreakable
   /// (strength set to infinity).
   std::size_t unsplittable() const { return unsplittable_; }
-  /// @brief Manual breaks that did not split: their particle was gone at
-  /// their time, or their cut left it whole (never an exception).
-  std::size_t manualSkipped() const { return manualSkipped_; }
-  /// @brief Fragments whose density was raised (BreakageDef::massScalingDt).
-  std::size_t massScaledFragments() const { return massScaled_; }
-  /// @brief Artificial mass density scaling added so far, kg.
-  double massScalingAdded() const { return massScalingAdded_; }
-  /// @brief Largest density factor applied so far (1 when none).
-  double massScalingMaxFactor() const { return massScalingMax_; }
   /// @brief Steps whose stress evaluation was skipped for stale contacts (file comment).
   std::size_t skippedSteps() const { return skipped_; }
+  /// @brief Manual breaks that were due but not applied, in order: the
+  /// particle was no longer there (broken or removed earlier), the surface
+  /// does not cut it at its grid resolution, or the split failed (the
+  /// reason names the error). The run goes on without them.
+  const std::vector<ManualBreakNotApplied>& manualNotApplied() const { return manualNotApplied_; }
 
  private:
   struct Pending {
@@ -211,14 +214,11 @@ class Breakage final : public dynamics::Effect<D> {
   std::vector<BreakageEvent<D>> events_;
   double rawVolumeError_ = 0.0;
   double finesMass_ = 0.0;
-  std::size_t massScaled_ = 0;
-  std::size_t manualSkipped_ = 0;
-  double massScalingAdded_ = 0.0;
-  double massScalingMax_ = 1.0;
   std::size_t unsplit_ = 0;
   std::size_t unsplittable_ = 0;
   std::size_t skipped_ = 0;
   std::size_t removedSeen_ = 0;
+  std::vector<ManualBreakNotApplied> manualNotApplied_;
 };
 
 extern template class Breakage<2>;

@@ -49,6 +49,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -140,6 +141,17 @@ class ContactSolver {
 
   /// @brief The law this solver applies.
   const ContactLawDef& law() const { return law_; }
+
+  /// @brief Gives plane `index` (its place in the planes passed to compute())
+  /// its own contact material; a plane without one meets the grains with the
+  /// law's constants. @note Throws std::invalid_argument as boundaryConstants.
+  void setPlaneMaterial(std::size_t index, const BoundaryMaterial& material);
+  /// @brief The same for tool `index`.
+  void setToolMaterial(std::size_t index, const BoundaryMaterial& material);
+  /// @brief The constants of contacts with plane `index` / tool `index`:
+  /// its material's, or null when it has none (the law's apply).
+  const ContactConstants* planeConstants(std::size_t index) const;
+  const ContactConstants* toolConstants(std::size_t index) const;
 
   /// @brief Switches the law's friction on or off for the next compute()
   /// calls (ContactLawDef::frictionFrom). Off, the law is frictionless and the
@@ -233,6 +245,8 @@ class ContactSolver {
 
   ContactLawDef law_;
   bool frictionActive_ = true;
+  // Constants of boundaries with their own material, by plane / tool index.
+  std::vector<std::optional<ContactConstants>> planeConstants_, toolConstants_;
   // Output of the last compute(); nodes_ / shear_ with history_ are also the history.
   std::vector<PairContact<D>> pairs_;
   std::vector<PairDashpot<D>> dashpots_;  // aligned with pairs_; not part of the saved state

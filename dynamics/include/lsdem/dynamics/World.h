@@ -29,6 +29,7 @@
 #include <functional>
 #include <limits>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -42,6 +43,7 @@ struct ToolDef {
   std::string name;
   std::shared_ptr<const geometry::Shape<D>> shape;  ///< required
   Motion<D> motion;                                  ///< pose of the shape's body frame over time
+  std::optional<BoundaryMaterial> material;          ///< its own contact material; absent: the grains'
 };
 
 /// An infinite plane wall, optionally translating at constant velocity.
@@ -49,6 +51,59 @@ template <int D>
 struct PlaneDef {
   std::string name;
   Plane<D> plane;  ///< at t = 0
+  std::optional<BoundaryMaterial> material;  ///< its own contact material; absent: the grains'
+};
+
+/// Opt-in density scaling of small fragments (STYLE 7). A fragment (a
+/// particle with a parent) whose equivalent diameter is below
+/// `belowDiameter` gets its mass and inertia, and with them its weight,
+/// multiplied by the factor s = min(maxFactor, max(1, omega_i^2 / omega_ref^2)),
+/// fixed when it enters the world: omega_i^2 = k_eff / m of the fragment and
+/// omega_ref^2 the largest k_eff / m of the particles the scaling leaves alone
+/// (so far in the run), so a scaled fragment no longer sets a shorter time step
+/// than the unscaled particles do (unless the cap stops it). Mass balances,
+/// removal records, size distributions and breakage use the true mass
+/// (World::unscaledMass); the dynamics (inertia, weight, contact damping) and
+/// the kinetic energy use the scaled one. The kinetic energy the scaling adds
+/// to a moving fragment is booked in the ledger's addedEnergy.
+struct DensityScalingDef {
+  double belowDiameter = 0.0;  ///< m (> 0): fragments smaller than this are scaled
+  double maxFactor = 100.0;    ///< >= 1: the largest factor applied
+};
+
+/// What sets the automatic time step: the particle whose stiffest contact,
+/// over its mass, gives the fastest oscillation (TimeStep.h), and that contact.
+struct TimeStepLimit {
+  std::uint64_t id = 0;          ///< global id of the particle
+  double mass = 0.0;             ///< its mass as the dynamics see it (density scaling included), kg
+  double stiffness = 0.0;        ///< k_eff of its stiffest contact, N/m
+  /// Linear law: the surface nodes of that contact's patch (a flat face
+  /// engages all its nodes at once; TimeStep.h); 0 for Hertz.
+  std::uint64_t patchNodes = 0;
+  double diameter = 0.0;         ///< its equivalent diameter, m
+  double spacing = 0.0;          ///< its grid spacing, m
+  std::uint64_t nodes = 0;       ///< its surface nodes
+  std::int32_t generation = 0;   ///< 0: an original particle; > 0: a fragment
+  /// The contact: -1 particle on particle; j in [0, planes): plane j's own
+  /// material; planes + k: tool k's own material.
+  std::int32_t boundary = -1;
+  double densityScale = 1.0;     ///< its density scaling factor (1: none)
+  double criticalDt = 0.0;       ///< the critical step it gives, s
+};
+
+/// One change of the time step during a run.
+struct TimeStepChange {
+  double time = 0.0;    ///< s, when it changed
+  double dt = 0.0;      ///< s, the new step
+  TimeStepLimit limit;  ///< what set it
+};
+
+/// What the density scaling did so far (DensityScalingDef).
+struct DensityScalingStats {
+  std::uint64_t scaled = 0;      ///< fragments scaled so far (factor > 1)
+  double largestFactor = 1.0;    ///< the largest factor applied
+  std::uint64_t capped = 0;      ///< fragments whose factor hit maxFactor
+  double referenceOmega2 = 0.0;  ///< omega_ref^2, 1/s^2 (0: no unscaled particle yet)
 };
 
 /// Everything that configures a world (STYLE 7). Effects are declared by
@@ -68,6 +123,7 @@ struct WorldDef {
   /// through the discharge (reason "discharge"); the others are "outflow".
   std::optional<geometry::Box<D>> discharge;
   bool checkFinite = false;                 ///< check every state value for NaN/Inf each step (debug)
+  std::optional<DensityScalingDef> densityScaling;  ///< opt-in; absent: no particle is scaled
 };
 
 /// The energy budget of a run, J. Work done on the particles counts positive.
@@ -178,16 +234,17 @@ class World {
   double dt() const { return dt_; }
   /// @brief The critical time step of the current particles (s).
   double criticalDt() const { return dtCritical_; }
-  /// @brief The particle whose stiffest contact sets the critical time step
-  /// (smallest sqrt(m / k)), as an index into particles(); particles().size()
-  /// when none has a stiffness. What limits dt (summary.json `dt_limit`).
-  std::size_t stepLimitingParticle() const;
-  /// @brief The stiffest-contact stiffness of particle `index`, N/m (the one the time step uses).
-  double particleStiffness(std::size_t index) const { return stiffness_.at(index); }
-  /// @brief The critical time step a particle of `shape` and `mass` (kg) would
-  /// bring, s (its stiffest contact under the world's law, the cached
-  /// per-shape stiffness; +infinity without stiffness).
-  double criticalDtOf(const std::shared_ptr<const geometry::Shape<D>>& shape, double mass);
+  /// @brief What sets criticalDt() (meaningful once a particle is in).
+  const TimeStepLimit& timeStepLimit() const { return limit_; }
+  /// @brief Every change of dt() so far, the first included (the automatic
+  /// step only falls; a user step changes once).
+  const std::vector<TimeStepChange>& timeStepChanges() const { return dtChanges_; }
+  /// @brief Particle i's true mass, kg: its mass without density scaling.
+  double unscaledMass(std::size_t i) const;
+  /// @brief Particle i's density scaling factor (1: not scaled).
+  double densityScale(std::size_t i) const;
+  /// @brief What the density scaling did (all zero without it).
+  const DensityScalingStats& densityScaling() const { return scalingStats_; }
   std::uint64_t steps() const { return steps_; }
   const WorldDef<D>& def() const { return def_; }
   const ContactSolver<D>& contacts() const { return contacts_; }
@@ -212,7 +269,7 @@ class World {
   /// reported one by one in effectSeconds().
   const std::array<double, std::size_t(Stage::Count)>& stageSeconds() const { return stageSeconds_; }
   const std::vector<double>& effectSeconds() const { return effectSeconds_; }
-  /// @brief Total mass of the particles now, kg.
+  /// @brief Total (true) mass of the particles now, kg.
   double particleMass() const;
   /// @brief Total mass removed so far, kg.
   double removedMass() const;
@@ -226,13 +283,27 @@ class World {
   /// Sets dt from dtCritical_ (automatic: safety x critical, never growing; user: checked).
   void stepFromCritical();
   void checkFinite() const;
-  /// The effective contact stiffness of a shape (N/m), from the cache when the
+  /// The effective stiffness of a shape's stiffest contact (N/m) and which
+  /// contact it is (TimeStepLimit::boundary).
+  struct ShapeStiffness {
+    double stiffness = 0.0;
+    std::int32_t boundary = -1;
+    std::uint64_t patchNodes = 0;
+  };
+  /// The effective contact stiffness of a shape, from the cache when the
   /// shape is one it still holds. Entries are keyed by the live shape, not by
   /// its address alone: a fragment shape freed by breakage or removal can have
   /// its address reused by a new shape, and a stale hit would give the new
   /// shape the old one's stiffness (so the time step would depend on the
   /// allocator, and with it on which thread freed what).
-  double shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>& shape);
+  ShapeStiffness shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>& shape);
+  /// A boundary got its own material: forget the cached stiffnesses and re-check the step.
+  void boundaryMaterialsChanged();
+  /// Density scaling of particle i if it is a small fragment not yet decided
+  /// (DensityScalingDef); books the kinetic energy it adds.
+  void scaleDensity(std::size_t i);
+  /// The TimeStepLimit of particle i (its stiffness must be current).
+  TimeStepLimit limitOf(std::size_t i) const;
   void refreshEnergy();
 
   WorldDef<D> def_;
@@ -250,15 +321,21 @@ class World {
   std::array<double, std::size_t(Stage::Count)> stageSeconds_{};
 
   // Time step: per particle effective contact stiffness (N/m), cached per shape.
-  std::vector<double> stiffness_;
+  std::vector<ShapeStiffness> stiffness_;
   struct CachedStiffness {
     const geometry::Shape<D>* shape = nullptr;      ///< address, compared only while `alive`
     std::weak_ptr<const geometry::Shape<D>> alive;  ///< expired once the shape is freed
-    double stiffness = 0.0;                         ///< N/m
+    ShapeStiffness stiffness;
   };
   std::vector<CachedStiffness> shapeStiffness_;
   double dt_ = 0.0;
   double dtCritical_ = std::numeric_limits<double>::infinity();
+  TimeStepLimit limit_;                   // what sets dtCritical_
+  std::vector<TimeStepChange> dtChanges_; // every change of dt_
+  // Density scaling: the factor of each fragment decided so far, by global id
+  // (1 for a fragment left alone); empty without the option.
+  std::map<std::uint64_t, double> densityScales_;
+  DensityScalingStats scalingStats_;
 
   // Scratch for the broad phase.
   std::vector<double> radii_;
