@@ -89,7 +89,15 @@ Grid<D> buildGrid(const ShapeDef<D>& def) {
   if constexpr (D == 3) {
     if (def.kind == ShapeKind::Mesh) {
       const TriangleMesh mesh = readMesh(def.meshFile, def.meshScale);
-      return meshToLevelSet(mesh, spacingFor(def, mesh.bounds().size().minCoeff()), pad, def.meshFile);
+      const double smallest = mesh.bounds().size().minCoeff();
+      const double h = spacingFor(def, smallest);
+      // 2 to 1e4 cells across the smallest extent, as cells_across allows.
+      if (!(smallest / h >= 2.0 && smallest / h <= 1e4)) {
+        throw std::invalid_argument("spacing " + std::to_string(h) + " gives " + std::to_string(smallest / h) +
+                                    " cells across the mesh's smallest extent " + std::to_string(smallest) +
+                                    "; it must give 2 to 1e4");
+      }
+      return meshToLevelSet(mesh, h, pad, def.meshFile);
     }
   }
   const double h = resolvedSpacing(def);

@@ -10,6 +10,7 @@
 #include "lsdem/geometry/Shape.h"
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -100,6 +101,10 @@ struct SceneDef {
   /// The region drawn for planes in ParaView and used for the default output
   /// extent, m (from `[simulation] domain`, or the particles' and tools' box).
   std::optional<geometry::Box<D>> domain;
+  /// Lines of the keys that are checked once the world is built (dotted key
+  /// -> line in `file`), for messages: `simulation.duration`,
+  /// `output.checkpoint_every`, `effects.gravity`, velocities.
+  std::map<std::string, int> keyLines;
 };
 
 using AnySceneDef = std::variant<SceneDef<2>, SceneDef<3>>;
