@@ -62,6 +62,7 @@ void runCommand(const RunArgs& a) {
   if (a.steps >= 0) o.steps = std::uint64_t(a.steps);
   o.threads = a.threads;
   o.stop = &gStop;
+  o.note = [](const std::string& line) { std::cerr << "lsdem: note: " << line << '\n'; };
   const bool terminal = isatty(fileno(stderr)) != 0;
   if (!a.quiet) {
     o.progress = [terminal](const io::RunProgress& p) {

@@ -25,6 +25,7 @@
 #include <cerrno>
 #include <cstring>
 #include <sstream>
+#include <variant>
 
 #ifdef LSDEM_HAVE_OPENMP
 #include <omp.h>
@@ -853,6 +854,7 @@ RunResult runOf(SceneDef<D> scene, const RunOptions& options) {
 RunResult runScene(const RunOptions& options) {
   const std::string scenePath = options.resumeDir.empty() ? options.scene : checkpointScene(options.resumeDir);
   AnySceneDef scene = readScene(scenePath);
+  if (options.note) std::visit([&](const auto& s) { for (const std::string& n : s.notes) options.note(n); }, scene);
   if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) return runOf<2>(std::move(*s2), options);
   return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), options);
 }

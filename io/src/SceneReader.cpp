@@ -6,6 +6,7 @@
 #include "ShapeTable.h"
 #include "TomlReader.h"
 
+#include "lsdem/geometry/Components.h"
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/ShapeFile.h"
 
@@ -285,7 +286,7 @@ class SceneReader {
       (void)line;
       indices.push_back(scene_.shapes.size());
       scene_.shapeNames.push_back(name);
-      scene_.shapes.push_back(buildDeclaredShape<D>(decl));
+      scene_.shapes.push_back(buildDeclaredShape<D>(decl, &scene_.notes));
     }
   }
 
@@ -525,7 +526,9 @@ class SceneReader {
       TomlReader r(*t, file_, "particles[" + std::to_string(g++) + "]");
       ParticleGroupDef<D> group;
       group.line = int(t->source().begin.line);
-      group.shapes = shapeList(r, r.has("shapes") ? "shapes" : "shape");
+      const std::string shapeKey = r.has("shapes") ? "shapes" : "shape";
+      group.shapes = shapeList(r, shapeKey);
+      for (const std::size_t s : group.shapes) checkOneBody(r, shapeKey, s);
       // Density: a named material's, or the group's own.
       if (r.has("material")) {
         const std::string name = r.string("material");
@@ -611,6 +614,19 @@ class SceneReader {
     if (scene_.groups.empty()) top.fail("", "a scene needs at least one [[particles]] group");
   }
 
+  // A particle is one body: a shape whose level set holds separate pieces (a
+  // mesh or grain file with two closed bodies side by side) is refused. (A
+  // tool may be several bodies: it only pushes.)
+  void checkOneBody(TomlReader& r, const std::string& key, std::size_t s) {
+    if (!oneBody_.insert(s).second) return;
+    std::vector<int> labels;
+    const int bodies = geometry::labelComponents<D>(scene_.shapes[s]->grid(), labels);
+    if (bodies > 1) {
+      r.fail(key, "shape '" + scene_.shapeNames[s] + "' is " + std::to_string(bodies) +
+                      " separate bodies; a particle must be one (give each body its own mesh or grain file)");
+    }
+  }
+
   void readOutput(TomlReader& top) {
     const toml::table* t = top.optionalTable("output");
     if (!t) return;
@@ -674,6 +690,7 @@ class SceneReader {
   std::map<std::string, std::size_t> materialIndex_;
   std::vector<double> densities_;
   std::set<std::string> boundaryNames_;
+  std::set<std::size_t> oneBody_;  // shapes found to be one body
 };
 
 }  // namespace

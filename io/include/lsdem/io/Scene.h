@@ -105,6 +105,9 @@ struct SceneDef {
   /// -> line in `file`), for messages: `simulation.duration`,
   /// `output.checkpoint_every`, `effects.gravity`, velocities.
   std::map<std::string, int> keyLines;
+  /// What reading the scene left out, one line each ("FILE:LINE: KEY: mesh
+  /// 'wall.stl': 2 zero-area faces dropped ..."): `lsdem run` prints them.
+  std::vector<std::string> notes;
 };
 
 using AnySceneDef = std::variant<SceneDef<2>, SceneDef<3>>;
