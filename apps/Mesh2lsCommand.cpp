@@ -6,6 +6,7 @@
 
 #include "Commands.h"
 
+#include "lsdem/geometry/Components.h"
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/MeshToLevelSet.h"
 #include "lsdem/geometry/Shape.h"
@@ -19,6 +20,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace lsdem::apps {
 namespace {
@@ -52,11 +54,13 @@ void run(const Mesh2lsOptions& o) {
 
   // Read and check the mesh; a broken one is reported by file name and problem.
   geometry::TriangleMesh mesh;
+  geometry::MeshImportReport imported;
   try {
-    mesh = geometry::readMesh(o.mesh, o.scale);
+    mesh = geometry::readMesh(o.mesh, o.scale, &imported);
   } catch (const geometry::MeshError& e) {
     throw io::InputError(o.mesh, 0, "", e.what());
   }
+  if (!imported.describe().empty()) std::cerr << "lsdem: note: " << o.mesh << ": " << imported.describe() << '\n';
   const geometry::MeshReport report = geometry::inspectMesh(mesh);
   if (!report.ok()) throw io::InputError(o.mesh, 0, "", "mesh " + report.describe());
 
@@ -66,6 +70,12 @@ void run(const Mesh2lsOptions& o) {
     grid = geometry::meshToLevelSet(mesh, o.spacing, geometry::kDefaultPaddingCells, o.mesh);
   } catch (const geometry::MeshError& e) {
     throw io::InputError(o.mesh, 0, "", e.what());
+  }
+  // A grain is one body.
+  std::vector<int> labels;
+  if (const int bodies = geometry::labelComponents<3>(grid, labels); bodies > 1) {
+    throw io::InputError(o.mesh, 0, "", "mesh holds " + std::to_string(bodies) +
+                                            " separate bodies; a grain is one (give each body its own file)");
   }
   geometry::ShapeOptions options;
   options.nodesPerCell = o.nodesPerCell;
@@ -86,6 +96,7 @@ void run(const Mesh2lsOptions& o) {
         .field("output", o.output)
         .field("format", o.binary ? "binary" : "text")
         .field("faces", mesh.faces.size())
+        .field("dropped_faces", imported.droppedFaces)
         .field("mesh_volume", mesh.signedVolume())
         .field("volume", shape->volume())
         .field("centroid", centroid)

@@ -1,8 +1,8 @@
 /// @file RunCommand.cpp
 /// @brief `lsdem run SCENE.toml [--out DIR] [--steps N] [--threads N] [--quiet]`
 /// and `lsdem run --resume DIR`: runs a scene (io/Run.h) with a progress line,
-/// and stops cleanly on Ctrl-C (final frame, summary and checkpoint written;
-/// exit code 130).
+/// and stops cleanly on Ctrl-C or SIGTERM (final frame, summary and checkpoint
+/// written; exit code 130 or 143, 128 + the signal).
 
 #include "Commands.h"
 
@@ -21,11 +21,13 @@ namespace lsdem::apps {
 namespace {
 
 std::atomic<bool> gStop{false};
+std::atomic<int> gSignal{0};  // the signal that asked the run to stop
 
-extern "C" void onInterrupt(int) {
+extern "C" void onStopSignal(int signal) {
+  gSignal.store(signal);
   gStop.store(true);
-  // A second Ctrl-C ends the program at once.
-  std::signal(SIGINT, SIG_DFL);
+  // A second one ends the program at once.
+  std::signal(signal, SIG_DFL);
 }
 
 std::string duration(double s) {
@@ -60,6 +62,7 @@ void runCommand(const RunArgs& a) {
   if (a.steps >= 0) o.steps = std::uint64_t(a.steps);
   o.threads = a.threads;
   o.stop = &gStop;
+  o.note = [](const std::string& line) { std::cerr << "lsdem: note: " << line << '\n'; };
   const bool terminal = isatty(fileno(stderr)) != 0;
   if (!a.quiet) {
     o.progress = [terminal](const io::RunProgress& p) {
@@ -77,9 +80,12 @@ void runCommand(const RunArgs& a) {
     };
   }
   gStop.store(false);
-  std::signal(SIGINT, onInterrupt);
+  gSignal.store(0);
+  std::signal(SIGINT, onStopSignal);
+  std::signal(SIGTERM, onStopSignal);
   const io::RunResult r = io::runScene(o);
   std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
   if (!a.quiet) {
     std::cout << (r.stopped ? "stopped" : "finished") << ": " << r.steps << " steps, t = " << r.time << " s, "
               << r.particles << " particles, " << r.breakages << " breakages, mass balance " << r.massBalanceError
@@ -87,7 +93,7 @@ void runCommand(const RunArgs& a) {
               << "outputs in " << r.outDir << (r.stopped ? " (continue with: lsdem run --resume " + r.outDir + ")" : "")
               << '\n';
   }
-  if (r.stopped) throw CLI::RuntimeError(130);
+  if (r.stopped) throw CLI::RuntimeError(128 + (gSignal.load() != 0 ? gSignal.load() : SIGINT));
 }
 
 }  // namespace

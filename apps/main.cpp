@@ -1,8 +1,9 @@
 /// @file main.cpp
 /// @brief The `lsdem` command: parses the command line (CLI11) and dispatches
-/// to the subcommands. Bad user input ends in one line on stderr
-/// ("lsdem: FILE:LINE: KEY: problem") and exit code 2; any other failure in one
-/// line and exit code 1.
+/// to the subcommands. Exit codes (README): 0 done; 2 bad input, one line on
+/// stderr ("lsdem: FILE:LINE: KEY: problem"), or a command-line usage error;
+/// 1 a failed run (one line); 130 / 143 a run stopped by SIGINT / SIGTERM
+/// after its checkpoint; a subcommand's own codes (3: nothing to plot or render).
 
 #include "Commands.h"
 
@@ -30,8 +31,13 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);  // --help, --version
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();  // a subcommand's exit code (stopped runs, failed checks)
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    app.exit(e);  // prints the usage error
+    return 2;
   } catch (const lsdem::io::InputError& e) {
     std::cerr << "lsdem: " << e.what() << '\n';
     return 2;

@@ -121,7 +121,7 @@ void inspectVertices(const TriangleMesh& mesh, MeshReport& report) {
 
 bool MeshReport::ok() const {
   return !empty && borderEdges == 0 && nonManifoldEdges == 0 && misorientedEdges == 0 && nonManifoldVertices == 0 &&
-         badIndexFaces == 0 && degenerateFaces == 0 && !selfIntersecting && !inverted;
+         badIndexFaces == 0 && nonFiniteVertices == 0 && degenerateFaces == 0 && !selfIntersecting && !inverted;
 }
 
 std::string MeshReport::describe() const {
@@ -129,6 +129,7 @@ std::string MeshReport::describe() const {
   std::vector<std::string> parts;
   if (empty) parts.push_back("is empty");
   if (badIndexFaces > 0) parts.push_back("has " + count(badIndexFaces, "face", "faces") + " with vertex indices out of range");
+  if (nonFiniteVertices > 0) parts.push_back("has " + count(nonFiniteVertices, "non-finite vertex", "non-finite vertices"));
   if (borderEdges > 0) parts.push_back("is not closed (" + count(borderEdges, "border edge", "border edges") + ")");
   if (nonManifoldEdges > 0) {
     parts.push_back("is not manifold (" + count(nonManifoldEdges, "edge", "edges") + " shared by more than two faces)");
@@ -140,7 +141,10 @@ std::string MeshReport::describe() const {
   if (nonManifoldVertices > 0) {
     parts.push_back("is not manifold (" + count(nonManifoldVertices, "vertex", "vertices") + " where separate sheets touch)");
   }
-  if (degenerateFaces > 0) parts.push_back("has " + count(degenerateFaces, "degenerate face", "degenerate faces"));
+  if (degenerateFaces > 0) {
+    parts.push_back("has " + count(degenerateFaces, "degenerate (zero-area) face", "degenerate (zero-area) faces") +
+                    " (the first: face " + std::to_string(firstDegenerateFace) + ")");
+  }
   if (selfIntersecting) parts.push_back("self-intersects");
   if (inverted) parts.push_back("is inverted (normals point inward)");
   if (parts.empty()) return "is ok";
@@ -161,14 +165,17 @@ MeshReport inspectMesh(const TriangleMesh& mesh) {
     report.badIndexFaces += bad ? 1 : 0;
   }
   if (report.badIndexFaces > 0) return report;
+  for (const Vec<3>& v : mesh.vertices) report.nonFiniteVertices += v.allFinite() ? 0 : 1;
+  if (report.nonFiniteVertices > 0) return report;
 
   // Degenerate faces: a repeated vertex or three collinear points (exact predicate).
-  for (const auto& f : mesh.faces) {
+  for (std::size_t k = 0; k < mesh.faces.size(); ++k) {
+    const auto& f = mesh.faces[k];
     const bool repeated = f[0] == f[1] || f[1] == f[2] || f[0] == f[2];
     if (repeated || CGAL::collinear(cgal::toPoint(mesh.vertices[std::size_t(f[0])]),
                                     cgal::toPoint(mesh.vertices[std::size_t(f[1])]),
                                     cgal::toPoint(mesh.vertices[std::size_t(f[2])]))) {
-      ++report.degenerateFaces;
+      if (report.degenerateFaces++ == 0) report.firstDegenerateFace = (long long)k;
     }
   }
 

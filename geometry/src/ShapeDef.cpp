@@ -83,13 +83,21 @@ double resolvedSpacing(const ShapeDef<D>& def) {
 }
 
 template <int D>
-Grid<D> buildGrid(const ShapeDef<D>& def) {
+Grid<D> buildGrid(const ShapeDef<D>& def, MeshImportReport* meshReport) {
   const int pad = kDefaultPaddingCells;
   // A mesh is read once, and its extent gives the spacing.
   if constexpr (D == 3) {
     if (def.kind == ShapeKind::Mesh) {
-      const TriangleMesh mesh = readMesh(def.meshFile, def.meshScale);
-      return meshToLevelSet(mesh, spacingFor(def, mesh.bounds().size().minCoeff()), pad, def.meshFile);
+      const TriangleMesh mesh = readMesh(def.meshFile, def.meshScale, meshReport);
+      const double smallest = mesh.bounds().size().minCoeff();
+      const double h = spacingFor(def, smallest);
+      // 2 to 1e4 cells across the smallest extent, as cells_across allows.
+      if (!(smallest / h >= 2.0 && smallest / h <= 1e4)) {
+        throw std::invalid_argument("spacing " + std::to_string(h) + " gives " + std::to_string(smallest / h) +
+                                    " cells across the mesh's smallest extent " + std::to_string(smallest) +
+                                    "; it must give 2 to 1e4");
+      }
+      return meshToLevelSet(mesh, h, pad, def.meshFile);
     }
   }
   const double h = resolvedSpacing(def);
@@ -111,8 +119,8 @@ Grid<D> buildGrid(const ShapeDef<D>& def) {
 }
 
 template <int D>
-std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def) {
-  return Shape<D>::fromGrid(buildGrid(def), def.options);
+std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def, MeshImportReport* meshReport) {
+  return Shape<D>::fromGrid(buildGrid(def, meshReport), def.options);
 }
 
 template const char* shapeKindName<2>(ShapeKind);
@@ -121,9 +129,9 @@ template double smallestDimension<2>(const ShapeDef<2>&);
 template double smallestDimension<3>(const ShapeDef<3>&);
 template double resolvedSpacing<2>(const ShapeDef<2>&);
 template double resolvedSpacing<3>(const ShapeDef<3>&);
-template Grid<2> buildGrid<2>(const ShapeDef<2>&);
-template Grid<3> buildGrid<3>(const ShapeDef<3>&);
-template std::shared_ptr<const Shape<2>> buildShape<2>(const ShapeDef<2>&);
-template std::shared_ptr<const Shape<3>> buildShape<3>(const ShapeDef<3>&);
+template Grid<2> buildGrid<2>(const ShapeDef<2>&, MeshImportReport*);
+template Grid<3> buildGrid<3>(const ShapeDef<3>&, MeshImportReport*);
+template std::shared_ptr<const Shape<2>> buildShape<2>(const ShapeDef<2>&, MeshImportReport*);
+template std::shared_ptr<const Shape<3>> buildShape<3>(const ShapeDef<3>&, MeshImportReport*);
 
 }  // namespace lsdem::geometry

@@ -23,8 +23,10 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <cerrno>
 #include <cstring>
 #include <sstream>
+#include <variant>
 
 #ifdef LSDEM_HAVE_OPENMP
 #include <omp.h>
@@ -40,6 +42,12 @@ using geometry::Vec;
 constexpr char kCheckpointMagic[8] = {'L', 'S', 'D', 'E', 'M', 'C', 'K', 'P'};
 constexpr std::uint32_t kCheckpointVersion = 1;
 constexpr const char* kCheckpointFile = "checkpoint.lsc";
+// The most steps a scene may imply (duration / dt, or steps); longer runs go
+// in parts with --steps and --resume (docs/reliability.md).
+constexpr double kMaxSteps = 1e9;
+// The largest energy scale (J) a scene may reach by its accelerations and
+// speeds: room for the sums and products of the energy ledger in doubles.
+constexpr double kMaxEnergyScale = 1e300;
 
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
@@ -64,13 +72,18 @@ std::string readWholeFile(const std::string& path) {
   return s.str();
 }
 
+// Why the last write failed (a full disk: "No space left on device").
+std::string writeError() { return errno != 0 ? std::strerror(errno) : "write failed"; }
+
 // One CSV file of the run, appended row by row and flushed, so a run that
 // stops keeps every row written. A resumed run cuts it back to the size it had
-// at the checkpoint.
+// at the checkpoint. Every row is checked before it is written: a non-finite
+// number (the simulation diverged) stops the run instead of reaching the file.
 class CsvFile {
  public:
   void open(const fs::path& path, const std::string& header, std::optional<std::uint64_t> resumeSize) {
     path_ = path;
+    columns_ = cells(header);
     if (resumeSize) {
       if (!fs::exists(path)) throw std::runtime_error("resume: " + path.string() + " is missing");
       fs::resize_file(path, *resumeSize);
@@ -82,19 +95,56 @@ class CsvFile {
     if (!out_) throw std::runtime_error("cannot write " + path.string());
     out_.flush();
   }
-  std::ofstream& stream() { return out_; }
-  void row(const std::string& line) {
-    out_ << line << '\n';
+  /// One row (no line break).
+  void row(const std::string& line) { write(line + '\n'); }
+  /// Whole rows, each ending in a line break.
+  void write(const std::string& rows) {
+    checkFinite(rows);
+    errno = 0;
+    out_ << rows;
     out_.flush();
+    if (!out_) throw std::runtime_error("cannot write " + path_.string() + ": " + writeError());
   }
-  void flush() { out_.flush(); }
   std::uint64_t size() {
     out_.flush();
     return std::uint64_t(fs::file_size(path_));
   }
 
  private:
+  static std::vector<std::string> cells(const std::string& line) {
+    std::vector<std::string> out(1);
+    for (const char c : line) {
+      if (c == ',') {
+        out.emplace_back();
+      } else {
+        out.back() += c;
+      }
+    }
+    return out;
+  }
+  // Numbers are written by std::to_chars: a non-finite one is a whole cell
+  // "inf", "-inf", "nan" or "-nan".
+  void checkFinite(const std::string& rows) const {
+    std::size_t begin = 0;
+    while (begin < rows.size()) {
+      std::size_t end = rows.find('\n', begin);
+      if (end == std::string::npos) end = rows.size();
+      const std::vector<std::string> row = cells(rows.substr(begin, end - begin));
+      for (std::size_t k = 0; k < row.size(); ++k) {
+        const std::string& c = row[k];
+        if (c != "inf" && c != "-inf" && c != "nan" && c != "-nan") continue;
+        const std::string column = k < columns_.size() ? columns_[k] : "column " + std::to_string(k + 1);
+        throw std::runtime_error(path_.string() + ": " + column + " = " + c + " in the row of " +
+                                 columns_.front() + " " + row.front() +
+                                 ": the simulation diverged (a non-finite value); the run stops here, the row is "
+                                 "not written");
+      }
+      begin = end + 1;
+    }
+  }
+
   fs::path path_;
+  std::vector<std::string> columns_;
   std::ofstream out_;
 };
 
@@ -103,8 +153,16 @@ struct Schedule {
   double interval = 0.0;  // <= 0: never
   double next = 0.0;
   bool due(double clock) const { return interval > 0.0 && clock >= next - 1e-9 * interval; }
+  // Moves `next` past `clock` in bounded time: an interval far below the
+  // clock's step skips the missed times at once, and one below the clock's
+  // rounding moves to just past the clock.
   void advance(double clock) {
-    while (next <= clock + 1e-9 * interval) next += interval;
+    const double until = clock + 1e-9 * interval;
+    if ((until - next) / interval > 1e6) next += std::floor((until - next) / interval) * interval;
+    while (next <= until) {
+      const double n = next + interval;
+      next = n > next ? n : std::nextafter(until, std::numeric_limits<double>::infinity());
+    }
   }
 };
 
@@ -117,18 +175,19 @@ class Runner {
   RunResult run(bool resume) {
     const Clock::time_point start = Clock::now();
     start_ = start;
-    fs::create_directories(out_);
     sw_ = buildWorld(scene_);
     World& world = *sw_.world;
     std::optional<std::map<std::string, std::uint64_t>> sizes;
     if (resume) {
       sizes = loadCheckpoint();
     } else {
-      fs::copy_file(scene_.file, out_ / "scene.toml", fs::copy_options::overwrite_existing);
       initialMass_ = sw_.initialMass;
       h0_ = specimenHeight();
     }
     setEnd(world);
+    // Everything is checked: now the outputs.
+    fs::create_directories(out_);
+    if (!resume) fs::copy_file(scene_.file, out_ / "scene.toml", fs::copy_options::overwrite_existing);
     openOutputs(sizes);
 
     // Frames at the start of a new run (a resumed run has them already).
@@ -225,10 +284,56 @@ class Runner {
                                            : std::max(1.0, std::floor(scene_.output.checkpointEvery / std::max(world.dt(), 1e-300))))
                                 : 0.0;
     if (!resumed_) {
+      checkLimits(world, span);
       frames_.next = distributions_.next = history_.next = 0.0;
       checkpoints_.next = checkpoints_.interval;
     }
   }
+  [[noreturn]] void refuse(const std::string& key, const std::string& what) const {
+    const auto line = scene_.keyLines.find(key);
+    throw InputError(scene_.file, line != scene_.keyLines.end() ? line->second : 0, key, what);
+  }
+
+  // What a new run must respect to end in bounded time with finite numbers:
+  // the end and the checkpoint interval at least one step, at most kMaxSteps
+  // steps, and speeds whose kinetic energy a double can hold.
+  void checkLimits(const World& world, double span) const {
+    const double dt = world.dt();
+    if (!(dt > 0.0)) return;
+    if (byTime_ && scene_.duration < dt) {
+      refuse("simulation.duration", "duration = " + num(scene_.duration) + " s is shorter than one time step (dt = " +
+                                        num(dt) + " s)");
+    }
+    if (!options_.steps) {
+      const double steps = byTime_ ? scene_.duration / dt : double(scene_.steps);
+      if (steps > kMaxSteps) {
+        refuse(byTime_ ? "simulation.duration" : "simulation.steps",
+               "needs " + num(std::ceil(steps)) + " steps (dt = " + num(dt) +
+                   " s), over the limit of 1e9 per run; run it in parts with --steps and --resume");
+      }
+    }
+    if (scene_.output.checkpointEvery > 0.0 && scene_.output.checkpointEvery < dt) {
+      refuse("output.checkpoint_every", "checkpoint_every = " + num(scene_.output.checkpointEvery) +
+                                            " s is shorter than one time step (dt = " + num(dt) + " s)");
+    }
+    // Speeds: free fall over the run, initial velocities, moving planes.
+    const double seconds = byTime_ ? span : span * dt;
+    const double mass = std::max(sw_.initialMass, 1.0);
+    const auto energyOf = [&](double speed) { return 0.5 * mass * speed * speed; };
+    const auto check = [&](const std::string& key, double speed, const std::string& what) {
+      if (!(energyOf(speed) <= kMaxEnergyScale) || !(speed * seconds <= kMaxEnergyScale)) {
+        refuse(key, what + " reaches " + num(speed) + " m/s over the run: beyond what double precision can carry");
+      }
+    };
+    if (scene_.world.gravity) check("effects.gravity", scene_.world.gravity->stableNorm() * seconds, "free fall");
+    for (std::size_t g = 0; g < scene_.groups.size(); ++g) {
+      check("particles[" + std::to_string(g) + "].velocity", scene_.groups[g].velocity.stableNorm(), "the velocity");
+    }
+    for (std::size_t k = 0; k < scene_.planes.size(); ++k) {
+      check("planes[" + std::to_string(k) + "].velocity", scene_.planes[k].plane.velocity.stableNorm(), "the velocity");
+    }
+  }
+
   // Snapshots at the scene's distribution_times (simulated time, s).
   bool distributionTimeDue() {
     const std::vector<double>& times = scene_.output.distributionTimes;
@@ -405,8 +510,9 @@ class Runner {
     }
     if (sw_.breakage && eventsWritten_ < sw_.breakage->events().size()) {
       const auto& events = sw_.breakage->events();
-      writeBreakageLogRows<D>(std::span(events).subspan(eventsWritten_), csv_["breakage_log.csv"].stream());
-      csv_["breakage_log.csv"].flush();
+      std::ostringstream rows;
+      writeBreakageLogRows<D>(std::span(events).subspan(eventsWritten_), rows);
+      csv_["breakage_log.csv"].write(rows.str());
       eventsWritten_ = events.size();
     }
   }
@@ -446,8 +552,7 @@ class Runner {
       passing += mass;
       rows += t + "," + num(size) + "," + num(100.0 * passing / total) + "\n";
     }
-    csv_["psd.csv"].stream() << rows;
-    csv_["psd.csv"].flush();
+    csv_["psd.csv"].write(rows);
     const double n = double(std::max<std::size_t>(p.size(), 1));
     const double m = double(std::max<std::size_t>(resolved.size(), 1));
     csv_["shape_stats.csv"].row(t + "," + strain + "," + std::to_string(p.size()) + "," + num(circ / m) + "," +
@@ -465,9 +570,8 @@ class Runner {
         out += t + "," + strain + "," + quantity + "," + num(0.1 * double(b)) + "," + num(0.1 * double(b + 1)) + "," +
                std::to_string(bins[b]) + "\n";
       }
-      csv_["shape_histograms.csv"].stream() << out;
+      csv_["shape_histograms.csv"].write(out);
     }
-    csv_["shape_histograms.csv"].flush();
     lastDistributionClock_ = clockValue();
   }
 
@@ -496,6 +600,14 @@ class Runner {
   void writeFrame() {
     if (!frameWriter_) return;
     const World& w = *sw_.world;
+    // Like the CSV rows, a frame holds finite numbers only.
+    for (std::size_t i = 0; i < w.particles().size(); ++i) {
+      if (!w.particles().position[i].allFinite() || !w.particles().velocity[i].allFinite()) {
+        throw std::runtime_error("frame at step " + std::to_string(w.steps()) + ": particle " +
+                                 std::to_string(w.particles().id[i]) +
+                                 " has a non-finite position or velocity: the simulation diverged; the run stops here");
+      }
+    }
     // Stress measure per particle: the breakage criterion's characteristic
     // stress, von Mises without breakage (Pa).
     if (!criterion_) {
@@ -789,6 +901,7 @@ RunResult runOf(SceneDef<D> scene, const RunOptions& options) {
 RunResult runScene(const RunOptions& options) {
   const std::string scenePath = options.resumeDir.empty() ? options.scene : checkpointScene(options.resumeDir);
   AnySceneDef scene = readScene(scenePath);
+  if (options.note) std::visit([&](const auto& s) { for (const std::string& n : s.notes) options.note(n); }, scene);
   if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) return runOf<2>(std::move(*s2), options);
   return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), options);
 }

@@ -4,8 +4,10 @@
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/Scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <numbers>
 #include <random>
 #include <unordered_map>
@@ -15,6 +17,10 @@ namespace {
 
 using geometry::Vec;
 using geometry::Mat;
+
+// The most particles a grid group may place by filling its region (the limit
+// of `count` too).
+constexpr std::uint64_t kMaxGridParticles = 10000000;
 
 // Uniform doubles in [0, 1) from 53 random bits (the same on every platform,
 // unlike std::uniform_real_distribution).
@@ -281,9 +287,18 @@ class Builder {
     }
     // Nodes of the lattice inside the region (a half spacing from its faces).
     Eigen::Array<std::int64_t, D, 1> n;
-    for (int a = 0; a < D; ++a) n[a] = std::int64_t(std::floor(g.region.size()[a] / spacing));
+    for (int a = 0; a < D; ++a) n[a] = std::int64_t(std::min(std::floor(g.region.size()[a] / spacing), 1e18));
     if ((n <= 0).any()) fail(g, "the grid region is smaller than one lattice spacing (" + std::to_string(spacing) + " m)");
-    const std::uint64_t capacity = std::uint64_t(n.prod());
+    // (counted in doubles: a spacing far below the region's size must not overflow)
+    double lattice = 1.0;
+    for (int a = 0; a < D; ++a) lattice *= double(n[a]);
+    if (g.count == 0 && lattice > double(kMaxGridParticles)) {
+      char text[160];
+      std::snprintf(text, sizeof(text), "the grid region holds %.3g particles at spacing %.3g m, over the limit of 1e7", lattice,
+                    spacing);
+      fail(g, std::string(text) + " (give `count`, a larger spacing or a smaller region)");
+    }
+    const std::uint64_t capacity = lattice > 1e18 ? std::uint64_t(1e18) : std::uint64_t(n.prod());
     const std::uint64_t count = g.count > 0 ? g.count : capacity;
     if (count > capacity) {
       fail(g, "the grid region holds " + std::to_string(capacity) + " particles at spacing " + std::to_string(spacing) +

@@ -6,6 +6,7 @@
 #include "ShapeTable.h"
 #include "TomlReader.h"
 
+#include "lsdem/geometry/Components.h"
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/ShapeFile.h"
 
@@ -36,11 +37,28 @@ template <int D>
 Vec<D> vec(TomlReader& r, const std::string& key, const Vec<D>& fallback) {
   return r.has(key) ? vec<D>(r, key) : fallback;
 }
+// A direction: any finite non-zero vector, normalised without overflow or
+// underflow (components near the double range, e.g. [1e308, 1e308], give
+// their true direction).
 template <int D>
 Vec<D> unitVec(TomlReader& r, const std::string& key, const Vec<D>& fallback) {
   const Vec<D> v = vec<D>(r, key, fallback);
-  if (!(v.norm() > 0.0)) r.fail(key, "must not be the zero vector");
-  return v.normalized();
+  if (!(v.cwiseAbs().maxCoeff() > 0.0)) r.fail(key, "must not be the zero vector");
+  const Vec<D> u = v.stableNormalized();
+  if (!u.allFinite() || !(std::abs(u.norm() - 1.0) < 1e-12)) r.fail(key, "has no direction that can be computed");
+  return u;
+}
+
+// Names of planes, tools and materials become CSV column names and ParaView
+// labels: no control characters (NUL, line breaks), commas or double quotes.
+void checkNameText(TomlReader& r, const std::string& key, const std::string& name) {
+  if (name.empty()) r.fail(key, "must not be empty");
+  for (const char c : name) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7f || c == ',' || c == '"') {
+      r.fail(key, "must not contain control characters, commas or double quotes (it names CSV columns)");
+    }
+  }
 }
 
 // A region {min = [...], max = [...]}.
@@ -136,6 +154,7 @@ class SceneReader {
       r.fail(r.has("steps") ? "steps" : "", "give exactly one of 'duration' (s) and 'steps'");
     }
     if (r.has("duration")) scene_.duration = r.positive("duration");
+    for (const char* key : {"duration", "steps"}) scene_.keyLines[r.pathOf(key)] = r.lineOf(key);
     if (r.has("steps")) {
       const std::int64_t n = r.integer("steps");
       if (n <= 0) r.fail("steps", "must be positive, got " + std::to_string(n));
@@ -244,6 +263,7 @@ class SceneReader {
     TomlReader all(*t, file_, "materials");
     for (const auto& [k, v] : *t) {
       const std::string name(k.str());
+      checkNameText(all, name, name);
       const toml::table* m = all.optionalTable(name);
       TomlReader r(*m, file_, "materials." + name);
       materialIndex_[name] = scene_.materials.size();
@@ -289,7 +309,7 @@ class SceneReader {
       (void)line;
       indices.push_back(scene_.shapes.size());
       scene_.shapeNames.push_back(name);
-      scene_.shapes.push_back(buildDeclaredShape<D>(decl));
+      scene_.shapes.push_back(buildDeclaredShape<D>(decl, &scene_.notes));
     }
   }
 
@@ -314,6 +334,7 @@ class SceneReader {
       p.plane.normal = unitVec<D>(r, "normal", Vec<D>::UnitY());
       p.plane.velocity = vec<D>(r, "velocity", Vec<D>::Zero());
       p.material = readBoundaryMaterial(r);
+      if (r.has("velocity")) scene_.keyLines[r.pathOf("velocity")] = r.lineOf("velocity");
       r.finish();
       checkName(r, p.name);
       scene_.planes.push_back(p);
@@ -366,6 +387,7 @@ class SceneReader {
   }
 
   void checkName(TomlReader& r, const std::string& name) {
+    checkNameText(r, "name", name);
     if (!boundaryNames_.insert(name).second) r.fail("name", "another plane or tool is named '" + name + "'");
   }
 
@@ -395,6 +417,21 @@ class SceneReader {
       tool.material = readBoundaryMaterial(r);
       r.finish();
       tool.motion = readMotion(m, r.pathOf("motion"), type, *tool.shape, p0, q0);
+      // Key frames pose the tool at every time: a pose of its own must be the first frame's.
+      if (const auto* k = std::get_if<dynamics::KeyFramed<D>>(&tool.motion)) {
+        const dynamics::KeyFrame<D>& first = k->frames.front();
+        const char* angleKey = D == 2 ? "angle_deg" : "rotation_deg";
+        const geometry::Mat<D> a = dynamics::Rotation<D>::matrix(first.orientation);
+        const geometry::Mat<D> b = dynamics::Rotation<D>::matrix(q0);
+        if (r.has(angleKey) && !((a - b).norm() <= 1e-12)) {
+          r.fail(angleKey, "differs from the first key frame's orientation; a key_frames tool follows its frames "
+                           "(remove it or make them agree)");
+        }
+        if (r.has("position") && !((first.position - p0).norm() <= 1e-12 * (1.0 + first.position.norm()))) {
+          r.fail("position", "differs from the first key frame's position; a key_frames tool follows its frames "
+                             "(remove `position` or make them agree)");
+        }
+      }
       scene_.tools.push_back(std::move(tool));
     }
   }
@@ -482,6 +519,7 @@ class SceneReader {
     if (!t) return;
     TomlReader r(*t, file_, "effects");
     if (r.has("gravity")) scene_.world.gravity = vec<D>(r, "gravity");
+    scene_.keyLines[r.pathOf("gravity")] = r.lineOf("gravity");
     if (r.has("global_damping")) {
       scene_.world.globalDamping = r.number("global_damping");
       if (*scene_.world.globalDamping < 0.0) r.fail("global_damping", "must be >= 0 (1/s)");
@@ -583,7 +621,9 @@ class SceneReader {
       TomlReader r(*t, file_, "particles[" + std::to_string(g++) + "]");
       ParticleGroupDef<D> group;
       group.line = int(t->source().begin.line);
-      group.shapes = shapeList(r, r.has("shapes") ? "shapes" : "shape");
+      const std::string shapeKey = r.has("shapes") ? "shapes" : "shape";
+      group.shapes = shapeList(r, shapeKey);
+      for (const std::size_t s : group.shapes) checkOneBody(r, shapeKey, s);
       // Density: a named material's, or the group's own.
       if (r.has("material")) {
         const std::string name = r.string("material");
@@ -595,6 +635,7 @@ class SceneReader {
       if (r.has("density")) group.density = r.positive("density");
       if (!r.has("material") && !r.has("density")) r.fail("", "give 'material' or 'density'");
       group.velocity = vec<D>(r, "velocity", Vec<D>::Zero());
+      scene_.keyLines[r.pathOf("velocity")] = r.lineOf("velocity");
       const std::int64_t seed = r.integer("seed", std::int64_t(scene_.seed + g));
       if (seed < 0) r.fail("seed", "must be >= 0");
       group.seed = std::uint64_t(seed);
@@ -668,6 +709,19 @@ class SceneReader {
     if (scene_.groups.empty()) top.fail("", "a scene needs at least one [[particles]] group");
   }
 
+  // A particle is one body: a shape whose level set holds separate pieces (a
+  // mesh or grain file with two closed bodies side by side) is refused. (A
+  // tool may be several bodies: it only pushes.)
+  void checkOneBody(TomlReader& r, const std::string& key, std::size_t s) {
+    if (!oneBody_.insert(s).second) return;
+    std::vector<int> labels;
+    const int bodies = geometry::labelComponents<D>(scene_.shapes[s]->grid(), labels);
+    if (bodies > 1) {
+      r.fail(key, "shape '" + scene_.shapeNames[s] + "' is " + std::to_string(bodies) +
+                      " separate bodies; a particle must be one (give each body its own mesh or grain file)");
+    }
+  }
+
   void readOutput(TomlReader& top) {
     const toml::table* t = top.optionalTable("output");
     if (!t) return;
@@ -704,6 +758,7 @@ class SceneReader {
     o.shapeMinCells = r.number("shape_min_cells", o.shapeMinCells);
     if (o.shapeMinCells < 0.0) r.fail("shape_min_cells", "must be >= 0 cells, got " + std::to_string(o.shapeMinCells));
     o.checkpointEvery = r.number("checkpoint_every", 0.0);
+    scene_.keyLines[r.pathOf("checkpoint_every")] = r.lineOf("checkpoint_every");
     if (o.checkpointEvery < 0.0) r.fail("checkpoint_every", "must be >= 0 s");
     o.progressSeconds = r.positive("progress_seconds", o.progressSeconds);
     if (const toml::table* s = r.optionalTable("specimen")) {
@@ -730,6 +785,7 @@ class SceneReader {
   std::map<std::string, std::size_t> materialIndex_;
   std::vector<double> densities_;
   std::set<std::string> boundaryNames_;
+  std::set<std::size_t> oneBody_;  // shapes found to be one body
 };
 
 }  // namespace

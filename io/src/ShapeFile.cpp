@@ -3,6 +3,7 @@
 #include "ShapeTable.h"
 #include "TomlReader.h"
 
+#include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/MeshToLevelSet.h"
 
 #include <stdexcept>
@@ -22,14 +23,20 @@ ShapeDecl readShapeFile(const std::string& path) {
 }
 
 template <int D>
-std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& decl) {
+std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& decl, std::vector<std::string>* notes) {
   const auto* def = std::get_if<geometry::ShapeDef<D>>(&decl.def);
   if (!def) {
     throw InputError(decl.file, decl.line, decl.key, "is a " + std::to_string(decl.dimension()) + "D shape, expected " +
                                                          std::to_string(D) + "D");
   }
   try {
-    return geometry::buildShape(*def);
+    geometry::MeshImportReport report;
+    auto shape = geometry::buildShape(*def, &report);
+    if (notes && !report.describe().empty()) {
+      notes->push_back(InputError(decl.file, decl.line, decl.key, "mesh '" + def->meshFile + "': " + report.describe())
+                           .what());
+    }
+    return shape;
   } catch (const geometry::MeshError& e) {
     throw InputError(decl.file, decl.line, decl.key, e.what());
   } catch (const std::invalid_argument& e) {
@@ -37,7 +44,7 @@ std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& de
   }
 }
 
-template std::shared_ptr<const geometry::Shape<2>> buildDeclaredShape<2>(const ShapeDecl&);
-template std::shared_ptr<const geometry::Shape<3>> buildDeclaredShape<3>(const ShapeDecl&);
+template std::shared_ptr<const geometry::Shape<2>> buildDeclaredShape<2>(const ShapeDecl&, std::vector<std::string>*);
+template std::shared_ptr<const geometry::Shape<3>> buildDeclaredShape<3>(const ShapeDecl&, std::vector<std::string>*);
 
 }  // namespace lsdem::io

@@ -3,6 +3,7 @@
 #include "TomlReader.h"
 
 #include <filesystem>
+#include <sstream>
 
 namespace lsdem::io::detail {
 namespace {
@@ -22,6 +23,12 @@ std::optional<ShapeKind> kindFromName(const std::string& name, int dimension) {
   if (two && name == "polygon") return ShapeKind::Polygon;
   if (!two && name == "mesh") return ShapeKind::Mesh;
   return std::nullopt;
+}
+
+std::string shortNumber(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
 }
 
 template <int D>
@@ -96,6 +103,15 @@ ShapeDecl readOfDimension(TomlReader& r, const std::string& file, int line, cons
   }
   def.spacing = r.has("spacing") ? r.positive("spacing") : 0.0;
   def.cellsAcross = r.has("cells_across") ? r.inRange("cells_across", 2.0, 1e4, 0.0) : 0.0;
+  // A spacing must resolve the shape like cells_across would: 2 to 1e4 cells
+  // across its smallest dimension (a mesh is checked when it is read).
+  if (def.spacing > 0.0 && def.kind != ShapeKind::Mesh) {
+    const double cells = geometry::smallestDimension<D>(def) / def.spacing;
+    if (!(cells >= 2.0 && cells <= 1e4)) {
+      r.fail("spacing", "gives " + shortNumber(cells) + " cells across the shape's smallest dimension (" +
+                            shortNumber(geometry::smallestDimension<D>(def)) + "); it must give 2 to 1e4");
+    }
+  }
   def.options.nodesPerCell = r.positive("node_density", 2.0);
   const std::string method = r.string("mass_method", "extrapolated");
   if (method == "extrapolated") {

@@ -148,3 +148,15 @@ TEST(Cli, SplitRejectsABadPlane) {
   const Result nan = run("split " + example("ellipse.toml") + " --plane 1,x,0");
   EXPECT_EQ(nan.code, 2);
 }
+
+// Command-line usage errors exit with 2, like bad input files (CLI11's own
+// codes 105-109 before issue 16); help and version with 0.
+TEST(Cli, UsageErrorsExitWithCode2) {
+  for (const char* args : {"run --no-such-option", "run", "no-such-command", "run scene.toml --threads -3",
+                           "run scene.toml --steps many", "shape", "split"}) {
+    const Result r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_FALSE(r.out.empty()) << args;
+  }
+  EXPECT_EQ(run("run --help").code, 0);
+}

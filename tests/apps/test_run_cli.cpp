@@ -1,5 +1,6 @@
-// `lsdem run` as a user runs it: Ctrl-C stops cleanly (final summary and
-// checkpoint written, exit code 130) and `--resume` continues the run.
+// `lsdem run` as a user runs it: Ctrl-C and SIGTERM stop cleanly (final
+// summary and checkpoint written, exit code 130 / 143) and `--resume`
+// continues the run.
 
 #include <gtest/gtest.h>
 
@@ -104,5 +105,35 @@ TEST(RunCli, CtrlCStopsCleanlyAndResumeContinues) {
   EXPECT_NE(readFile(out / "summary.json").find("\"stopped_early\": false"), std::string::npos);
   // Neither a scene nor --resume: a usage error.
   EXPECT_NE(runToExit({LSDEM_BINARY, "run", "--quiet"}), 0);
+  fs::remove_all(dir);
+}
+
+// SIGTERM (a job scheduler's stop) is handled like Ctrl-C: checkpoint,
+// summary, exit code 143 (128 + 15), and the run resumes.
+TEST(RunCli, SigtermStopsCleanlyWithCode143) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_term";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path scene = dir / "long.toml";
+  std::ofstream(scene) << kLongScene;
+  const fs::path out = dir / "out";
+  std::vector<std::string> args = {LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--quiet"};
+  std::vector<char*> argv;
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  ASSERT_EQ(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ), 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(out / "frames" / "particles_000003.vtp") && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_TRUE(fs::exists(out / "frames" / "particles_000003.vtp")) << "the run did not start";
+  kill(pid, SIGTERM);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of stopping";
+  EXPECT_EQ(WEXITSTATUS(status), 143);
+  EXPECT_NE(readFile(out / "summary.json").find("\"stopped_early\": true"), std::string::npos);
+  EXPECT_EQ(runToExit({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "5", "--quiet"}), 0);
   fs::remove_all(dir);
 }

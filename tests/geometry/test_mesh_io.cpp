@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -172,4 +174,139 @@ TEST_F(MeshIO, WriteErrors) {
   EXPECT_THROW(writeStl(bad, file("bad.stl")), std::invalid_argument);
   EXPECT_FALSE(fs::exists(file("bad.stl")));
   EXPECT_THROW(writeStl(cubeMesh(1.0), file("no/such/dir/cube.stl")), MeshError);
+}
+
+namespace {
+
+// A unit cube as PLY (ASCII or binary little-endian, triangles), with one
+// face's last index replaced by `badIndex` when >= 0.
+std::string cubePly(bool binary, int badIndex = -1, const std::string& endHeader = "end_header") {
+  const TriangleMesh cube = cubeMesh(1.0);
+  std::string out = std::string("ply\nformat ") + (binary ? "binary_little_endian" : "ascii") +
+                    " 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
+                    "element face 12\nproperty list uchar int vertex_indices\n" + endHeader + "\n";
+  for (const Vec<3>& v : cube.vertices) {
+    for (int a = 0; a < 3; ++a) {
+      const float x = float(v[a]);
+      if (binary) {
+        out.append(reinterpret_cast<const char*>(&x), 4);
+      } else {
+        out += std::to_string(x) + (a < 2 ? " " : "\n");
+      }
+    }
+  }
+  for (std::size_t f = 0; f < cube.faces.size(); ++f) {
+    std::array<int, 3> t = cube.faces[f];
+    if (f == 3 && badIndex >= 0) t[2] = badIndex;
+    if (binary) {
+      out += char(3);
+      out.append(reinterpret_cast<const char*>(t.data()), 12);
+    } else {
+      out += "3 " + std::to_string(t[0]) + " " + std::to_string(t[1]) + " " + std::to_string(t[2]) + "\n";
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+// Files that crashed or hung the importer, or reached CGAL with NaN vertices
+// (issue 16), are refused with a message naming the file and the defect.
+TEST_F(MeshIO, MalformedFilesAreRefusedNamingTheDefect) {
+  const auto write = [&](const std::string& name, const std::string& bytes) {
+    std::ofstream(file(name), std::ios::binary) << bytes;
+    return file(name);
+  };
+  // The well-formed files read.
+  expectUnitCube(readMesh(write("cube.ply", cubePly(false))), 1.0);
+  expectUnitCube(readMesh(write("cube_bin.ply", cubePly(true))), 1.0);
+
+  struct Case {
+    std::string name, bytes, message;
+  };
+  const std::string binary = cubePly(true);
+  std::string nanPly = cubePly(false);
+  nanPly.replace(nanPly.find("1.000000 1.000000 1.000000"), 8, "nan");
+  std::string infObj = "v 0 0 0\nv 1 0 0\nv 0 inf 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+  const std::vector<Case> cases = {
+      {"index.ply", cubePly(false, 70000), "face 3 refers to vertex 70000, the file has 8"},
+      {"index_bin.ply", cubePly(true, 70000), "face 3 refers to vertex 70000, the file has 8"},
+      {"truncated.ply", binary.substr(0, binary.size() - 30), "truncated: it ends inside element 'face' 9 of 12"},
+      {"truncated_vertices.ply", binary.substr(0, 200), "truncated: it ends inside element 'vertex'"},
+      {"end_header.ply", cubePly(false, -1, "end_hedaer"), "unexpected 'end_hedaer'"},
+      {"no_end.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", "no end_header line"},
+      {"nan.ply", nanPly, "is not finite"},
+      {"inf.obj", infObj, "is not finite"},
+      {"empty.stl", "", "the file is empty"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = write(c.name, c.bytes);
+    const std::string error = readError(path);
+    EXPECT_EQ(error.rfind("cannot read mesh file '" + path + "': ", 0), 0u) << c.name << ": " << error;
+    EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
+  }
+  // The size limit.
+  MeshImportLimits small;
+  small.maxBytes = 100;
+  try {
+    readMesh(file("cube.ply"), 1.0, nullptr, small);
+    ADD_FAILURE() << "a file over the size limit must be refused";
+  } catch (const MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("over the limit of 100"), std::string::npos) << e.what();
+  }
+}
+
+// The importer runs in a child process: with the PLY check off, files that
+// hang it (no end_header) or that it cannot survive are contained, and end in
+// a MeshError in bounded time.
+TEST_F(MeshIO, TheImporterIsIsolatedAndTimeLimited) {
+  MeshImportLimits unchecked;
+  unchecked.checkFormat = false;
+  unchecked.seconds = 1.0;
+  std::ofstream(file("end_header.ply"), std::ios::binary) << cubePly(false, -1, "end_hedaer");
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    readMesh(file("end_header.ply"), 1.0, nullptr, unchecked);
+    ADD_FAILURE() << "accepted";
+  } catch (const MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("did not finish within 1 s"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 30.0);
+  // Unchecked bad indices and a truncated file: assimp 5.2 crashes on both
+  // (SIGSEGV); the crash stays in the child.
+  const std::string binary = cubePly(true);
+  std::ofstream(file("index_bin.ply"), std::ios::binary) << cubePly(true, 70000);
+  std::ofstream(file("truncated.ply"), std::ios::binary) << binary.substr(0, binary.size() - 30);
+  for (const char* name : {"index_bin.ply", "truncated.ply"}) {
+    try {
+      readMesh(file(name), 1.0, nullptr, unchecked);
+      ADD_FAILURE() << name << ": accepted";
+    } catch (const MeshError& e) {
+      const std::string what = e.what();
+      std::cout << name << ": " << what << "\n";
+      EXPECT_TRUE(what.find("the importer crashed on this file") != std::string::npos ||
+                  what.find("refers to vertex") != std::string::npos)
+          << what;
+    }
+  }
+  // The parent is unharmed: a good file still reads.
+  std::ofstream(file("cube.ply"), std::ios::binary) << cubePly(true);
+  expectUnitCube(readMesh(file("cube.ply"), 1.0, nullptr, unchecked), 1.0);
+}
+
+// A face that collapses to a repeated vertex is dropped, and reported.
+TEST_F(MeshIO, DroppedZeroAreaFacesAreReported) {
+  std::string text = cubePly(false);
+  text.replace(text.find("element face 12"), 15, "element face 13");
+  text += "3 0 0 1\n";
+  std::ofstream(file("drop.ply")) << text;
+  MeshImportReport report;
+  expectUnitCube(readMesh(file("drop.ply"), 1.0, &report), 1.0);
+  EXPECT_EQ(report.droppedFaces, 1);
+  EXPECT_EQ(report.firstDroppedFace, 12);
+  EXPECT_EQ(report.describe(), "1 zero-area face dropped (the first: face 12)");
+  MeshImportReport none;
+  std::ofstream(file("cube.ply")) << cubePly(false);
+  readMesh(file("cube.ply"), 1.0, &none);
+  EXPECT_EQ(none.describe(), "");
 }

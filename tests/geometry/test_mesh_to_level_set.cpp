@@ -202,7 +202,7 @@ TEST(MeshToLevelSet, BrokenMeshesRaiseTheRightMessage) {
   flat.faces.push_back({m, b, c});
   flat.faces.push_back({a, b, m});
   EXPECT_EQ(inspectMesh(flat).borderEdges, 0);
-  EXPECT_EQ(errorOf(flat, "flat"), "mesh 'flat': has 1 degenerate face");
+  EXPECT_EQ(errorOf(flat, "flat"), "mesh 'flat': has 1 degenerate (zero-area) face (the first: face 13)");
 
   TriangleMesh flipped = cube;
   for (auto& f : flipped.faces) std::swap(f[1], f[2]);
@@ -247,7 +247,7 @@ TEST(MeshToLevelSet, BrokenMeshesRaiseTheRightMessage) {
   // Several problems at once are all listed.
   TriangleMesh openAndFlat = flat;
   openAndFlat.faces.erase(openAndFlat.faces.begin());
-  EXPECT_EQ(errorOf(openAndFlat, "both"), "mesh 'both': is not closed (3 border edges); has 1 degenerate face");
+  EXPECT_EQ(errorOf(openAndFlat, "both"), "mesh 'both': is not closed (3 border edges); has 1 degenerate (zero-area) face (the first: face 12)");
 }
 
 TEST(MeshToLevelSet, RejectsBadSpacingAndPadding) {

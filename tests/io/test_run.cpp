@@ -345,3 +345,146 @@ distributions = 2
     EXPECT_EQ(counted, minCells > 0.0 ? 1u : 2u);
   }
 }
+
+namespace {
+
+// One disc resting on a floor: the scene the limit checks below edit.
+const char* kDiscScene = R"([simulation]
+dimension = 2
+duration = 0.01
+
+[contact]
+kn = 1e5
+
+[shapes.disc]
+kind = "circle"
+radius = 0.01
+cells_across = 12
+
+[[particles]]
+shape = "disc"
+density = 2000.0
+placement = "list"
+positions = [[0.0, 0.0099]]
+
+[[planes]]
+name = "floor"
+point = [0.0, 0.0]
+normal = [0.0, 1.0]
+
+[effects]
+gravity = [0.0, -9.81]
+
+[output]
+frames = 2
+)";
+
+std::string editScene(std::string text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return at == std::string::npos ? text : text.replace(at, from.size(), to);
+}
+
+}  // namespace
+
+// A run that could not end in bounded time or would overflow is refused
+// before anything is written, naming the file, line and key (issue 16: these
+// hung in Schedule::advance or wrote inf and NaN with exit code 0).
+TEST(Run, RunsThatCannotEndOrWouldOverflowAreRefusedBeforeWriting) {
+  struct Case {
+    std::string name, from, to;
+    int line;
+    std::string key, message;
+  };
+  const std::vector<Case> cases = {
+      {"tiny_duration", "duration = 0.01", "duration = 1e-308", 3, "simulation.duration", "shorter than one time step"},
+      {"tiny_checkpoints", "frames = 2", "frames = 2\ncheckpoint_every = 1e-308", 29, "output.checkpoint_every",
+       "shorter than one time step"},
+      {"too_many_steps", "duration = 0.01", "duration = 1e8", 3, "simulation.duration", "over the limit of 1e9"},
+      {"overflowing_gravity", "gravity = [0.0, -9.81]", "gravity = [0.0, -1e308]", 25, "effects.gravity",
+       "double precision"},
+      {"overflowing_velocity", "positions = [[0.0, 0.0099]]", "positions = [[0.0, 0.0099]]\nvelocity = [1e200, 0.0]",
+       18, "particles[0].velocity", "double precision"},
+  };
+  for (const Case& c : cases) {
+    TempDir dir("limits_" + c.name);
+    io::RunOptions o;
+    o.scene = writeScene(dir.path, editScene(kDiscScene, c.from, c.to)).string();
+    o.outDir = (dir.path / "out").string();
+    try {
+      io::runScene(o);
+      ADD_FAILURE() << c.name << ": accepted";
+    } catch (const io::InputError& e) {
+      EXPECT_EQ(e.file(), o.scene) << c.name;
+      EXPECT_EQ(e.line(), c.line) << c.name << ": " << e.what();
+      EXPECT_EQ(e.key(), c.key) << c.name << ": " << e.what();
+      EXPECT_NE(e.problem().find(c.message), std::string::npos) << c.name << ": " << e.what();
+    }
+    EXPECT_FALSE(fs::exists(o.outDir)) << c.name << ": nothing is written for a refused run";
+  }
+}
+
+// Output intervals far shorter than a step (here 1e-10 s against dt ~ 2.6e-4 s)
+// write at most one row per step and end at once.
+TEST(Run, OutputIntervalsBelowTheStepStayBounded) {
+  TempDir dir("short_intervals");
+  io::RunOptions o;
+  o.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 2\nhistory_rows = 100000000")).string();
+  o.outDir = (dir.path / "out").string();
+  const io::RunResult r = io::runScene(o);
+  // The first row, then one per step.
+  EXPECT_EQ(lines(readFile(dir.path / "out" / "history.csv")).size(), 1u + 1u + r.steps);
+}
+
+// A diverging run (a stiff contact with a forced, far too large step) stops
+// with an error at the first non-finite value; no row holding one is written.
+TEST(Run, ADivergedRunStopsBeforeWritingANonFiniteRow) {
+  TempDir dir("diverged");
+  const std::string scene = R"([simulation]
+dimension = 2
+steps = 3000
+dt = 0.01
+force_dt = true
+
+[contact]
+kn = 1e9
+
+[shapes.disc]
+kind = "circle"
+radius = 0.01
+cells_across = 12
+
+[[particles]]
+shape = "disc"
+density = 2000.0
+placement = "list"
+positions = [[0.0, 0.0]]
+
+[[planes]]
+name = "low"
+point = [0.0, -0.0095]
+normal = [0.0, 1.0]
+
+[[planes]]
+name = "high"
+point = [0.0, 0.0095]
+normal = [0.0, -1.0]
+
+[output]
+history_rows = 3000
+)";
+  io::RunOptions o;
+  o.scene = writeScene(dir.path, scene).string();
+  o.outDir = (dir.path / "out").string();
+  try {
+    io::runScene(o);
+    FAIL() << "a diverging run must stop with an error";
+  } catch (const io::InputError& e) {
+    FAIL() << "not an input error: " << e.what();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("diverged"), std::string::npos) << e.what();
+  }
+  const std::string history = readFile(dir.path / "out" / "history.csv");
+  EXPECT_GT(lines(history).size(), 10u) << "the rows before the divergence stay";
+  for (const char* bad : {"inf", "nan"}) EXPECT_EQ(history.find(bad), std::string::npos) << bad;
+}

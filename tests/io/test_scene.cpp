@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -235,6 +236,66 @@ TEST(Scene, WallMaterialsMindlinAndDensityScaling) {
   ASSERT_TRUE(as<2>(scaled).world.densityScaling);
   EXPECT_EQ(as<2>(scaled).world.densityScaling->belowDiameter, 0.004);
   EXPECT_EQ(as<2>(scaled).world.densityScaling->maxFactor, 20.0);
+}
+
+// Values the physics cannot survive, names that would break a CSV header, and
+// contradictory keys: refused with file, line and key (issue 16).
+TEST(Scene, UnsurvivableValuesNamesAndConflictsAreRefused) {
+  const std::string tool = "[[tools]]\nshape = \"disc\"\nposition = [0.1, 0.3]\n[tools.motion]\ntype = \"key_frames\"\n"
+                           "[[tools.motion.frames]]\ntime = 0.0\nposition = [0.2, 0.3]\n";
+  const std::vector<BadCase> cases = {
+      {"comma_name", std::string(kBase) + "[[planes]]\nname = \"fl,oor\"\npoint = [0.0, 0.0]\n", 22, "planes[0].name",
+       "commas"},
+      {"nul_name", std::string(kBase) + "[[planes]]\nname = \"fl\\u0000oor\"\npoint = [0.0, 0.0]\n", 22,
+       "planes[0].name", "control characters"},
+      {"newline_tool_name", std::string(kBase) + "[[tools]]\nname = \"a\\nb\"\nshape = \"disc\"\n", 22, "tools[0].name",
+       "control characters"},
+      {"quote_material", edit("[materials.rock]\ndensity = 2000.0", "[materials.'ro\"ck']\ndensity = 2000.0"), 8,
+       "materials.ro\"ck", "double quotes"},
+      {"key_frames_position", std::string(kBase) + tool, 23, "tools[0].position", "first key frame"},
+      {"key_frames_angle",
+       std::string(kBase) + "[[tools]]\nshape = \"disc\"\nangle_deg = 30.0\n[tools.motion]\ntype = \"key_frames\"\n"
+                            "[[tools.motion.frames]]\ntime = 0.0\nposition = [0.2, 0.3]\n",
+       23, "tools[0].angle_deg", "first key frame"},
+      {"spacing_above_grain", edit("cells_across = 16", "spacing = 1.0"), 14, "shapes.disc.spacing", "cells across"},
+      {"spacing_far_below_grain", edit("cells_across = 16", "spacing = 1e-9"), 14, "shapes.disc.spacing",
+       "cells across"},
+      {"grid_beyond_limit",
+       edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
+            "placement = \"grid\"\nregion = { min = [0.0, 0.0], max = [1e3, 1e3] }"),
+       16, "particles", "over the limit of 1e7"},
+  };
+  for (const BadCase& c : cases) {
+    const fs::path file = writeScene(c.name, c.scene);
+    try {
+      const io::AnySceneDef scene = io::readScene(file.string());
+      io::buildWorld(as<2>(scene));  // placement limits are found while placing
+      ADD_FAILURE() << c.name << ": accepted";
+    } catch (const io::InputError& e) {
+      EXPECT_EQ(e.line(), c.line) << c.name << ": " << e.what();
+      EXPECT_EQ(e.key(), c.key) << c.name << ": " << e.what();
+      EXPECT_NE(e.problem().find(c.message), std::string::npos) << c.name << ": " << e.what();
+    }
+  }
+  // A key_frames tool whose own pose is its first frame's is accepted (the demolition scene).
+  std::string agreeing = std::string(kBase) + tool;
+  agreeing.replace(agreeing.find("position = [0.1, 0.3]"), 21, "position = [0.2, 0.3]");
+  EXPECT_NO_THROW(io::readScene(writeScene("key_frames_agree", agreeing).string()));
+}
+
+// A direction given with components near the double range keeps its true
+// direction (its plain norm overflows to infinity).
+TEST(Scene, DirectionsNearTheDoubleRangeNormaliseExactly) {
+  const io::AnySceneDef any = io::readScene(
+      writeScene("huge_normal", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nnormal = [1e308, -1e308]\n")
+          .string());
+  const auto& n = as<2>(any).planes.at(0).plane.normal;
+  EXPECT_NEAR(n.x(), std::sqrt(0.5), 1e-15);
+  EXPECT_NEAR(n.y(), -std::sqrt(0.5), 1e-15);
+  const io::AnySceneDef tiny = io::readScene(
+      writeScene("tiny_normal", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nnormal = [0.0, 5e-324]\n")
+          .string());
+  EXPECT_EQ(as<2>(tiny).planes.at(0).plane.normal.y(), 1.0);
 }
 
 TEST(Scene, LsdemRunExitsWithCodeTwoAndOneLine) {

@@ -25,8 +25,12 @@ struct MeshReport {
   int nonManifoldVertices = 0;
   /// Faces referring to a vertex index outside [0, vertices.size()).
   int badIndexFaces = 0;
+  /// Vertices with a NaN or infinite coordinate (nothing else is checked then).
+  int nonFiniteVertices = 0;
   /// Faces of zero area (repeated vertex or three collinear vertices, tested exactly).
   int degenerateFaces = 0;
+  /// Index of the first degenerate face, -1 when none.
+  long long firstDegenerateFace = -1;
   /// Two faces intersect other than at a shared edge or vertex.
   bool selfIntersecting = false;
   /// A closed mesh with normals pointing inward: signed volume <= 0, or a shell
@@ -50,7 +54,8 @@ struct MeshReport {
 /// @param mesh triangle mesh, any units.
 /// @return The report; never throws on bad geometry.
 /// @note Order of checks: emptiness, then indices (faces with bad indices stop
-/// the inspection), then degenerate faces and edges, then vertices (only when
+/// the inspection), then finite vertices (non-finite ones stop it: CGAL's
+/// predicates never see them), then degenerate faces and edges, then vertices (only when
 /// edges are manifold and consistent), then self-intersection (only for a
 /// manifold, consistently oriented mesh without degenerate faces, where the
 /// test is well defined), then orientation (only for a closed manifold mesh).

@@ -15,6 +15,8 @@
 
 namespace lsdem::geometry {
 
+struct MeshImportReport;  // MeshIO.h
+
 /// The kinds of shape lsdem builds. Sphere is the circle in 2D, Ellipsoid the
 /// ellipse, Box the rectangle, Superellipsoid the superellipse.
 enum class ShapeKind { Sphere, Box, Ellipsoid, Superellipsoid, Polygon, RandomGrain, Mesh };
@@ -61,11 +63,14 @@ double resolvedSpacing(const ShapeDef<D>& def);
 
 /// @brief The level-set grid of the definition, centred on the origin (meshes
 /// keep their file coordinates, scaled).
+/// @param meshReport when given and the shape is a mesh: what reading it left
+/// out (readMesh).
 template <int D>
-Grid<D> buildGrid(const ShapeDef<D>& def);
+Grid<D> buildGrid(const ShapeDef<D>& def, MeshImportReport* meshReport = nullptr);
 
 /// @brief The shape of the definition: grid, mass properties, nodes, descriptors.
+/// @param meshReport as for buildGrid.
 template <int D>
-std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def);
+std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def, MeshImportReport* meshReport = nullptr);
 
 }  // namespace lsdem::geometry

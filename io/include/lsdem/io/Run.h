@@ -37,6 +37,7 @@ struct RunOptions {
   std::string resumeDir;                    ///< non-empty: continue the run whose outputs are in this folder
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by Ctrl-C) to stop after the current step
   std::function<void(const RunProgress&)> progress;  ///< called every [output] progress_seconds and at the end
+  std::function<void(const std::string&)> note;      ///< called with each line of the scene's notes before the run starts
 };
 
 struct RunResult {

@@ -10,6 +10,7 @@
 #include "lsdem/geometry/Shape.h"
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -100,6 +101,13 @@ struct SceneDef {
   /// The region drawn for planes in ParaView and used for the default output
   /// extent, m (from `[simulation] domain`, or the particles' and tools' box).
   std::optional<geometry::Box<D>> domain;
+  /// Lines of the keys that are checked once the world is built (dotted key
+  /// -> line in `file`), for messages: `simulation.duration`,
+  /// `output.checkpoint_every`, `effects.gravity`, velocities.
+  std::map<std::string, int> keyLines;
+  /// What reading the scene left out, one line each ("FILE:LINE: KEY: mesh
+  /// 'wall.stl': 2 zero-area faces dropped ..."): `lsdem run` prints them.
+  std::vector<std::string> notes;
 };
 
 using AnySceneDef = std::variant<SceneDef<2>, SceneDef<3>>;

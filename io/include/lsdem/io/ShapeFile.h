@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 #include <variant>
+#include <vector>
 
 namespace lsdem::io {
 
@@ -32,7 +33,10 @@ ShapeDecl readShapeFile(const std::string& path);
 /// @brief Builds the declared shape. Problems only geometry can see (a
 /// self-intersecting polygon, a broken mesh, a shape with no interior) become
 /// InputError at the declaration's table.
+/// @param notes when given, receives one line "FILE:LINE: KEY: ..." per thing
+/// left out of a mesh file (zero-area faces dropped).
 template <int D>
-std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& decl);
+std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& decl,
+                                                             std::vector<std::string>* notes = nullptr);
 
 }  // namespace lsdem::io
