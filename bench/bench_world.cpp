@@ -610,4 +610,32 @@ BENCHMARK(BM_WorldPacking2D)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// World::particlesChanged (run after every batch of splits) with N particles
+// of N distinct shapes, as a breakage-heavy run has (every fragment is a shape
+// of its own): the per-shape stiffness cache must keep it linear in N.
+void BM_ParticlesChanged(benchmark::State& state) {
+  const std::size_t n = std::size_t(state.range(0));
+  geometry::ShapeDef<2> def;
+  def.kind = geometry::ShapeKind::Sphere;
+  def.radius = 0.01;
+  def.cellsAcross = 8;
+  def.options.nodesPerCell = 1.0;
+  const auto base = geometry::buildShape(def);
+  WorldDef<2> wdef;
+  wdef.contact.kn = 1e5;
+  World<2> world(wdef);
+  const int perRow = int(std::ceil(std::sqrt(double(n))));
+  for (std::size_t i = 0; i < n; ++i) {
+    ParticleDef<2> p;
+    p.shape = geometry::Shape<2>::fromParts(base->parts());  // a distinct shape, equal to the base
+    p.position = Vec<2>(0.03 * double(int(i) % perRow), 0.03 * double(int(i) / perRow));
+    world.addParticle(p);
+  }
+  for (auto _ : state) world.particlesChanged();
+  state.counters["shapes"] = double(n);
+  state.counters["s/shape"] =
+      benchmark::Counter(double(n) * double(state.iterations()), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_ParticlesChanged)->Arg(2000)->Arg(4000)->Arg(8000)->Arg(16000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 }  // namespace

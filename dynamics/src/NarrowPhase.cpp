@@ -1,6 +1,7 @@
 #include "lsdem/dynamics/NarrowPhase.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -89,10 +90,68 @@ double stiffnessFactor(double directionWeight, double nodeWeight, double weightT
   }
 }
 
+// Puts the node contacts buf.nodes[first, end) (and their work records) in
+// ascending node order: the tree visits nodes in its own order, the output
+// and the shear-history merge want node order (NarrowPhase.h). Within one
+// direction every record has the same owner, so the node index is the key.
+template <int D>
+void sortByNode(ThreadBuffers<D>& buf, std::size_t first) {
+  const std::size_t end = buf.nodes.size();
+  bool sorted = true;
+  for (std::size_t j = first + 1; j < end && sorted; ++j) sorted = buf.nodes[j - 1].node < buf.nodes[j].node;
+  if (sorted) return;
+  const std::size_t n = end - first;
+  buf.order.resize(n);
+  for (std::size_t j = 0; j < n; ++j) buf.order[j] = std::uint32_t(j);
+  std::sort(buf.order.begin(), buf.order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return buf.nodes[first + a].node < buf.nodes[first + b].node; });
+  buf.nodeScratch.assign(buf.nodes.begin() + std::ptrdiff_t(first), buf.nodes.end());
+  buf.workScratch.assign(buf.work.begin() + std::ptrdiff_t(first), buf.work.end());
+  for (std::size_t j = 0; j < n; ++j) {
+    buf.nodes[first + j] = buf.nodeScratch[buf.order[j]];
+    buf.work[first + j] = buf.workScratch[buf.order[j]];
+  }
+}
+
+// Depth-first walk over the cells of a node tree: `reject(cell)` true skips
+// the cell and everything below it; `leaf(begin, end)` gets the tree-order
+// range of each leaf that survives. Returns the cells tested.
+template <int D, class Reject, class Leaf>
+std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, const Leaf& leaf) {
+  if (tree.cells.empty()) return 0;
+  // Depth-first with children pushed in pairs: at most depth + 2 entries.
+  constexpr int kStack = 128;
+  std::array<std::uint32_t, kStack> stack;
+  int top = 0;
+  stack[top++] = 0;
+  std::uint64_t tested = 0;
+  while (top > 0) {
+    const typename geometry::NodeTree<D>::Cell& cell = tree.cells[stack[--top]];
+    ++tested;
+    if (reject(cell)) continue;
+    if (cell.child == 0) {
+      leaf(cell.begin, cell.end);
+    } else {
+      stack[top++] = cell.child + 1;
+      stack[top++] = cell.child;
+    }
+  }
+  return tested;
+}
+
 // eq. 3-4 for one direction: appends to `buf` the nodes of `owner` (pose Ro, xo)
 // inside the level set of `other` (pose Rt, xt), with normals of sign
-// `normalSign` x grad phi_other (so they point from b towards a), and returns
-// the number of nodes tested.
+// `normalSign` x grad phi_other (so they point from b towards a), in node
+// order, and returns the number of nodes tested one by one.
+//
+// Bulk rejection (NodeTree.h): a tree cell's sphere (centre c, radius r) is
+// mapped to the other body's grid frame and skipped, with every node in it,
+// when it misses the other body's bounding sphere, misses its grid box grown
+// by r, or phi_other(c) > L r, with L = other.levelSetSlope() a bound on
+// |grad phi| of the interpolant everywhere: then phi >= phi(c) - L r > 0 at
+// every point of the sphere, so none of its nodes can touch. The test is
+// exact (no contact is lost); nodes of surviving leaves go through the same
+// per-node test as without the tree, so the contacts are the same.
 template <int D, ForceFormulation Formulation>
 std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
@@ -109,68 +168,98 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const Grid<D>& grid = other.grid();
   const Box<D> box = grid.bounds();
   const Vec<D> centre = toGrid.translation;
-  const double reach2 = other.boundingRadius() * other.boundingRadius();
+  const double reach = other.boundingRadius();
+  const double reach2 = reach * reach;
+  const double slope = other.levelSetSlope();
+  // Round-off of the look-up and of the mapped centre, far below any overlap that matters.
+  const double margin = 1e-9 * grid.spacing();
   const double weightToFactor = directionWeight / referenceNodeWeight<D>(owner.contactSpacing());
 
-  // Test every node of the owner.
-  const std::vector<Vec<D>>& nodes = owner.nodes().positions;
+  const geometry::NodeTree<D>& tree = owner.nodeTree();
   const std::vector<double>& weights = owner.nodes().weights;
-  const std::size_t count = nodes.size();
-  for (std::size_t i = 0; i < count; ++i) {
-    const Vec<D> g = map * nodes[i] + shift;
-    if ((g - centre).squaredNorm() > reach2) continue;
-    if (!box.contains(g)) continue;
-    Vec<D> grad;
-    const double phi = grid.valueAndGradient(g, grad);
-    if (!(phi < 0.0)) continue;
-    // A node at a point of zero gradient (a medial point) has no normal: skipped.
-    Vec<D> normal = gradToWorld * grad;
-    const double length = normal.norm();
-    if (!(length > 0.0)) continue;
-    NodeContact<D> c;
-    c.point = Ro * nodes[i] + xo;
-    c.normal = normal / length;
-    c.overlap = -phi;
-    c.node = std::uint32_t(i);
-    c.ownerIsB = ownerIsB;
-    buf.nodes.push_back(c);
-    NodeWork<D> w;
-    w.stiffness = stiffnessFactor<Formulation>(directionWeight, weights[i], weightToFactor);
-    w.area = directionWeight * weights[i];
-    w.gradient = length;
-    buf.work.push_back(w);
-  }
-  return count;
+  const std::size_t first = buf.nodes.size();
+  std::uint64_t tested = 0;
+  const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
+    const Vec<D> g = map * cell.centre + shift;
+    const double r = cell.radius;
+    if ((g - centre).squaredNorm() > (reach + r) * (reach + r)) return true;
+    if (((g.array() < box.lower.array() - r) || (g.array() > box.upper.array() + r)).any()) return true;
+    return grid.value(g) > slope * r + margin;
+  };
+  const auto leaf = [&](std::uint32_t begin, std::uint32_t end) {
+    tested += end - begin;
+    for (std::uint32_t k = begin; k < end; ++k) {
+      const Vec<D>& x = tree.positions[k];
+      const Vec<D> g = map * x + shift;
+      if ((g - centre).squaredNorm() > reach2) continue;
+      if (!box.contains(g)) continue;
+      Vec<D> grad;
+      const double phi = grid.valueAndGradient(g, grad);
+      if (!(phi < 0.0)) continue;
+      // A node at a point of zero gradient (a medial point) has no normal: skipped.
+      Vec<D> normal = gradToWorld * grad;
+      const double length = normal.norm();
+      if (!(length > 0.0)) continue;
+      const std::uint32_t i = tree.order[k];
+      NodeContact<D> c;
+      c.point = Ro * x + xo;
+      c.normal = normal / length;
+      c.overlap = -phi;
+      c.node = i;
+      c.ownerIsB = ownerIsB;
+      buf.nodes.push_back(c);
+      NodeWork<D> w;
+      w.stiffness = stiffnessFactor<Formulation>(directionWeight, weights[i], weightToFactor);
+      w.area = directionWeight * weights[i];
+      w.gradient = length;
+      buf.work.push_back(w);
+    }
+  };
+  buf.cellChecks += walkTree<D>(tree, reject, leaf);
+  sortByNode(buf, first);
+  return tested;
 }
 
 // A particle's nodes against a plane (one-sided, weight 1); `offset` is the
-// signed distance of the particle's centroid from the plane. Returns the number
-// of nodes tested.
+// signed distance of the particle's centroid from the plane. A tree cell
+// whose sphere lies wholly on the free side is skipped (one dot product).
+// Returns the number of nodes tested one by one.
 template <int D, ForceFormulation Formulation>
 std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Plane<D>& plane,
                            double offset, ThreadBuffers<D>& buf) {
   // The plane normal in the owner's body frame: distance = offset + nb . x_body.
   const Vec<D> nb = Ro.transpose() * plane.normal;
   const double weightToFactor = 1.0 / referenceNodeWeight<D>(owner.contactSpacing());
-  const std::vector<Vec<D>>& nodes = owner.nodes().positions;
+  const geometry::NodeTree<D>& tree = owner.nodeTree();
   const std::vector<double>& weights = owner.nodes().weights;
-  const std::size_t count = nodes.size();
-  for (std::size_t i = 0; i < count; ++i) {
-    const double distance = offset + nb.dot(nodes[i]);
-    if (!(distance < 0.0)) continue;
-    NodeContact<D> c;
-    c.point = Ro * nodes[i] + xo;
-    c.normal = plane.normal;
-    c.overlap = -distance;
-    c.node = std::uint32_t(i);
-    c.ownerIsB = 0;
-    buf.nodes.push_back(c);
-    NodeWork<D> w;
-    w.stiffness = stiffnessFactor<Formulation>(1.0, weights[i], weightToFactor);
-    w.area = weights[i];
-    buf.work.push_back(w);
-  }
-  return count;
+  const std::size_t first = buf.nodes.size();
+  std::uint64_t tested = 0;
+  const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
+    return offset + nb.dot(cell.centre) > cell.radius * (1.0 + 1e-12);
+  };
+  const auto leaf = [&](std::uint32_t begin, std::uint32_t end) {
+    tested += end - begin;
+    for (std::uint32_t k = begin; k < end; ++k) {
+      const Vec<D>& x = tree.positions[k];
+      const double distance = offset + nb.dot(x);
+      if (!(distance < 0.0)) continue;
+      const std::uint32_t i = tree.order[k];
+      NodeContact<D> c;
+      c.point = Ro * x + xo;
+      c.normal = plane.normal;
+      c.overlap = -distance;
+      c.node = i;
+      c.ownerIsB = 0;
+      buf.nodes.push_back(c);
+      NodeWork<D> w;
+      w.stiffness = stiffnessFactor<Formulation>(1.0, weights[i], weightToFactor);
+      w.area = weights[i];
+      buf.work.push_back(w);
+    }
+  };
+  buf.cellChecks += walkTree<D>(tree, reject, leaf);
+  sortByNode(buf, first);
+  return tested;
 }
 
 // The dashpot at the edge of a contact. The integrator samples a node's force
@@ -471,6 +560,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     buf.nodes.clear();
     buf.work.clear();
     buf.nodeChecks = 0;
+    buf.cellChecks = 0;
   }
 
   // The previous step's node contacts of a pair key, for friction.
@@ -665,7 +755,11 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
     dissipatedPower_ += rec.dissipatedPower;
   }
   nodeChecks_ = 0;
-  for (const ThreadBuffers<D>& buf : threads_) nodeChecks_ += buf.nodeChecks;
+  cellChecks_ = 0;
+  for (const ThreadBuffers<D>& buf : threads_) {
+    nodeChecks_ += buf.nodeChecks;
+    cellChecks_ += buf.cellChecks;
+  }
 
   // Shear history for the next step: the pair keys, sorted, pointing into nodes_ / shear_.
   history_.clear();

@@ -145,11 +145,15 @@ double tangentialLeverage(const geometry::Shape<D>& shape) {
 template <int D>
 typename World<D>::ShapeStiffness World<D>::shapeStiffness(const std::shared_ptr<const geometry::Shape<D>>& shapePtr) {
   // A hit needs the cached shape alive: an expired entry's address may now
-  // hold another shape. Expired entries are dropped on a miss.
-  for (const CachedStiffness& c : shapeStiffness_) {
-    if (c.shape == shapePtr.get() && !c.alive.expired()) return c.stiffness;
+  // hold another shape (it is then recomputed in place). Expired entries are
+  // dropped whenever the cache has doubled since the last sweep, so a lookup
+  // and the sweeps cost O(1) amortised per shape.
+  const auto hit = shapeStiffness_.find(shapePtr.get());
+  if (hit != shapeStiffness_.end() && !hit->second.alive.expired()) return hit->second.stiffness;
+  if (shapeStiffness_.size() >= 2 * stiffnessSweepSize_ + 64) {
+    std::erase_if(shapeStiffness_, [](const auto& entry) { return entry.second.alive.expired(); });
+    stiffnessSweepSize_ = shapeStiffness_.size();
   }
-  std::erase_if(shapeStiffness_, [](const CachedStiffness& c) { return c.alive.expired(); });
   const geometry::Shape<D>& shape = *shapePtr;
   const ContactLawDef& law = def_.contact;
 
@@ -188,7 +192,7 @@ typename World<D>::ShapeStiffness World<D>::shapeStiffness(const std::shared_ptr
   };
   for (std::size_t j = 0; j < planes_.size(); ++j) consider(contacts_.planeConstants(j), j);
   for (std::size_t j = 0; j < tools_.size(); ++j) consider(contacts_.toolConstants(j), planes_.size() + j);
-  shapeStiffness_.push_back({shapePtr.get(), shapePtr, k});
+  shapeStiffness_[shapePtr.get()] = CachedStiffness{shapePtr, k};
   return k;
 }
 

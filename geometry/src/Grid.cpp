@@ -1,5 +1,7 @@
 #include "lsdem/geometry/Grid.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -43,6 +45,22 @@ Grid<D> Grid<D>::covering(const Box<D>& box, double spacing, int paddingCells, f
     origin[a] = centre[a] - halfCells * spacing;
   }
   return Grid<D>(dims.max(2), origin, spacing, fill);
+}
+
+template <int D>
+double Grid<D>::maxAxisSlope() const {
+  double largest = 0.0;
+  for (int a = 0; a < D; ++a) {
+    if (dims_[a] < 2) continue;
+    // Neighbours along axis a are `stride` apart in storage.
+    std::size_t stride = 1;
+    for (int b = 0; b < a; ++b) stride *= std::size_t(dims_[b]);
+    Index<D> i = Index<D>::Zero();
+    for (std::size_t n = 0; n < values_.size(); ++n, advance(i)) {
+      if (i[a] + 1 < dims_[a]) largest = std::max(largest, std::abs(double(values_[n + stride]) - double(values_[n])));
+    }
+  }
+  return largest / spacing_;
 }
 
 template class Grid<2>;

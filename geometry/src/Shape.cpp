@@ -2,6 +2,7 @@
 
 #include "lsdem/geometry/SurfaceNodes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -89,6 +90,18 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromGridNodesAndMass(Grid<D> grid, Nod
   radius = std::sqrt(radius2);
   shape->boundingRadius_ = radius;
   shape->grid_ = std::move(grid);
+  shape->deriveSearchData();
+  // Nodes in the tree's order, so a tree leaf is a run of consecutive node
+  // indices and the narrow phase finds contacts in node order without sorting.
+  {
+    NodeTree<D>& tree = shape->nodeTree_;
+    NodeSet<D> ordered;
+    ordered.positions = tree.positions;
+    ordered.weights.reserve(tree.order.size());
+    for (std::uint32_t i : tree.order) ordered.weights.push_back(shape->nodes_.weights[i]);
+    shape->nodes_ = std::move(ordered);
+    for (std::uint32_t k = 0; k < tree.order.size(); ++k) tree.order[k] = k;
+  }
   return shape;
 }
 
@@ -128,7 +141,14 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromParts(Parts parts) {
   shape->descriptors_ = parts.descriptors;
   shape->boundingRadius_ = parts.boundingRadius;
   shape->options_ = parts.options;
+  shape->deriveSearchData();
   return shape;
+}
+
+template <int D>
+void Shape<D>::deriveSearchData() {
+  nodeTree_ = NodeTree<D>::build(nodes_.positions);
+  levelSetSlope_ = std::sqrt(double(D)) * std::max(1.0, grid_.maxAxisSlope());
 }
 
 template <int D>
@@ -138,7 +158,8 @@ typename Shape<D>::Parts Shape<D>::parts() const {
 
 template <int D>
 std::size_t Shape<D>::bytes() const {
-  return sizeof(Shape) + grid_.bytes() + nodes_.positions.size() * sizeof(Vec<D>) + nodes_.weights.size() * sizeof(double);
+  return sizeof(Shape) + grid_.bytes() + nodes_.positions.size() * sizeof(Vec<D>) + nodes_.weights.size() * sizeof(double) +
+         nodeTree_.bytes();
 }
 
 template class Shape<2>;

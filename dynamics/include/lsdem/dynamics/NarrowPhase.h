@@ -28,10 +28,17 @@
 ///
 /// Cost. Per pair and direction the node owner's body frame is mapped to the
 /// other body's grid frame by one composed rigid map (the other shape's
-/// bodyToGrid, the inverse of its pose, the owner's pose), so a node costs one
-/// D x D matrix-vector product, a bounding-sphere test (in the grid frame),
-/// a grid-box test and, only for nodes near the other body, one multilinear
-/// look-up. The law's parts (normal model, formulation, friction, damping) are
+/// bodyToGrid, the inverse of its pose, the owner's pose). Bulk rejection
+/// first: the owner's node tree (NodeTree.h, spheres over groups of nodes) is
+/// walked from the root, and a cell whose sphere misses the other body's
+/// bounding sphere or grid box, or lies wholly outside the other body by its
+/// level set (phi at the centre > Shape::levelSetSlope() x radius), is skipped
+/// with every node in it; against a plane, one dot product per cell. Only the
+/// nodes of the leaves that remain are tested one by one: one D x D
+/// matrix-vector product, a bounding-sphere test, a grid-box test and, only
+/// for nodes near the other body, one multilinear look-up. The test is exact,
+/// so the contacts are those of testing every node; they are put back in node
+/// order, so forces and sums are bitwise the same. The law's parts (normal model, formulation, friction, damping) are
 /// template parameters of the kernel, chosen once per compute() call, so a part
 /// the scene does not declare costs nothing per node.
 ///
@@ -96,6 +103,11 @@ struct alignas(64) ThreadBuffers {
   std::vector<NodeContact<D>> nodes;
   std::vector<NodeWork<D>> work;
   std::uint64_t nodeChecks = 0;
+  std::uint64_t cellChecks = 0;  ///< node-tree cells tested (bulk rejection)
+  // Scratch of sortByNode.
+  std::vector<std::uint32_t> order;
+  std::vector<NodeContact<D>> nodeScratch;
+  std::vector<NodeWork<D>> workScratch;
 };
 
 /// Where one task's records went (internal): thread buffer ranges and output offsets.
@@ -223,9 +235,12 @@ class ContactSolver {
   double elasticEnergy() const { return elasticEnergy_; }
   /// @brief Power dissipated by contact damping and sliding friction in the last compute(), W.
   double dissipatedPower() const { return dissipatedPower_; }
-  /// @brief Nodes tested against a level set or plane in the last compute()
-  /// (the narrow phase's unit of work).
+  /// @brief Nodes tested one by one against a level set or plane in the last
+  /// compute() (those of node-tree leaves that bulk rejection kept).
   std::uint64_t nodeChecks() const { return nodeChecks_; }
+  /// @brief Node-tree cells tested in the last compute() (bulk rejection; one
+  /// level-set look-up each against a level set, one dot product against a plane).
+  std::uint64_t cellChecks() const { return cellChecks_; }
   /// @brief Node contacts carrying shear history into the next compute().
   std::size_t historySize() const { return history_.empty() ? 0 : shear_.size(); }
   /// @brief Forgets every shear history (e.g. after a restart without it).
@@ -256,7 +271,7 @@ class ContactSolver {
   std::size_t particlePairCount_ = 0, planePairCount_ = 0;
   std::size_t particleCount_ = 0, planeCount_ = 0, toolCount_ = 0;
   double elasticEnergy_ = 0.0, dissipatedPower_ = 0.0;
-  std::uint64_t nodeChecks_ = 0;
+  std::uint64_t nodeChecks_ = 0, cellChecks_ = 0;
   // Scratch reused between steps.
   std::vector<detail::ThreadBuffers<D>> threads_;
   std::vector<detail::TaskOutput> tasks_;

@@ -33,6 +33,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace lsdem::dynamics {
@@ -323,11 +324,12 @@ class World {
   // Time step: per particle effective contact stiffness (N/m), cached per shape.
   std::vector<ShapeStiffness> stiffness_;
   struct CachedStiffness {
-    const geometry::Shape<D>* shape = nullptr;      ///< address, compared only while `alive`
     std::weak_ptr<const geometry::Shape<D>> alive;  ///< expired once the shape is freed
     ShapeStiffness stiffness;
   };
-  std::vector<CachedStiffness> shapeStiffness_;
+  // By the shape's address, valid only while `alive`.
+  std::unordered_map<const geometry::Shape<D>*, CachedStiffness> shapeStiffness_;
+  std::size_t stiffnessSweepSize_ = 0;  // cache size after the last sweep of expired entries
   double dt_ = 0.0;
   double dtCritical_ = std::numeric_limits<double>::infinity();
   TimeStepLimit limit_;                   // what sets dtCritical_

@@ -98,10 +98,7 @@ class Grid {
   /// Outside the node box the answer is phi(c) + |x - c|, with c the closest
   /// point of the box: continuous, positive far away when the grid's border is
   /// outside the shape, and growing like a distance.
-  double value(const Vec<D>& x) const {
-    Vec<D> g;
-    return valueAndGradient(x, g);
-  }
+  double value(const Vec<D>& x) const;
 
   /// @brief Multilinear value at world point x and its analytic gradient
   /// (world units per world unit) written to `grad`. Inside the box the gradient
@@ -109,8 +106,16 @@ class Grid {
   /// is the derivative of the extension described at value().
   double valueAndGradient(const Vec<D>& x, Vec<D>& grad) const;
 
+  /// @brief The largest |difference of neighbouring values| / spacing along
+  /// any axis (dimensionless; 1 for an exact distance sampled on the grid).
+  /// Every partial derivative of the multilinear interpolant is a convex
+  /// combination of such differences, so |d phi / d x_a| <= this inside the
+  /// box (and <= 1 for the distance term of the extension outside it).
+  double maxAxisSlope() const;
+
  private:
   double interpolate(const Vec<D>& g, Vec<D>& gradCells) const;
+  double interpolateValue(const Vec<D>& g) const;
 
   Index<D> dims_ = Index<D>::Zero();
   Vec<D> origin_ = Vec<D>::Zero();
@@ -160,6 +165,49 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>& gradCells) const {
     gradCells[2] = y1 - y0;
     return y0 + t[2] * (y1 - y0);
   }
+}
+
+// The value alone, with the same arithmetic as interpolate() (so value() and
+// valueAndGradient() agree bit for bit).
+template <int D>
+inline double Grid<D>::interpolateValue(const Vec<D>& g) const {
+  Index<D> c;
+  Vec<D> t;
+  for (int a = 0; a < D; ++a) {
+    const int ci = std::clamp(int(std::floor(g[a])), 0, dims_[a] - 2);
+    c[a] = ci;
+    t[a] = g[a] - double(ci);
+  }
+  const std::size_t n0 = linear(c);
+  if constexpr (D == 2) {
+    const std::size_t sy = std::size_t(dims_[0]);
+    const double v00 = values_[n0], v10 = values_[n0 + 1];
+    const double v01 = values_[n0 + sy], v11 = values_[n0 + sy + 1];
+    const double a0 = v00 + t[0] * (v10 - v00);
+    const double a1 = v01 + t[0] * (v11 - v01);
+    return a0 + t[1] * (a1 - a0);
+  } else {
+    const std::size_t sy = std::size_t(dims_[0]);
+    const std::size_t sz = sy * std::size_t(dims_[1]);
+    const double v000 = values_[n0], v100 = values_[n0 + 1];
+    const double v010 = values_[n0 + sy], v110 = values_[n0 + sy + 1];
+    const double v001 = values_[n0 + sz], v101 = values_[n0 + sz + 1];
+    const double v011 = values_[n0 + sz + sy], v111 = values_[n0 + sz + sy + 1];
+    const double x00 = v000 + t[0] * (v100 - v000), x10 = v010 + t[0] * (v110 - v010);
+    const double x01 = v001 + t[0] * (v101 - v001), x11 = v011 + t[0] * (v111 - v011);
+    const double y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
+    return y0 + t[2] * (y1 - y0);
+  }
+}
+
+template <int D>
+inline double Grid<D>::value(const Vec<D>& x) const {
+  const Vec<D> g = toGrid(x);
+  const Vec<D> upper = (dims_ - 1).template cast<double>().matrix();
+  const Vec<D> gc = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
+  const double inside = interpolateValue(gc);
+  if (gc == g) return inside;
+  return inside + (spacing_ * (g - gc)).norm();
 }
 
 template <int D>

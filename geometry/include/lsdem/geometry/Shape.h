@@ -17,6 +17,7 @@
 #include "lsdem/geometry/Grid.h"
 #include "lsdem/geometry/MassProperties.h"
 #include "lsdem/geometry/NodeSet.h"
+#include "lsdem/geometry/NodeTree.h"
 #include "lsdem/geometry/Types.h"
 
 #include <cstddef>
@@ -105,6 +106,15 @@ class Shape {
   double boundingRadius() const { return boundingRadius_; }
   /// Spacing of the contact law's reference node weight (ShapeOptions::contactSpacing), world units.
   double contactSpacing() const { return options_.contactSpacing > 0.0 ? options_.contactSpacing : grid_.spacing(); }
+  /// Bounding-sphere tree over the surface nodes (NodeTree.h), body frame:
+  /// the narrow phase's bulk rejection.
+  const NodeTree<D>& nodeTree() const { return nodeTree_; }
+  /// A bound on |grad phi| of the level set's interpolant everywhere (inside
+  /// the grid box and in its extension outside): sqrt(D) x max(1, the grid's
+  /// largest axis slope, Grid::maxAxisSlope). So phi(y) >= phi(x) - this x |y - x|
+  /// for any two points, which lets one look-up at a sphere's centre show
+  /// that every point of the sphere is outside the shape.
+  double levelSetSlope() const { return levelSetSlope_; }
   /// Options the shape was made with.
   const ShapeOptions& options() const { return options_; }
   /// Bytes held by the shape (grid values and nodes).
@@ -130,6 +140,10 @@ class Shape {
   Descriptors<D> descriptors_;
   double boundingRadius_ = 0.0;
   ShapeOptions options_;
+  // Derived on construction (not stored in grain files or checkpoints).
+  NodeTree<D> nodeTree_;
+  double levelSetSlope_ = 0.0;
+  void deriveSearchData();
 };
 
 extern template class Shape<2>;

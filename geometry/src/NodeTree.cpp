@@ -1,0 +1,69 @@
+#include "lsdem/geometry/NodeTree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace lsdem::geometry {
+
+template <int D>
+NodeTree<D> NodeTree<D>::build(const std::vector<Vec<D>>& nodes, int leafSize) {
+  if (leafSize < 1) throw std::invalid_argument("node tree: leaf size must be >= 1, got " + std::to_string(leafSize));
+  NodeTree tree;
+  const std::uint32_t n = std::uint32_t(nodes.size());
+  if (n == 0) return tree;
+  tree.order.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) tree.order[i] = i;
+  // A binary tree with leaves of >= leafSize / 2 nodes has fewer than 4 n / leafSize cells.
+  tree.cells.reserve(std::size_t(4) * n / std::size_t(leafSize) + 2);
+  tree.cells.push_back(Cell{Vec<D>::Zero(), 0.0, 0, n, 0});
+
+  // Breadth-first over cells: children are appended in pairs, so a cell's
+  // two children are adjacent; `level` tracks the depth reached.
+  struct Pending {
+    std::uint32_t cell;
+    int level;
+  };
+  std::vector<Pending> queue{{0, 0}};
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    const auto [c, level] = queue[q];
+    tree.depth = std::max(tree.depth, level);
+    const std::uint32_t begin = tree.cells[c].begin, end = tree.cells[c].end;
+    // Bounding box of the cell's nodes: its centre, then the radius about it.
+    Vec<D> lo = nodes[tree.order[begin]], hi = lo;
+    for (std::uint32_t k = begin + 1; k < end; ++k) {
+      lo = lo.cwiseMin(nodes[tree.order[k]]);
+      hi = hi.cwiseMax(nodes[tree.order[k]]);
+    }
+    const Vec<D> centre = 0.5 * (lo + hi);
+    double r2 = 0.0;
+    for (std::uint32_t k = begin; k < end; ++k) r2 = std::max(r2, (nodes[tree.order[k]] - centre).squaredNorm());
+    tree.cells[c].centre = centre;
+    // Rounded up so the sphere holds every node despite the rounding of its own arithmetic.
+    tree.cells[c].radius = std::sqrt(r2) * (1.0 + 1e-12) + 1e-300;
+    if (end - begin <= std::uint32_t(leafSize)) continue;
+    // Split at the median of the longest axis (ties by index, so the tree is deterministic).
+    int axis = 0;
+    (hi - lo).maxCoeff(&axis);
+    const std::uint32_t mid = begin + (end - begin) / 2;
+    std::nth_element(tree.order.begin() + begin, tree.order.begin() + mid, tree.order.begin() + end,
+                     [&](std::uint32_t a, std::uint32_t b) {
+                       return nodes[a][axis] < nodes[b][axis] || (nodes[a][axis] == nodes[b][axis] && a < b);
+                     });
+    const std::uint32_t child = std::uint32_t(tree.cells.size());
+    tree.cells[c].child = child;
+    tree.cells.push_back(Cell{Vec<D>::Zero(), 0.0, begin, mid, 0});
+    tree.cells.push_back(Cell{Vec<D>::Zero(), 0.0, mid, end, 0});
+    queue.push_back({child, level + 1});
+    queue.push_back({child + 1, level + 1});
+  }
+  tree.positions.reserve(n);
+  for (std::uint32_t i : tree.order) tree.positions.push_back(nodes[i]);
+  return tree;
+}
+
+template struct NodeTree<2>;
+template struct NodeTree<3>;
+
+}  // namespace lsdem::geometry
