@@ -147,9 +147,12 @@ std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, 
 // Bulk rejection (NodeTree.h): a tree cell's sphere (centre c, radius r) is
 // mapped to the other body's grid frame and skipped, with every node in it,
 // when it misses the other body's bounding sphere, misses its grid box grown
-// by r, or phi_other(c) > L r, with L = other.levelSetSlope() a bound on
-// |grad phi| of the interpolant everywhere: then phi >= phi(c) - L r > 0 at
-// every point of the sphere, so none of its nodes can touch. The test is
+// by r, or phi_other(c') > L r, with c' the point of the grid box closest to
+// c (c itself when inside) and L = other.levelSetSlope() the largest
+// |grad phi| of the interpolant in the box: a node y in the box is no farther
+// from c' than from c (projection onto a convex set), the segment from c' to
+// y stays in the box, so phi(y) >= phi(c') - L r > 0; nodes outside the box
+// are never tested. So none of the cell's nodes can touch. The test is
 // exact (no contact is lost); nodes of surviving leaves go through the same
 // per-node test as without the tree, so the contacts are the same.
 template <int D, ForceFormulation Formulation>
@@ -184,7 +187,11 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     const double r = cell.radius;
     if ((g - centre).squaredNorm() > (reach + r) * (reach + r)) return true;
     if (((g.array() < box.lower.array() - r) || (g.array() > box.upper.array() + r)).any()) return true;
-    return grid.value(g) > slope * r + margin;
+    // The slope bound holds along segments in the grid box, and only nodes in
+    // the box are tested: a centre outside the box is replaced by its closest
+    // point of the box, no farther from any node in the box.
+    const Vec<D> inside = g.cwiseMax(box.lower).cwiseMin(box.upper);
+    return grid.value(inside) > slope * r + margin;
   };
   const auto leaf = [&](std::uint32_t begin, std::uint32_t end) {
     tested += end - begin;
@@ -193,9 +200,11 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       const Vec<D> g = map * x + shift;
       if ((g - centre).squaredNorm() > reach2) continue;
       if (!box.contains(g)) continue;
+      // The value first; the gradient only for the few nodes inside (value()
+      // and valueAndGradient() agree bit for bit).
+      if (!(grid.value(g) < 0.0)) continue;
       Vec<D> grad;
       const double phi = grid.valueAndGradient(g, grad);
-      if (!(phi < 0.0)) continue;
       // A node at a point of zero gradient (a medial point) has no normal: skipped.
       Vec<D> normal = gradToWorld * grad;
       const double length = normal.norm();

@@ -1,6 +1,7 @@
 #include "lsdem/geometry/Grid.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -48,19 +49,35 @@ Grid<D> Grid<D>::covering(const Box<D>& box, double spacing, int paddingCells, f
 }
 
 template <int D>
-double Grid<D>::maxAxisSlope() const {
-  double largest = 0.0;
+double Grid<D>::maxGradientNorm() const {
   for (int a = 0; a < D; ++a) {
-    if (dims_[a] < 2) continue;
-    // Neighbours along axis a are `stride` apart in storage.
-    std::size_t stride = 1;
-    for (int b = 0; b < a; ++b) stride *= std::size_t(dims_[b]);
-    Index<D> i = Index<D>::Zero();
-    for (std::size_t n = 0; n < values_.size(); ++n, advance(i)) {
-      if (i[a] + 1 < dims_[a]) largest = std::max(largest, std::abs(double(values_[n + stride]) - double(values_[n])));
+    if (dims_[a] < 2) return 0.0;
+  }
+  std::array<std::size_t, D> stride;
+  stride[0] = 1;
+  for (int a = 1; a < D; ++a) stride[a] = stride[a - 1] * std::size_t(dims_[a - 1]);
+  double largest2 = 0.0;
+  Index<D> i = Index<D>::Zero();
+  for (std::size_t n = 0; n < values_.size(); ++n, advance(i)) {
+    bool cell = true;  // i is the lower corner of a cell
+    for (int a = 0; a < D; ++a) cell = cell && i[a] + 1 < dims_[a];
+    if (!cell) continue;
+    // The cell's 2^D corners; at each, the differences along the edges leaving it.
+    for (int corner = 0; corner < (1 << D); ++corner) {
+      std::size_t at = n;
+      for (int a = 0; a < D; ++a) {
+        if (corner & (1 << a)) at += stride[a];
+      }
+      double g2 = 0.0;
+      for (int a = 0; a < D; ++a) {
+        const std::size_t other = (corner & (1 << a)) ? at - stride[a] : at + stride[a];
+        const double d = double(values_[other]) - double(values_[at]);
+        g2 += d * d;
+      }
+      largest2 = std::max(largest2, g2);
     }
   }
-  return largest / spacing_;
+  return std::sqrt(largest2) / spacing_;
 }
 
 template class Grid<2>;

@@ -148,7 +148,7 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromParts(Parts parts) {
 template <int D>
 void Shape<D>::deriveSearchData() {
   nodeTree_ = NodeTree<D>::build(nodes_.positions);
-  levelSetSlope_ = std::sqrt(double(D)) * std::max(1.0, grid_.maxAxisSlope());
+  levelSetSlope_ = grid_.maxGradientNorm();
 }
 
 template <int D>

@@ -59,7 +59,8 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
       .field("particles", world.particles().size())
       .field("contacts", contacts.pairContacts().size())
       .field("node_contacts", contacts.nodeContacts().size())
-      .field("node_checks_last_step", static_cast<long long>(contacts.nodeChecks()));
+      .field("node_checks_last_step", static_cast<long long>(contacts.nodeChecks()))
+      .field("cell_checks_last_step", static_cast<long long>(contacts.cellChecks()));
 
   // Mass: what is in the world and what left it.
   w.key("mass").beginObject()

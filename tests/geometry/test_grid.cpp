@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -113,6 +114,41 @@ TEST(Grid, SphereDistanceAndNormal) {
     EXPECT_NEAR(v, -0.02, 1e-3);
     EXPECT_GT(grad.normalized().dot(dir), 0.999);
   }
+}
+
+// maxGradientNorm is the supremum of |grad phi| of the interpolant: exact for
+// a linear field (|(0.5, -2, 1.5)| = 2.55); for a field with kinks (a sphere's
+// distance plus a ripple) no point of the box exceeds it, the corners of
+// some cell reach it, and values differ by at most it times the distance.
+TEST(Grid, MaxGradientNormBoundsTheInterpolant) {
+  const Grid<3> linear = sampled(Grid<3>(Index<3>(6, 7, 8), Vec<3>(-0.3, 0.1, -1), 0.2),
+                                 [](const Vec<3>& x) { return 0.5 * x[0] - 2.0 * x[1] + 1.5 * x[2] + 0.25; });
+  EXPECT_NEAR(linear.maxGradientNorm(), std::sqrt(0.25 + 4.0 + 2.25), 1e-5);
+
+  const Grid<3> g = sampled(Grid<3>(Index<3>::Constant(12), Vec<3>::Constant(-1.1), 0.2),
+                            [](const Vec<3>& x) { return x.norm() - 0.7 + 0.1 * std::sin(3 * x[0]); });
+  const double bound = g.maxGradientNorm();
+  EXPECT_GT(bound, 1.0);
+  EXPECT_LT(bound, 2.0);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Box<3> b = g.bounds();
+  const auto inBox = [&] {
+    Vec<3> x;
+    for (int a = 0; a < 3; ++a) x[a] = b.lower[a] + u(rng) * (b.upper[a] - b.lower[a]);
+    return x;
+  };
+  double largest = 0.0, steepest = 0.0;
+  for (int s = 0; s < 20000; ++s) {
+    const Vec<3> x = inBox(), y = inBox();
+    Vec<3> grad;
+    g.valueAndGradient(x, grad);
+    largest = std::max(largest, grad.norm());
+    steepest = std::max(steepest, std::abs(g.value(y) - g.value(x)) / (y - x).norm());
+  }
+  EXPECT_LE(largest, bound * (1.0 + 1e-12));
+  EXPECT_GT(largest, 0.9 * bound);  // random points come close to the corner maximum
+  EXPECT_LE(steepest, bound * (1.0 + 1e-12));
 }
 
 // Outside the node box the value keeps growing like a distance, continuously.

@@ -106,12 +106,13 @@ class Grid {
   /// is the derivative of the extension described at value().
   double valueAndGradient(const Vec<D>& x, Vec<D>& grad) const;
 
-  /// @brief The largest |difference of neighbouring values| / spacing along
-  /// any axis (dimensionless; 1 for an exact distance sampled on the grid).
-  /// Every partial derivative of the multilinear interpolant is a convex
-  /// combination of such differences, so |d phi / d x_a| <= this inside the
-  /// box (and <= 1 for the distance term of the extension outside it).
-  double maxAxisSlope() const;
+  /// @brief The largest |grad phi| of the multilinear interpolant inside the
+  /// node box (world units per world unit): exact. In a cell each component of
+  /// the gradient is multilinear in the other coordinates and does not depend
+  /// on its own, so |grad|^2 is convex along every axis and its maximum over
+  /// the cell is at a corner, where the gradient is the cell's edge
+  /// differences from that corner over the spacing.
+  double maxGradientNorm() const;
 
  private:
   double interpolate(const Vec<D>& g, Vec<D>& gradCells) const;

@@ -109,11 +109,11 @@ class Shape {
   /// Bounding-sphere tree over the surface nodes (NodeTree.h), body frame:
   /// the narrow phase's bulk rejection.
   const NodeTree<D>& nodeTree() const { return nodeTree_; }
-  /// A bound on |grad phi| of the level set's interpolant everywhere (inside
-  /// the grid box and in its extension outside): sqrt(D) x max(1, the grid's
-  /// largest axis slope, Grid::maxAxisSlope). So phi(y) >= phi(x) - this x |y - x|
-  /// for any two points, which lets one look-up at a sphere's centre show
-  /// that every point of the sphere is outside the shape.
+  /// The largest |grad phi| of the level set's interpolant inside the grid
+  /// box (Grid::maxGradientNorm, exact; about 1 for a distance). So
+  /// phi(y) >= phi(x) - this x |y - x| for any two points x, y of the box (a
+  /// segment in the box), which lets one look-up at a sphere's centre show
+  /// that every point of the sphere in the box is outside the shape.
   double levelSetSlope() const { return levelSetSlope_; }
   /// Options the shape was made with.
   const ShapeOptions& options() const { return options_; }
