@@ -25,6 +25,8 @@
 #include <map>
 #include <cerrno>
 #include <cstring>
+
+#include <zlib.h>
 #include <sstream>
 #include <variant>
 
@@ -40,7 +42,8 @@ using Clock = std::chrono::steady_clock;
 using geometry::Vec;
 
 constexpr char kCheckpointMagic[8] = {'L', 'S', 'D', 'E', 'M', 'C', 'K', 'P'};
-constexpr std::uint32_t kCheckpointVersion = 1;
+// 2: a CRC-32 of everything before it closes the file.
+constexpr std::uint32_t kCheckpointVersion = 2;
 constexpr const char* kCheckpointFile = "checkpoint.lsc";
 // The most steps a scene may imply (duration / dt, or steps); longer runs go
 // in parts with --steps and --resume (docs/reliability.md).
@@ -62,6 +65,43 @@ std::uint64_t fnv1a(const std::string& bytes) {
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
   return h;
+}
+
+std::uint32_t crc32Of(const char* data, std::size_t size) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  while (size > 0) {  // zlib takes a uInt length
+    const uInt chunk = uInt(std::min<std::size_t>(size, std::size_t(1) << 30));
+    crc = crc32(crc, reinterpret_cast<const Bytef*>(data), chunk);
+    data += chunk;
+    size -= chunk;
+  }
+  return std::uint32_t(crc);
+}
+
+std::string readWholeFile(const std::string& path);
+
+// A checkpoint's bytes, its magic, format version and CRC-32 checked, the
+// checksum removed.
+std::string readCheckpointFile(const std::string& path) {
+  std::string bytes = readWholeFile(path);
+  if (bytes.size() < 8 || std::memcmp(bytes.data(), kCheckpointMagic, 8) != 0) {
+    throw InputError(path, 0, "", "not an lsdem checkpoint");
+  }
+  if (bytes.size() < 8 + 4 + 4) throw InputError(path, 0, "", "truncated checkpoint");
+  std::uint32_t version = 0;
+  std::memcpy(&version, bytes.data() + 8, 4);
+  if (version != kCheckpointVersion) {
+    throw InputError(path, 0, "", "checkpoint of another lsdem version (format " + std::to_string(version) +
+                                      ", this lsdem reads " + std::to_string(kCheckpointVersion) + ")");
+  }
+  std::uint32_t stored = 0;
+  std::memcpy(&stored, bytes.data() + bytes.size() - 4, 4);
+  if (crc32Of(bytes.data(), bytes.size() - 4) != stored) {
+    throw InputError(path, 0, "",
+                     "damaged checkpoint: its checksum does not match its contents (a partial copy, a bit flip or an edit)");
+  }
+  bytes.resize(bytes.size() - 4);
+  return bytes;
 }
 
 std::string readWholeFile(const std::string& path) {
@@ -764,14 +804,17 @@ class Runner {
     }
     putBytes(std::string(state.bytes().begin(), state.bytes().end()));
     putBytes(std::string(runner.bytes().begin(), runner.bytes().end()));
-    writeFileAtomically(out_ / kCheckpointFile, out.str());
+    std::string file = out.str();
+    const std::uint32_t crc = crc32Of(file.data(), file.size());
+    file.append(reinterpret_cast<const char*>(&crc), 4);
+    writeFileAtomically(out_ / kCheckpointFile, file);
     wallSeconds_ = secondsSince(start_);
     writeSummary(false);
   }
 
   std::map<std::string, std::uint64_t> loadCheckpoint() {
     const std::string path = (out_ / kCheckpointFile).string();
-    const std::string bytes = readWholeFile(path);
+    const std::string bytes = readCheckpointFile(path);
     std::size_t pos = 0;
     const auto fail = [&](const std::string& what) { throw InputError(path, 0, "", what); };
     const auto take = [&](std::size_t n) {
@@ -790,9 +833,8 @@ class Runner {
       const char* p = take(std::size_t(n));
       return std::string(p, std::size_t(n));
     };
-    if (bytes.size() < 8 || std::memcmp(bytes.data(), kCheckpointMagic, 8) != 0) fail("not an lsdem checkpoint");
     take(8);
-    if (get(std::uint32_t{}) != kCheckpointVersion) fail("checkpoint of another lsdem version");
+    get(std::uint32_t{});  // the version, checked by readCheckpointFile
     if (get(std::int32_t{}) != D) fail("checkpoint of another dimension");
     getBytes();  // scene path, read by runScene
     get(std::uint64_t{});
@@ -864,11 +906,9 @@ class Runner {
 std::string checkpointScene(const std::string& dir) {
   const std::string path = (fs::path(dir) / kCheckpointFile).string();
   if (!fs::exists(path)) throw InputError(path, 0, "", "no checkpoint to resume from (is this a run's output folder?)");
-  const std::string bytes = readWholeFile(path);
+  const std::string bytes = readCheckpointFile(path);
   std::size_t pos = 8 + 4 + 4;
-  if (bytes.size() < pos + 8 || std::memcmp(bytes.data(), kCheckpointMagic, 8) != 0) {
-    throw InputError(path, 0, "", "not an lsdem checkpoint");
-  }
+  if (bytes.size() < pos + 8) throw InputError(path, 0, "", "truncated checkpoint");
   std::uint64_t n = 0;
   std::memcpy(&n, bytes.data() + pos, 8);
   pos += 8;
@@ -877,7 +917,12 @@ std::string checkpointScene(const std::string& dir) {
   pos += std::size_t(n);
   std::uint64_t hash = 0;
   std::memcpy(&hash, bytes.data() + pos, 8);
-  if (!fs::exists(scene)) throw InputError(path, 0, "", "its scene file " + scene + " no longer exists");
+  // A scene file that moved: the copy the run keeps in its output folder, when it is the same scene.
+  const fs::path copy = fs::path(dir) / "scene.toml";
+  if (!fs::exists(scene)) {
+    if (fs::exists(copy) && fnv1a(readWholeFile(copy.string())) == hash) return copy.string();
+    throw InputError(path, 0, "", "its scene file " + scene + " no longer exists (nor does an unchanged copy in " + dir + ")");
+  }
   if (fnv1a(readWholeFile(scene)) != hash) {
     throw InputError(scene, 0, "", "the scene file changed since the checkpoint in " + dir + " was written");
   }

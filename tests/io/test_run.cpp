@@ -261,6 +261,53 @@ TEST(Run, ResumeRefusesAChangedSceneAndAMissingCheckpoint) {
   }
 }
 
+// A checkpoint carries a CRC-32: every single-bit flip at 24 places spread
+// over the file is refused as damaged (none resumes into another run), and
+// so is a truncated copy; a scene file that moved resumes from the unchanged
+// copy the run keeps in its output folder.
+TEST(Run, DamagedCheckpointsAreRefusedAndMovedScenesResume) {
+  TempDir dir("resume_damaged");
+  const fs::path scene = writeScene(dir.path, kCrushScene);
+  io::RunOptions run;
+  run.scene = scene.string();
+  run.outDir = (dir.path / "out").string();
+  run.steps = 5;
+  io::runScene(run);
+  const fs::path checkpoint = dir.path / "out" / "checkpoint.lsc";
+  const std::string good = readFile(checkpoint);
+  const auto refusal = [&](const std::string& bytes) {
+    std::ofstream(checkpoint, std::ios::binary | std::ios::trunc) << bytes;
+    io::RunOptions resume;
+    resume.resumeDir = run.outDir;
+    resume.steps = 6;
+    try {
+      io::runScene(resume);
+    } catch (const io::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("resumed");
+  };
+  for (int k = 0; k < 24; ++k) {
+    std::string bad = good;
+    const std::size_t at = 8 + (bad.size() - 9) * std::size_t(k) / 23;  // past the magic, to the last byte
+    bad[at] = char(bad[at] ^ (1 << (k % 8)));
+    const std::string what = refusal(bad);
+    EXPECT_TRUE(what.find("damaged checkpoint") != std::string::npos ||
+                what.find("another lsdem version") != std::string::npos)
+        << "byte " << at << ": " << what;
+  }
+  EXPECT_NE(refusal(good.substr(0, good.size() / 2)).find("damaged checkpoint"), std::string::npos);
+
+  // The scene moves away; the copy in the output folder is the same scene.
+  std::ofstream(checkpoint, std::ios::binary | std::ios::trunc) << good;
+  fs::rename(scene, dir.path / "moved.toml");
+  io::RunOptions resume;
+  resume.resumeDir = run.outDir;
+  resume.steps = 6;
+  const io::RunResult r = io::runScene(resume);
+  EXPECT_EQ(r.steps, 11u);  // 5, then 6 more
+}
+
 TEST(Run, DistributionsAtChosenTimes) {
   TempDir dir("times");
   std::string text = kCrushScene;
