@@ -58,6 +58,9 @@ NodeTree<D> NodeTree<D>::build(const std::vector<Vec<D>>& nodes, int leafSize) {
     queue.push_back({child, level + 1});
     queue.push_back({child + 1, level + 1});
   }
+  // Median splits halve the count per level: 2^32 nodes give 30 levels; the
+  // narrow phase's walk keeps depth + 2 cells on a fixed stack of 128.
+  if (tree.depth > 120) throw std::logic_error("node tree: depth " + std::to_string(tree.depth) + " over 120");
   tree.positions.reserve(n);
   for (std::uint32_t i : tree.order) tree.positions.push_back(nodes[i]);
   return tree;

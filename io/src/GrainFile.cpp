@@ -21,6 +21,8 @@
 #include <system_error>
 #include <type_traits>
 
+#include <zlib.h>
+
 namespace lsdem::io {
 namespace {
 
@@ -35,7 +37,9 @@ using geometry::Vec;
 
 /// Format version written by this code (text key `lsdem_grain`, binary header).
 constexpr std::uint32_t kVersion = 1;         // text form (contact_spacing is an optional key)
-constexpr std::uint32_t kBinaryVersion = 2;   // 2 adds options.contactSpacing; version 1 is still read
+// 2 adds options.contactSpacing; 3 a closing CRC-32 of every byte before it.
+// Versions 1 and 2 are still read.
+constexpr std::uint32_t kBinaryVersion = 3;
 /// Binary magic: a non-ASCII first byte (so text and binary are told apart by
 /// one byte), the name, and a newline that catches text-mode line-end mangling.
 constexpr char kMagic[8] = {'\x89', 'L', 'S', 'D', 'E', 'M', 'G', '\n'};
@@ -219,6 +223,14 @@ std::string binaryGrain(const Shape<D>& shape) {
   putRaw<double>(b, p.options.nodesPerCell);
   putRaw<std::uint32_t>(b, p.options.massMethod == MassMethod::Paper ? 0u : 1u);
   putRaw<double>(b, p.options.contactSpacing);
+  // Checksum of everything above (zlib takes at most a uInt at a time).
+  uLong crc = crc32(0L, Z_NULL, 0);
+  for (std::size_t at = 0; at < b.size();) {
+    const std::size_t n = std::min<std::size_t>(b.size() - at, std::size_t(1) << 30);
+    crc = crc32(crc, reinterpret_cast<const Bytef*>(b.data() + at), uInt(n));
+    at += n;
+  }
+  putRaw<std::uint32_t>(b, std::uint32_t(crc));
   return b;
 }
 
@@ -233,7 +245,10 @@ class BinaryIn {
   void bytes(char* dst, std::size_t n, const std::string& key) {
     in_.read(dst, std::streamsize(n));
     if (std::size_t(in_.gcount()) != n) fail(key, "the file ends early (truncated binary grain)");
+    crc_ = crc32(crc_, reinterpret_cast<const Bytef*>(dst), uInt(n));
   }
+  /// CRC-32 of every byte read so far.
+  std::uint32_t crc() const { return std::uint32_t(crc_); }
   template <class T>
   T raw(const std::string& key) {
     char b[sizeof(T)];
@@ -280,6 +295,7 @@ class BinaryIn {
  private:
   std::istream& in_;
   const std::string& source_;
+  uLong crc_ = crc32(0L, Z_NULL, 0);
 };
 
 /// Reads the binary header after the first byte: magic, version, dimension.
@@ -288,8 +304,8 @@ std::uint32_t readBinaryHeader(BinaryIn& b, std::uint32_t* versionOut = nullptr)
   b.bytes(magic, sizeof(magic), "magic");
   if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) b.fail("magic", "not an lsdem binary grain (bad magic)");
   const auto version = b.raw<std::uint32_t>("version");
-  if (version != kBinaryVersion && version != 1) {
-    b.fail("version", "binary grain version " + std::to_string(version) + " is not supported (this lsdem reads 1 and " +
+  if (version < 1 || version > kBinaryVersion) {
+    b.fail("version", "binary grain version " + std::to_string(version) + " is not supported (this lsdem reads 1 to " +
                           std::to_string(kBinaryVersion) + ")");
   }
   if (versionOut) *versionOut = version;
@@ -345,8 +361,9 @@ std::shared_ptr<const Shape<D>> readBinary(std::istream& in, const std::string& 
   p.bodyToGrid.translation = b.vec<D>("body_to_grid_translation");
   const auto nodes = b.raw<std::uint64_t>("body_nodes");
   if (nodes == 0 || nodes > kMaxNodes) b.fail("body_nodes", "node count " + std::to_string(nodes) + " out of range");
-  p.nodes.positions.resize(std::size_t(nodes));
+  // Read before anything is sized by the count: a false count fails on the short read.
   const std::vector<double> xyz = b.array<double>(nodes * D, "body_nodes");
+  p.nodes.positions.resize(std::size_t(nodes));
   for (std::size_t i = 0; i < nodes; ++i) {
     for (int a = 0; a < D; ++a) p.nodes.positions[i][a] = xyz[i * D + a];
   }
@@ -371,6 +388,17 @@ std::shared_ptr<const Shape<D>> readBinary(std::istream& in, const std::string& 
   if (version >= 2) {
     p.options.contactSpacing = b.real("contact_spacing");
     if (!(p.options.contactSpacing >= 0.0)) b.fail("contact_spacing", "must be >= 0");
+  }
+  if (version >= 3) {
+    const std::uint32_t computed = b.crc();
+    if (b.raw<std::uint32_t>("checksum") != computed) {
+      b.fail("checksum", "does not match the contents: the file is damaged (a bit flip, a partial copy or an edit)");
+    }
+  }
+  // The body frame must be a rotation (orthonormal, determinant +1).
+  const Mat<D> R = p.bodyToGrid.rotation;
+  if (!((R.transpose() * R - Mat<D>::Identity()).cwiseAbs().maxCoeff() <= 1e-9) || !(R.determinant() > 0.0)) {
+    b.fail("body_to_grid_rotation", "is not a rotation (orthonormal with determinant +1)");
   }
   return checkedShape(source, 0, "", [&] { return Shape<D>::fromParts(std::move(p)); });
 }

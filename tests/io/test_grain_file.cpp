@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include <zlib.h>
+
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -391,12 +393,39 @@ TEST(GrainFile, BadBinaryInputNamesFileAndKey) {
   expectError(readError<2>(bin), 0, "dimension", "holds a 3D grain, a 2D one is needed");
   // Truncated in the values and at the last field.
   expectError(readError<3>(bin.substr(0, 100)), 0, "values", "truncated");
-  expectError(readError<3>(bin.substr(0, bin.size() - 1)), 0, "contact_spacing", "truncated");
+  expectError(readError<3>(bin.substr(0, bin.size() - 1)), 0, "checksum", "truncated");
+  expectError(readError<3>(bin.substr(0, bin.size() - 5)), 0, "contact_spacing", "truncated");
   // A NaN value in the grid (first value at byte 16 + 12 + 24 + 8 + 8 = 68).
   std::string nan = bin;
   const float q = std::nanf("");
   std::memcpy(nan.data() + 68, &q, 4);
   expectError(readError<3>(nan), 0, "values", "value 0 is not finite");
+  // Single-bit flips anywhere after the header: refused by the checksum (or,
+  // in a count or size, by the check that reads it), never read as another grain.
+  for (int k = 0; k < 20; ++k) {
+    std::string flipped = bin;
+    const std::size_t at = 16 + (bin.size() - 17) * std::size_t(k) / 19;
+    flipped[at] = char(flipped[at] ^ (1 << (k % 8)));
+    EXPECT_NE(readError<3>(flipped).problem(), "") << "byte " << at;
+  }
+  std::string flipped = bin;
+  flipped[bin.size() / 2] = char(flipped[bin.size() / 2] ^ 4);  // in the grid values
+  expectError(readError<3>(flipped), 0, "checksum", "does not match the contents");
+  // A body frame that is not a rotation (5 x identity), with a valid checksum.
+  std::string scaled = bin;
+  const std::size_t rotation = 68 + 4 * sphere->grid().size();
+  for (int i = 0; i < 3; ++i) {
+    const double five = 5.0;
+    const auto& R = sphere->bodyToGrid().rotation;
+    for (int j = 0; j < 3; ++j) {
+      const double v = five * R(i, j);
+      std::memcpy(scaled.data() + rotation + 8 * std::size_t(3 * i + j), &v, 8);
+    }
+  }
+  const std::uint32_t crc = std::uint32_t(
+      crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(scaled.data()), uInt(scaled.size() - 4)));
+  std::memcpy(scaled.data() + scaled.size() - 4, &crc, 4);
+  expectError(readError<3>(scaled), 0, "body_to_grid_rotation", "is not a rotation");
   // A missing file.
   try {
     io::readGrainFile<3>("/nonexistent/grain.lsg");

@@ -110,7 +110,8 @@ class Shape {
   /// the narrow phase's bulk rejection.
   const NodeTree<D>& nodeTree() const { return nodeTree_; }
   /// The largest |grad phi| of the level set's interpolant inside the grid
-  /// box (Grid::maxGradientNorm, exact; about 1 for a distance). So
+  /// box (Grid::maxGradientNorm, exact; 1.1-1.4 for superellipsoids, sqrt(D)
+  /// for a sphere, whose centre is a kink of its distance). So
   /// phi(y) >= phi(x) - this x |y - x| for any two points x, y of the box (a
   /// segment in the box), which lets one look-up at a sphere's centre show
   /// that every point of the sphere in the box is outside the shape.
