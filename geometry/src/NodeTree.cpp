@@ -13,8 +13,14 @@ NodeTree<D> NodeTree<D>::build(const std::vector<Vec<D>>& nodes, int leafSize) {
   NodeTree tree;
   const std::uint32_t n = std::uint32_t(nodes.size());
   if (n == 0) return tree;
-  tree.order.resize(n);
-  for (std::uint32_t i = 0; i < n; ++i) tree.order[i] = i;
+  // The nodes with their indices, permuted in place as the tree splits them
+  // (contiguous records: the selection reads no memory indirectly).
+  struct Entry {
+    Vec<D> x;
+    std::uint32_t index;
+  };
+  std::vector<Entry> entries(n);
+  for (std::uint32_t i = 0; i < n; ++i) entries[i] = {nodes[i], i};
   // A binary tree with leaves of >= leafSize / 2 nodes has fewer than 4 n / leafSize cells.
   tree.cells.reserve(std::size_t(4) * n / std::size_t(leafSize) + 2);
   tree.cells.push_back(Cell{Vec<D>::Zero(), 0.0, 0, n, 0});
@@ -31,14 +37,14 @@ NodeTree<D> NodeTree<D>::build(const std::vector<Vec<D>>& nodes, int leafSize) {
     tree.depth = std::max(tree.depth, level);
     const std::uint32_t begin = tree.cells[c].begin, end = tree.cells[c].end;
     // Bounding box of the cell's nodes: its centre, then the radius about it.
-    Vec<D> lo = nodes[tree.order[begin]], hi = lo;
+    Vec<D> lo = entries[begin].x, hi = lo;
     for (std::uint32_t k = begin + 1; k < end; ++k) {
-      lo = lo.cwiseMin(nodes[tree.order[k]]);
-      hi = hi.cwiseMax(nodes[tree.order[k]]);
+      lo = lo.cwiseMin(entries[k].x);
+      hi = hi.cwiseMax(entries[k].x);
     }
     const Vec<D> centre = 0.5 * (lo + hi);
     double r2 = 0.0;
-    for (std::uint32_t k = begin; k < end; ++k) r2 = std::max(r2, (nodes[tree.order[k]] - centre).squaredNorm());
+    for (std::uint32_t k = begin; k < end; ++k) r2 = std::max(r2, (entries[k].x - centre).squaredNorm());
     tree.cells[c].centre = centre;
     // Rounded up so the sphere holds every node despite the rounding of its own arithmetic.
     tree.cells[c].radius = std::sqrt(r2) * (1.0 + 1e-12) + 1e-300;
@@ -47,9 +53,9 @@ NodeTree<D> NodeTree<D>::build(const std::vector<Vec<D>>& nodes, int leafSize) {
     int axis = 0;
     (hi - lo).maxCoeff(&axis);
     const std::uint32_t mid = begin + (end - begin) / 2;
-    std::nth_element(tree.order.begin() + begin, tree.order.begin() + mid, tree.order.begin() + end,
-                     [&](std::uint32_t a, std::uint32_t b) {
-                       return nodes[a][axis] < nodes[b][axis] || (nodes[a][axis] == nodes[b][axis] && a < b);
+    std::nth_element(entries.begin() + begin, entries.begin() + mid, entries.begin() + end,
+                     [axis](const Entry& a, const Entry& b) {
+                       return a.x[axis] < b.x[axis] || (a.x[axis] == b.x[axis] && a.index < b.index);
                      });
     const std::uint32_t child = std::uint32_t(tree.cells.size());
     tree.cells[c].child = child;
@@ -61,8 +67,12 @@ NodeTree<D> NodeTree<D>::build(const std::vector<Vec<D>>& nodes, int leafSize) {
   // Median splits halve the count per level: 2^32 nodes give 30 levels; the
   // narrow phase's walk keeps depth + 2 cells on a fixed stack of 128.
   if (tree.depth > 120) throw std::logic_error("node tree: depth " + std::to_string(tree.depth) + " over 120");
+  tree.order.reserve(n);
   tree.positions.reserve(n);
-  for (std::uint32_t i : tree.order) tree.positions.push_back(nodes[i]);
+  for (const Entry& e : entries) {
+    tree.order.push_back(e.index);
+    tree.positions.push_back(e.x);
+  }
   return tree;
 }
 
