@@ -254,8 +254,12 @@ class Runner {
       if (history_.due(clock)) writeHistoryRow();
       if (frames_.due(clock)) writeFrame();
       if (distributions_.due(clock) || distributionTimeDue()) writeDistributions();
-      if (checkpoints_.due(clock)) writeCheckpoint();
+      // The schedules move past this step before a periodic checkpoint saves
+      // them: a run resumed from it (after a kill) must not write this step's
+      // outputs again.
+      const bool checkpoint = checkpoints_.due(clock);
       advanceSchedules();
+      if (checkpoint) writeCheckpoint();
       if (options_.progress && secondsSince(lastReport) >= scene_.output.progressSeconds) {
         const double dtWall = secondsSince(lastReport);
         report(start, double(world.steps() - stepsAtReport) / dtWall, false);
