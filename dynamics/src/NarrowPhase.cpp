@@ -179,6 +179,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const double weightToFactor = directionWeight / referenceNodeWeight<D>(owner.contactSpacing());
 
   const geometry::NodeTree<D>& tree = owner.nodeTree();
+  const std::vector<Vec<D>>& nodes = owner.nodes().positions;
   const std::vector<double>& weights = owner.nodes().weights;
   const std::size_t first = buf.nodes.size();
   std::uint64_t tested = 0;
@@ -196,7 +197,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const auto leaf = [&](std::uint32_t begin, std::uint32_t end) {
     tested += end - begin;
     for (std::uint32_t k = begin; k < end; ++k) {
-      const Vec<D>& x = tree.positions[k];
+      const std::uint32_t i = tree.order[k];
+      const Vec<D>& x = nodes[i];
       const Vec<D> g = map * x + shift;
       if ((g - centre).squaredNorm() > reach2) continue;
       if (!box.contains(g)) continue;
@@ -209,7 +211,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       Vec<D> normal = gradToWorld * grad;
       const double length = normal.norm();
       if (!(length > 0.0)) continue;
-      const std::uint32_t i = tree.order[k];
       NodeContact<D> c;
       c.point = Ro * x + xo;
       c.normal = normal / length;
@@ -240,6 +241,7 @@ std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>
   const Vec<D> nb = Ro.transpose() * plane.normal;
   const double weightToFactor = 1.0 / referenceNodeWeight<D>(owner.contactSpacing());
   const geometry::NodeTree<D>& tree = owner.nodeTree();
+  const std::vector<Vec<D>>& nodes = owner.nodes().positions;
   const std::vector<double>& weights = owner.nodes().weights;
   const std::size_t first = buf.nodes.size();
   std::uint64_t tested = 0;
@@ -249,10 +251,10 @@ std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>
   const auto leaf = [&](std::uint32_t begin, std::uint32_t end) {
     tested += end - begin;
     for (std::uint32_t k = begin; k < end; ++k) {
-      const Vec<D>& x = tree.positions[k];
+      const std::uint32_t i = tree.order[k];
+      const Vec<D>& x = nodes[i];
       const double distance = offset + nb.dot(x);
       if (!(distance < 0.0)) continue;
-      const std::uint32_t i = tree.order[k];
       NodeContact<D> c;
       c.point = Ro * x + xo;
       c.normal = plane.normal;

@@ -68,11 +68,7 @@ NodeTree<D> NodeTree<D>::build(const std::vector<Vec<D>>& nodes, int leafSize) {
   // narrow phase's walk keeps depth + 2 cells on a fixed stack of 128.
   if (tree.depth > 120) throw std::logic_error("node tree: depth " + std::to_string(tree.depth) + " over 120");
   tree.order.reserve(n);
-  tree.positions.reserve(n);
-  for (const Entry& e : entries) {
-    tree.order.push_back(e.index);
-    tree.positions.push_back(e.x);
-  }
+  for (const Entry& e : entries) tree.order.push_back(e.index);
   return tree;
 }
 

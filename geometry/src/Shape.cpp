@@ -96,9 +96,12 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromGridNodesAndMass(Grid<D> grid, Nod
   {
     NodeTree<D>& tree = shape->nodeTree_;
     NodeSet<D> ordered;
-    ordered.positions = tree.positions;
+    ordered.positions.reserve(tree.order.size());
     ordered.weights.reserve(tree.order.size());
-    for (std::uint32_t i : tree.order) ordered.weights.push_back(shape->nodes_.weights[i]);
+    for (std::uint32_t i : tree.order) {
+      ordered.positions.push_back(shape->nodes_.positions[i]);
+      ordered.weights.push_back(shape->nodes_.weights[i]);
+    }
     shape->nodes_ = std::move(ordered);
     for (std::uint32_t k = 0; k < tree.order.size(); ++k) tree.order[k] = k;
   }

@@ -6,6 +6,8 @@
 
 #include "lsdem/io/InputError.h"
 
+#include "Checksum.h"
+
 #include <algorithm>
 #include <bit>
 #include <charconv>
@@ -20,8 +22,6 @@
 #include <stdexcept>
 #include <system_error>
 #include <type_traits>
-
-#include <zlib.h>
 
 namespace lsdem::io {
 namespace {
@@ -223,14 +223,8 @@ std::string binaryGrain(const Shape<D>& shape) {
   putRaw<double>(b, p.options.nodesPerCell);
   putRaw<std::uint32_t>(b, p.options.massMethod == MassMethod::Paper ? 0u : 1u);
   putRaw<double>(b, p.options.contactSpacing);
-  // Checksum of everything above (zlib takes at most a uInt at a time).
-  uLong crc = crc32(0L, Z_NULL, 0);
-  for (std::size_t at = 0; at < b.size();) {
-    const std::size_t n = std::min<std::size_t>(b.size() - at, std::size_t(1) << 30);
-    crc = crc32(crc, reinterpret_cast<const Bytef*>(b.data() + at), uInt(n));
-    at += n;
-  }
-  putRaw<std::uint32_t>(b, std::uint32_t(crc));
+  // Checksum of everything above.
+  putRaw<std::uint32_t>(b, crc32Of(b.data(), b.size()));
   return b;
 }
 
@@ -245,10 +239,10 @@ class BinaryIn {
   void bytes(char* dst, std::size_t n, const std::string& key) {
     in_.read(dst, std::streamsize(n));
     if (std::size_t(in_.gcount()) != n) fail(key, "the file ends early (truncated binary grain)");
-    crc_ = crc32(crc_, reinterpret_cast<const Bytef*>(dst), uInt(n));
+    crc_.add(dst, n);
   }
   /// CRC-32 of every byte read so far.
-  std::uint32_t crc() const { return std::uint32_t(crc_); }
+  std::uint32_t crc() const { return crc_.value(); }
   template <class T>
   T raw(const std::string& key) {
     char b[sizeof(T)];
@@ -295,7 +289,7 @@ class BinaryIn {
  private:
   std::istream& in_;
   const std::string& source_;
-  uLong crc_ = crc32(0L, Z_NULL, 0);
+  Crc32 crc_;
 };
 
 /// Reads the binary header after the first byte: magic, version, dimension.

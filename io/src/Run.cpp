@@ -14,6 +14,8 @@
 #include "lsdem/io/Scene.h"
 #include "lsdem/io/Vtk.h"
 
+#include "Checksum.h"
+
 #include <algorithm>
 #include <charconv>
 #include <array>
@@ -25,8 +27,6 @@
 #include <map>
 #include <cerrno>
 #include <cstring>
-
-#include <zlib.h>
 #include <sstream>
 #include <variant>
 
@@ -65,17 +65,6 @@ std::uint64_t fnv1a(const std::string& bytes) {
   std::uint64_t h = 1469598103934665603ull;
   for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
   return h;
-}
-
-std::uint32_t crc32Of(const char* data, std::size_t size) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  while (size > 0) {  // zlib takes a uInt length
-    const uInt chunk = uInt(std::min<std::size_t>(size, std::size_t(1) << 30));
-    crc = crc32(crc, reinterpret_cast<const Bytef*>(data), chunk);
-    data += chunk;
-    size -= chunk;
-  }
-  return std::uint32_t(crc);
 }
 
 std::string readWholeFile(const std::string& path);

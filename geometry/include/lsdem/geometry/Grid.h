@@ -115,8 +115,10 @@ class Grid {
   double maxGradientNorm() const;
 
  private:
-  double interpolate(const Vec<D>& g, Vec<D>& gradCells) const;
-  double interpolateValue(const Vec<D>& g) const;
+  template <bool Gradient>
+  double interpolate(const Vec<D>& g, Vec<D>* gradCells) const;
+  /// Grid coordinates g clamped into the node box.
+  Vec<D> clampToBox(const Vec<D>& g) const;
 
   Index<D> dims_ = Index<D>::Zero();
   Vec<D> origin_ = Vec<D>::Zero();
@@ -126,8 +128,12 @@ class Grid {
 
 // ---- inline look-ups (the narrow phase calls these once per node per step) ----
 
+// The interpolant at grid coordinates g inside the box; with `Gradient`,
+// also its derivative per cell length in *gradCells. value() and
+// valueAndGradient() share this arithmetic, so their values agree bit for bit.
 template <int D>
-inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>& gradCells) const {
+template <bool Gradient>
+inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells) const {
   // Cell containing g (clamped so the upper border uses the last cell) and the
   // fractional position t in [0, 1]^D inside it.
   Index<D> c;
@@ -144,8 +150,10 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>& gradCells) const {
     const double v01 = values_[n0 + sy], v11 = values_[n0 + sy + 1];
     const double a0 = v00 + t[0] * (v10 - v00);  // along x at y = 0
     const double a1 = v01 + t[0] * (v11 - v01);  // along x at y = 1
-    gradCells[0] = (v10 - v00) + t[1] * ((v11 - v01) - (v10 - v00));
-    gradCells[1] = a1 - a0;
+    if constexpr (Gradient) {
+      (*gradCells)[0] = (v10 - v00) + t[1] * ((v11 - v01) - (v10 - v00));
+      (*gradCells)[1] = a1 - a0;
+    }
     return a0 + t[1] * (a1 - a0);
   } else {
     const std::size_t sy = std::size_t(dims_[0]);
@@ -158,55 +166,28 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>& gradCells) const {
     const double x00 = v000 + t[0] * (v100 - v000), x10 = v010 + t[0] * (v110 - v010);
     const double x01 = v001 + t[0] * (v101 - v001), x11 = v011 + t[0] * (v111 - v011);
     const double y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
-    // d/dx: differences along x bilinearly interpolated in (y, z).
-    const double d00 = v100 - v000, d10 = v110 - v010, d01 = v101 - v001, d11 = v111 - v011;
-    const double dy0 = d00 + t[1] * (d10 - d00), dy1 = d01 + t[1] * (d11 - d01);
-    gradCells[0] = dy0 + t[2] * (dy1 - dy0);
-    gradCells[1] = (x10 - x00) + t[2] * ((x11 - x01) - (x10 - x00));
-    gradCells[2] = y1 - y0;
+    if constexpr (Gradient) {
+      // d/dx: differences along x bilinearly interpolated in (y, z).
+      const double d00 = v100 - v000, d10 = v110 - v010, d01 = v101 - v001, d11 = v111 - v011;
+      const double dy0 = d00 + t[1] * (d10 - d00), dy1 = d01 + t[1] * (d11 - d01);
+      (*gradCells)[0] = dy0 + t[2] * (dy1 - dy0);
+      (*gradCells)[1] = (x10 - x00) + t[2] * ((x11 - x01) - (x10 - x00));
+      (*gradCells)[2] = y1 - y0;
+    }
     return y0 + t[2] * (y1 - y0);
   }
 }
 
-// The value alone, with the same arithmetic as interpolate() (so value() and
-// valueAndGradient() agree bit for bit).
 template <int D>
-inline double Grid<D>::interpolateValue(const Vec<D>& g) const {
-  Index<D> c;
-  Vec<D> t;
-  for (int a = 0; a < D; ++a) {
-    const int ci = std::clamp(int(std::floor(g[a])), 0, dims_[a] - 2);
-    c[a] = ci;
-    t[a] = g[a] - double(ci);
-  }
-  const std::size_t n0 = linear(c);
-  if constexpr (D == 2) {
-    const std::size_t sy = std::size_t(dims_[0]);
-    const double v00 = values_[n0], v10 = values_[n0 + 1];
-    const double v01 = values_[n0 + sy], v11 = values_[n0 + sy + 1];
-    const double a0 = v00 + t[0] * (v10 - v00);
-    const double a1 = v01 + t[0] * (v11 - v01);
-    return a0 + t[1] * (a1 - a0);
-  } else {
-    const std::size_t sy = std::size_t(dims_[0]);
-    const std::size_t sz = sy * std::size_t(dims_[1]);
-    const double v000 = values_[n0], v100 = values_[n0 + 1];
-    const double v010 = values_[n0 + sy], v110 = values_[n0 + sy + 1];
-    const double v001 = values_[n0 + sz], v101 = values_[n0 + sz + 1];
-    const double v011 = values_[n0 + sz + sy], v111 = values_[n0 + sz + sy + 1];
-    const double x00 = v000 + t[0] * (v100 - v000), x10 = v010 + t[0] * (v110 - v010);
-    const double x01 = v001 + t[0] * (v101 - v001), x11 = v011 + t[0] * (v111 - v011);
-    const double y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
-    return y0 + t[2] * (y1 - y0);
-  }
+inline Vec<D> Grid<D>::clampToBox(const Vec<D>& g) const {
+  return g.cwiseMax(Vec<D>::Zero()).cwiseMin((dims_ - 1).template cast<double>().matrix());
 }
 
 template <int D>
 inline double Grid<D>::value(const Vec<D>& x) const {
   const Vec<D> g = toGrid(x);
-  const Vec<D> upper = (dims_ - 1).template cast<double>().matrix();
-  const Vec<D> gc = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
-  const double inside = interpolateValue(gc);
+  const Vec<D> gc = clampToBox(g);
+  const double inside = interpolate<false>(gc, nullptr);
   if (gc == g) return inside;
   return inside + (spacing_ * (g - gc)).norm();
 }
@@ -214,10 +195,9 @@ inline double Grid<D>::value(const Vec<D>& x) const {
 template <int D>
 inline double Grid<D>::valueAndGradient(const Vec<D>& x, Vec<D>& grad) const {
   const Vec<D> g = toGrid(x);
-  const Vec<D> upper = (dims_ - 1).template cast<double>().matrix();
-  const Vec<D> gc = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
+  const Vec<D> gc = clampToBox(g);
   Vec<D> gradCells;
-  const double inside = interpolate(gc, gradCells);
+  const double inside = interpolate<true>(gc, &gradCells);
   grad = gradCells;  // per cell of distance -> per world unit, since values are in world units
   // Fast path: x inside the node box.
   if (gc == g) {

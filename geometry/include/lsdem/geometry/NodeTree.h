@@ -9,9 +9,8 @@
 /// bounding box until a group holds at most `leafSize` nodes. Each tree cell
 /// keeps the centre of its nodes' bounding box and the radius of the sphere
 /// about that centre holding them all, and a contiguous range of `order` (the
-/// node indices in tree order). `positions` copies the body-frame node
-/// positions in that order, so a leaf's nodes are read from one stretch of
-/// memory. Children of cell c are cells `child` and `child + 1`; a leaf has
+/// node indices in tree order; a new Shape stores its nodes in that order, so
+/// a leaf's nodes are one stretch of memory). Children of cell c are cells `child` and `child + 1`; a leaf has
 /// child 0 (the root, index 0, is nobody's child).
 ///
 /// Deterministic: the same positions give the same tree.
@@ -28,12 +27,11 @@ struct NodeTree {
   struct Cell {
     Vec<D> centre = Vec<D>::Zero();  ///< body frame, world units
     double radius = 0.0;             ///< every node of the cell is within this of centre
-    std::uint32_t begin = 0, end = 0;  ///< range of order / positions
+    std::uint32_t begin = 0, end = 0;  ///< range of order
     std::uint32_t child = 0;           ///< first child (second: child + 1); 0 for a leaf
   };
   std::vector<Cell> cells;              ///< cells[0] is the root (absent for no nodes)
   std::vector<std::uint32_t> order;     ///< node indices in tree order
-  std::vector<Vec<D>> positions;        ///< body-frame node positions in tree order
   int depth = 0;                        ///< levels below the root (a traversal stack needs depth + 2 entries)
 
   /// Nodes per leaf at most (the default of build()).
@@ -43,7 +41,7 @@ struct NodeTree {
   static NodeTree build(const std::vector<Vec<D>>& nodes, int leafSize = kLeafSize);
   /// @brief Bytes held.
   std::size_t bytes() const {
-    return cells.size() * sizeof(Cell) + order.size() * sizeof(std::uint32_t) + positions.size() * sizeof(Vec<D>);
+    return cells.size() * sizeof(Cell) + order.size() * sizeof(std::uint32_t);
   }
 };
 
