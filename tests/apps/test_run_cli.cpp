@@ -2,12 +2,11 @@
 // summary and checkpoint written, exit code 130 / 143) and `--resume`
 // continues the run.
 
+#include "support/Process.h"
+
 #include <gtest/gtest.h>
 
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -16,7 +15,7 @@
 #include <thread>
 
 namespace fs = std::filesystem;
-extern char** environ;
+using lsdem::test::runToExit;
 
 namespace {
 
@@ -59,44 +58,41 @@ std::string readFile(const fs::path& p) {
   return s.str();
 }
 
-int runToExit(const std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+// Starts the long scene into `out` (under `dir`), waits until it has written
+// three frames and sends it `signal`; its exit code (-1: it never wrote the
+// frames, or the signal killed it instead of stopping it).
+int interruptedRun(const fs::path& dir, const fs::path& out, int signal) {
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path scene = dir / "long.toml";
+  std::ofstream(scene) << kLongScene;
+  const pid_t pid = lsdem::test::spawnProcess({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--quiet"});
+  if (pid < 0) {
+    ADD_FAILURE() << "lsdem did not start";
+    return -1;
+  }
+  const fs::path frame = out / "frames" / "particles_000003.vtp";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!fs::exists(frame) && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const bool started = fs::exists(frame);
+  kill(pid, started ? signal : SIGKILL);
+  const int code = lsdem::test::waitForExit(pid);
+  if (!started) {
+    ADD_FAILURE() << "the run did not start";
+    return -1;
+  }
+  return code;
 }
 
 }  // namespace
 
 TEST(RunCli, CtrlCStopsCleanlyAndResumeContinues) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const fs::path scene = dir / "long.toml";
-  std::ofstream(scene) << kLongScene;
-  const fs::path out = dir / "out";
-
   // Start a run that would take hours; interrupt it once it has written frames.
-  std::vector<std::string> args = {LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--quiet"};
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ), 0);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!fs::exists(out / "frames" / "particles_000003.vtp") && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  ASSERT_TRUE(fs::exists(out / "frames" / "particles_000003.vtp")) << "the run did not start";
-  kill(pid, SIGINT);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 130);
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli";
+  const fs::path out = dir / "out";
+  ASSERT_EQ(interruptedRun(dir, out, SIGINT), 130);
   EXPECT_NE(readFile(out / "summary.json").find("\"stopped_early\": true"), std::string::npos);
   EXPECT_TRUE(fs::exists(out / "checkpoint.lsc"));
 
@@ -112,27 +108,8 @@ TEST(RunCli, CtrlCStopsCleanlyAndResumeContinues) {
 // summary, exit code 143 (128 + 15), and the run resumes.
 TEST(RunCli, SigtermStopsCleanlyWithCode143) {
   const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_term";
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  const fs::path scene = dir / "long.toml";
-  std::ofstream(scene) << kLongScene;
   const fs::path out = dir / "out";
-  std::vector<std::string> args = {LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--quiet"};
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  ASSERT_EQ(posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ), 0);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (!fs::exists(out / "frames" / "particles_000003.vtp") && std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  ASSERT_TRUE(fs::exists(out / "frames" / "particles_000003.vtp")) << "the run did not start";
-  kill(pid, SIGTERM);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  ASSERT_TRUE(WIFEXITED(status)) << "killed by the signal instead of stopping";
-  EXPECT_EQ(WEXITSTATUS(status), 143);
+  ASSERT_EQ(interruptedRun(dir, out, SIGTERM), 143) << "killed by the signal instead of stopping";
   EXPECT_NE(readFile(out / "summary.json").find("\"stopped_early\": true"), std::string::npos);
   EXPECT_EQ(runToExit({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "5", "--quiet"}), 0);
   fs::remove_all(dir);

@@ -7,12 +7,10 @@
 // Barber & Fawcett; Chung & Ooi's oblique impacts). With the old default
 // tangential stiffness (0.8 N/m) the sphere would leave as it came: 1 and 0.
 
+#include "support/Process.h"
 #include "support/VtpReader.h"
 
 #include <gtest/gtest.h>
-
-#include <spawn.h>
-#include <sys/wait.h>
 
 #include <cmath>
 #include <filesystem>
@@ -22,7 +20,7 @@
 #include <vector>
 
 namespace fs = std::filesystem;
-extern char** environ;
+using lsdem::test::runToExit;
 
 namespace {
 
@@ -61,17 +59,6 @@ frames = 1
 vtk = ["particles"]
 )";
 
-int run(const std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
-  int status = 0;
-  waitpid(pid, &status, 0);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 }  // namespace
 
 TEST(RunImpact, HertzWithFrictionAndNoKsGrips) {
@@ -79,7 +66,7 @@ TEST(RunImpact, HertzWithFrictionAndNoKsGrips) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   std::ofstream(dir / "oblique.toml") << kObliqueScene;
-  ASSERT_EQ(run({LSDEM_BINARY, "run", (dir / "oblique.toml").string(), "--out", (dir / "out").string(), "--quiet"}), 0);
+  ASSERT_EQ(runToExit({LSDEM_BINARY, "run", (dir / "oblique.toml").string(), "--out", (dir / "out").string(), "--quiet"}), 0);
 
   // The sphere after the impact (the last frame), clear of the floor.
   const lsdem::test::VtpFile frame = lsdem::test::readVtp((dir / "out" / "frames" / "particles_000001.vtp").string());

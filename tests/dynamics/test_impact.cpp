@@ -215,17 +215,23 @@ void checkLinearImpact(bool onPlane) {
   }
 }
 
-// Hertz: peak force F_max = 4/3 E* sqrt(R*) delta_max^(3/2) with delta_max =
-// (15 m* v^2 / (16 E* sqrt(R*)))^(2/5); undamped, so e = 1. R* is the radius
-// of the sphere of equal volume (halved for two spheres), m* the effective mass.
-template <int D>
-void checkHertzImpact(bool onPlane) {
+// Hertz without friction or damping, E = 70 GPa, nu = 0.25.
+ContactLawDef elasticHertz() {
   ContactLawDef law;
   law.normal = NormalModel::Hertz;
   law.youngsModulus = 70e9;
   law.poissonRatio = 0.25;
   law.hasFriction = false;
   law.hasDamping = false;
+  return law;
+}
+
+// Hertz: peak force F_max = 4/3 E* sqrt(R*) delta_max^(3/2) with delta_max =
+// (15 m* v^2 / (16 E* sqrt(R*)))^(2/5); undamped, so e = 1. R* is the radius
+// of the sphere of equal volume (halved for two spheres), m* the effective mass.
+template <int D>
+void checkHertzImpact(bool onPlane) {
+  const ContactLawDef law = elasticHertz();
   const auto shape = sphere<D>();
   const double eStar = effectiveModulus(law);
   const double radius = equivalentRadius<D>(shape->volume());
@@ -250,12 +256,7 @@ void checkHertzImpact(bool onPlane) {
 // time of omega = sqrt(kn_wall / m).
 template <int D>
 void checkWallMaterial() {
-  ContactLawDef law;
-  law.normal = NormalModel::Hertz;
-  law.youngsModulus = 70e9;
-  law.poissonRatio = 0.25;
-  law.hasFriction = false;
-  law.hasDamping = false;
+  const ContactLawDef law = elasticHertz();
   const auto shape = sphere<D>();
   const double radius = equivalentRadius<D>(shape->volume());
   const double mass = sphereMass(shape->volume());
