@@ -54,6 +54,10 @@ Breakage<D>::Breakage(const BreakageDef<D>& def) : def_(def), criterion_(makeCri
   if (!(def.minVolume >= 0.0) || !std::isfinite(def.minVolume)) {
     throw std::invalid_argument("breakage minVolume must be finite and >= 0, got " + std::to_string(def.minVolume));
   }
+  if (!(def.minBreakableVolume >= 0.0) || !std::isfinite(def.minBreakableVolume)) {
+    throw std::invalid_argument("breakage minBreakableVolume must be finite and >= 0, got " +
+                                std::to_string(def.minBreakableVolume));
+  }
   validateSplitOptions(def.split);
   // Fragments that leave as fines at once need no finer grid.
   if (!def.haltBelowMinimum) def_.split.regridMinVolume = std::max(def_.split.regridMinVolume, def.minVolume);
@@ -122,6 +126,7 @@ void Breakage<D>::queueFailures(World<D>& world) {
       if (!criterion_->fails(principal, p.strength[i])) continue;
       const Shape<D>& shape = *p.shape[i];
       if (def_.haltBelowMinimum && isBelowMinimum(shape)) continue;
+      if (shape.volume() < def_.minBreakableVolume) continue;
       // Fracture plane: buckling (eq. 21) for slender grains, else the strongest contacts (eq. 18-20).
       const bool buckling = def_.buckling && circumscribedVolumeRatio(shape) > def_.bucklingRatio;
       std::optional<HalfSpace<D>> plane;

@@ -593,6 +593,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
     geometry::MassProperties<D> mass;
     int side = 0;
     bool regridded = false;
+    double nodesPerCell = 0.0;  ///< of the piece's own grid: what its own splits put on their cut faces
   };
   std::vector<Piece> kept;
   double keptVolume = 0.0;
@@ -601,6 +602,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
     for (std::size_t k = 0; k < side.pieces.size(); ++k) {
       Piece piece;
       piece.side = side.sign;
+      piece.nodesPerCell = nodesPerCell;
       piece.mass = shares[slotOf(sides, s, k)].properties(childOptions.massMethod, cellVolume, reference);
       // A piece thinner than regridCells of its cells gets a finer grid of its
       // own (within the memory bound) and nodes made afresh on it.
@@ -619,6 +621,9 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
             piece.grid = std::move(refined);
             piece.nodes = std::move(nodes);
             piece.regridded = true;
+            // The node spacing in metres passes on to this piece's own
+            // fragments (with "per_new_cell" the density per cell does).
+            piece.nodesPerCell = density;
           }
         }
       }
@@ -680,8 +685,10 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
     fragment.volume = piece.mass.volume;
     fragment.side = piece.side;
     fragment.regridded = piece.regridded;
+    geometry::ShapeOptions pieceOptions = childOptions;
+    pieceOptions.nodesPerCell = piece.nodesPerCell;
     fragment.shape =
-        Shape<D>::fromGridNodesAndMass(std::move(piece.grid), std::move(piece.nodes), piece.mass, childOptions);
+        Shape<D>::fromGridNodesAndMass(std::move(piece.grid), std::move(piece.nodes), piece.mass, pieceOptions);
     fragment.childToParent = gridToParentBody * fragment.shape->bodyToGrid();
     result.fragments.push_back(std::move(fragment));
   }

@@ -562,6 +562,8 @@ class SceneReader {
     if (minNodes < 0 || minNodes > 1000000) r.fail("min_nodes", "must be in [0, 1e6]");
     def.minNodes = int(minNodes);
     def.haltBelowMinimum = r.boolean("halt_below_minimum", false);
+    def.minBreakableVolume = r.number("min_breakable_volume", 0.0);
+    if (def.minBreakableVolume < 0.0) r.fail("min_breakable_volume", "must be >= 0");
     // Re-gridding of small fragments (Split.h, docs/breakage.md).
     def.split.regridCells = r.number("regrid_cells", def.split.regridCells);
     if (def.split.regridCells < 0.0 || def.split.regridCells > 1000.0) r.fail("regrid_cells", "must be in [0, 1000] (0 turns re-gridding off)");

@@ -56,12 +56,15 @@ struct CrushResult {
   std::uint64_t steps = 0;
   double energyError = 0.0;   ///< relative balance error of the energy ledger at the end
   double splitRelease = 0.0;  ///< spring energy released by splits / platen work
+  double smallestParent = std::numeric_limits<double>::infinity();  ///< volume of the smallest grain that broke, m^D
+  double grainVolume = 0.0;   ///< of one initial grain, m^D
 };
 
 // A box of D-balls crushed by a top plane moving down; breakage with low
 // strengths. Checks mass every step and every event's conservation laws.
 template <int D>
-CrushResult crush(int perRow, int rows, double cells, double speed, double sigma0, std::size_t target) {
+CrushResult crush(int perRow, int rows, double cells, double speed, double sigma0, std::size_t target,
+                  double minBreakableFraction = 0.0) {
   const double r = 0.01;
   const double gap = 2.2 * r;
   const double width = perRow * gap;
@@ -110,6 +113,7 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
   // Grains 8 cells across: every fragment is below the default 10 cells and
   // would be re-gridded; 6 keeps re-gridding in the cascade at a unit test's cost.
   bdef.split.regridCells = 6.0;
+  bdef.minBreakableVolume = minBreakableFraction * s->volume();
   auto effect = std::make_unique<Breakage<D>>(bdef);
   Breakage<D>& brk = *effect;
   w.addEffect(std::move(effect));
@@ -146,10 +150,15 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
       EXPECT_NEAR(ev.planeNormal.norm(), 1.0, 1e-12);
       EXPECT_EQ(ev.childVolumes.size(), ev.children.size());
       EXPECT_GE(ev.childVolumes.size() + ev.finesVolumes.size(), 2u);
+      double parentVolume = 0.0;
+      for (double v : ev.childVolumes) parentVolume += v;
+      for (double v : ev.finesVolumes) parentVolume += v;
+      out.smallestParent = std::min(out.smallestParent, parentVolume);
     }
   }
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.breakages = brk.breakages();
+  out.grainVolume = s->volume();
   out.steps = w.steps();
   for (const auto& rm : w.removed()) out.fines += rm.reason == "fines";
   EXPECT_NEAR(brk.finesMass(), w.removedMass(), 1e-12 * initialMass);
@@ -197,6 +206,17 @@ TEST(BreakageEffect, CrushingCascade3D) {
   // Energy budget across the splits: measured -0.26% (split release 4.9% of the platen work).
   EXPECT_LT(std::abs(r.energyError), 0.01);
   EXPECT_GT(r.splitRelease, 0.01);
+}
+
+// Halting breakage below a size (the paper's first remedy): no grain smaller
+// than min_breakable_volume breaks, however high its stress; without the
+// limit the same cascade breaks pieces of a few percent of a grain.
+TEST(BreakageEffect, NoGrainBelowTheBreakableSizeBreaks2D) {
+  const CrushResult free = crush<2>(8, 5, 10, 0.5, 2e4, 30);
+  EXPECT_LT(free.smallestParent, 0.15 * free.grainVolume);
+  const CrushResult held = crush<2>(8, 5, 10, 0.5, 2e4, 30, 0.3);
+  EXPECT_GE(held.smallestParent, 0.3 * held.grainVolume);
+  EXPECT_GE(held.breakages, 30u);  // the cascade goes on among the bigger grains
 }
 
 // A manual break of a grain three cells across (which a cut may leave whole
@@ -445,6 +465,11 @@ TEST(BreakageEffect, RejectsBadDefinitions) {
   EXPECT_THROW(Breakage<2>{d}, std::invalid_argument);
   d = {};
   d.minNodes = -2;
+  EXPECT_THROW(Breakage<2>{d}, std::invalid_argument);
+  d = {};
+  d.minBreakableVolume = -1.0;
+  EXPECT_THROW(Breakage<2>{d}, std::invalid_argument);
+  d.minBreakableVolume = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(Breakage<2>{d}, std::invalid_argument);
   d = {};
   d.bucklingRatio = 0.5;

@@ -201,6 +201,33 @@ TEST(Split, SmallCapMassIsItsShare3D) {
   checkSmallCap<3>(regrid(), 0.05);
 }
 
+// "parent_spacing": a re-gridded fragment keeps its parent's node spacing in
+// metres, and so do its own fragments when it breaks again (before, its
+// record said the parent's nodes per cell on its finer grid, and its own cut
+// faces got up to regridMaxFactor^2 times the nodes per area).
+TEST(Split, RegriddedFragmentPassesOnItsNodeSpacing) {
+  SplitOptions options = regrid();
+  options.regridKeepsNodeSpacing = true;
+  const auto parent = ball<3>(1.0);
+  const double parentSpacing = parent->grid().spacing() / parent->options().nodesPerCell;
+  const SplitResult<3> split = splitShape<3>(*parent, flat<3>({Vec<3>::UnitX(), capOffset<3>(0.1)}), options);
+  ASSERT_EQ(split.fragments.size(), 2u);
+  const Fragment<3>& cap = split.fragments[1];
+  ASSERT_TRUE(cap.regridded);
+  ASSERT_LT(cap.shape->grid().spacing(), 0.5 * parent->grid().spacing());
+  EXPECT_NEAR(cap.shape->grid().spacing() / cap.shape->options().nodesPerCell, parentSpacing, 1e-12);
+  // Halve the cap across its thin direction's normal: the halves' new cut
+  // faces carry about the parent's area per node.
+  const double parentArea = parent->nodes().totalWeight() / double(parent->nodes().size());
+  const Vec<3> across = cap.childToParent.rotation.transpose() * Vec<3>::UnitY();  // parent y, cap body frame
+  const SplitResult<3> again = splitShape<3>(*cap.shape, flat<3>({across, 0.0}), noRegrid());
+  ASSERT_EQ(again.fragments.size(), 2u);
+  for (const Fragment<3>& f : again.fragments) {
+    const double area = f.shape->nodes().totalWeight() / double(f.shape->nodes().size());
+    EXPECT_GT(area, 0.6 * parentArea) << area / parentArea;
+    EXPECT_LT(area, 2.5 * parentArea);
+  }
+}
 
 // A plane through the centre of a box: two equal halves with the half box's inertia.
 TEST(Split, BoxHalves2D) {

@@ -137,6 +137,8 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "effects.breakage.regrid_nodes", "needs contact.formulation"},
       {"negative_min_volume", std::string(kBase) + "[effects.breakage]\nmin_volume = -1e-9\n", 22,
        "effects.breakage.min_volume", "must be >= 0"},
+      {"negative_min_breakable_volume", std::string(kBase) + "[effects.breakage]\nmin_breakable_volume = -1e-9\n", 22,
+       "effects.breakage.min_breakable_volume", "must be >= 0"},
       {"bad_motion", std::string(kBase) + "[[tools]]\nshape = \"disc\"\n[tools.motion]\ntype = \"wobble\"\n", 24,
        "tools[0].motion.type", "unknown motion 'wobble'"},
       {"zero_normal", std::string(kBase) + "[[planes]]\npoint = [0.0, 0.0]\nnormal = [0.0, 0.0]\n", 23,

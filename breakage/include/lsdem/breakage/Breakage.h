@@ -97,6 +97,12 @@ struct BreakageDef {
   /// Instead of removing small fragments: particles below minVolume or
   /// minNodes do not break (and fragments below them are kept).
   bool haltBelowMinimum = false;
+  /// Particles with a smaller volume (area in 2D) do not break, m^D (>= 0;
+  /// 0: every size breaks). The paper's first remedy for unstable small
+  /// fragments (section 4), independent of the fines size minVolume: with
+  /// minVolume well below it, pieces between the two are kept whole and only
+  /// chips below minVolume leave as fines.
+  double minBreakableVolume = 0.0;
   bool buckling = false;         ///< eq. 21 buckling mode (off by default)
   /// Buckling trigger: circumscribed sphere (circle) volume / grain volume > this (> 1).
   double bucklingRatio = 10.0;
