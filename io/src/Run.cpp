@@ -671,7 +671,7 @@ class Runner {
   void writeFragmentDensity(JsonWriter& j) const {
     const auto& p = sw_.world->particles();
     double worst = 0.0, sum = 0.0;
-    std::size_t checked = 0, regridded = 0;
+    std::size_t checked = 0, regridded = 0, over3 = 0, worstIndex = 0;
     for (std::size_t i = 0; i < p.size(); ++i) {
       const geometry::Shape<D>& shape = *p.shape[i];
       if (shape.grid().spacing() < 0.999 * shape.contactSpacing()) ++regridded;
@@ -682,7 +682,11 @@ class Runner {
       // mass = density x the shape's volume (its share of the parent's), so
       // mass / (density x enclosed) - 1 = volume / enclosed - 1.
       const double deviation = shape.volume() / enclosed - 1.0;
-      worst = std::max(worst, std::abs(deviation));
+      if (std::abs(deviation) >= worst) {
+        worst = std::abs(deviation);
+        worstIndex = i;
+      }
+      over3 += std::abs(deviation) > 0.03;
       sum += deviation;
       ++checked;
     }
@@ -691,7 +695,19 @@ class Runner {
         .field("density_checked", checked)
         .field("density_max_abs_deviation", worst)
         .field("density_mean_deviation", checked ? sum / double(checked) : 0.0)
-        .endObject();
+        .field("density_over_3_percent", over3);
+    if (checked > 0) {
+      // The fragment with the largest deviation: which one, how old, how big.
+      const geometry::Shape<D>& shape = *p.shape[worstIndex];
+      j.key("density_worst").beginObject()
+          .field("id", p.id[worstIndex])
+          .field("generation", p.generation[worstIndex])
+          .field("diameter", shape.descriptors().equivalentDiameter)
+          .field("parent_cells_across", shape.descriptors().equivalentDiameter / shape.contactSpacing())
+          .field("regridded", shape.grid().spacing() < 0.999 * shape.contactSpacing())
+          .endObject();
+    }
+    j.endObject();
   }
 
   void writeSummary(bool stopped, bool final = false) const {
