@@ -1,5 +1,5 @@
 /// @file RunCommand.cpp
-/// @brief `lsdem run SCENE.toml [--out DIR] [--steps N] [--threads N] [--quiet]`
+/// @brief `lsdem run SCENE.toml [--out DIR] [--overwrite] [--steps N] [--threads N] [--quiet]`
 /// and `lsdem run --resume DIR`: runs a scene (io/Run.h) with a progress line,
 /// and stops cleanly on Ctrl-C or SIGTERM (final frame, summary and checkpoint
 /// written; exit code 130 or 143, 128 + the signal).
@@ -49,6 +49,7 @@ struct RunArgs {
   long long steps = -1;
   int threads = -1;
   bool quiet = false;
+  bool overwrite = false;
 };
 
 void runCommand(const RunArgs& a) {
@@ -61,6 +62,7 @@ void runCommand(const RunArgs& a) {
   o.resumeDir = a.resume;
   if (a.steps >= 0) o.steps = std::uint64_t(a.steps);
   o.threads = a.threads;
+  o.overwrite = a.overwrite;
   o.stop = &gStop;
   o.note = [](const std::string& line) { std::cerr << "lsdem: note: " << line << '\n'; };
   const bool terminal = isatty(fileno(stderr)) != 0;
@@ -107,6 +109,8 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--threads", args->threads, "OpenMP threads (0: all cores; default: the scene's)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--resume", args->resume, "continue the run whose outputs are in DIR from its checkpoint");
+  cmd->add_flag("--overwrite", args->overwrite,
+                "replace the outputs of another run in the output folder (without it such a folder is refused)");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress line and no final report");
   cmd->callback([args] { runCommand(*args); });
 }

@@ -15,6 +15,7 @@
 #include "lsdem/io/Vtk.h"
 
 #include "Checksum.h"
+#include "OutputFolder.h"
 
 #include <algorithm>
 #include <charconv>
@@ -198,8 +199,8 @@ struct Schedule {
 template <int D>
 class Runner {
  public:
-  Runner(SceneDef<D> scene, const RunOptions& options, const std::string& outDir)
-      : scene_(std::move(scene)), options_(options), out_(outDir) {}
+  Runner(SceneDef<D> scene, const RunOptions& options, const std::string& outDir, std::unique_ptr<OutputLock> lock)
+      : scene_(std::move(scene)), options_(options), out_(outDir), lock_(std::move(lock)) {}
 
   RunResult run(bool resume) {
     const Clock::time_point start = Clock::now();
@@ -215,7 +216,7 @@ class Runner {
     }
     setEnd(world);
     // Everything is checked: now the outputs.
-    fs::create_directories(out_);
+    claimOutputFolder(resume);
     if (!resume) fs::copy_file(scene_.file, out_ / "scene.toml", fs::copy_options::overwrite_existing);
     openOutputs(sizes);
 
@@ -390,6 +391,18 @@ class Runner {
   }
 
   // ---- outputs ----
+  // The folder is created and locked; a new run refuses another run's
+  // outputs in it, or removes them with `overwrite`.
+  void claimOutputFolder(bool resume) {
+    std::error_code ec;
+    fs::create_directories(out_, ec);
+    if (ec) throw std::runtime_error("cannot create the output folder " + out_.string() + ": " + ec.message());
+    if (!lock_) lock_ = std::make_unique<OutputLock>(out_);
+    if (resume) return;
+    checkOutputFolder(out_, options_.overwrite);
+    removeRunOutputs(out_);
+  }
+
   void openOutputs(const std::optional<std::map<std::string, std::uint64_t>>& sizes) {
     const auto size = [&](const std::string& name) -> std::optional<std::uint64_t> {
       if (!sizes) return std::nullopt;
@@ -874,6 +887,7 @@ class Runner {
   SceneDef<D> scene_;
   RunOptions options_;
   fs::path out_;
+  std::unique_ptr<OutputLock> lock_;  // held while the run writes into out_
   SceneWorld<D> sw_;
   bool resumed_ = false;
   bool byTime_ = true;
@@ -923,25 +937,35 @@ std::string checkpointScene(const std::string& dir) {
 }
 
 template <int D>
-RunResult runOf(SceneDef<D> scene, const RunOptions& options) {
+RunResult runOf(SceneDef<D> scene, const RunOptions& options, std::unique_ptr<OutputLock> lock) {
   const std::string out =
       !options.resumeDir.empty() ? options.resumeDir : (!options.outDir.empty() ? options.outDir : scene.output.dir);
+  // A folder that exists is claimed before the world is built: another run
+  // in it is refused at once.
+  if (!lock && fs::is_directory(out)) {
+    lock = std::make_unique<OutputLock>(out);
+    checkOutputFolder(out, options.overwrite);
+  }
 #ifdef LSDEM_HAVE_OPENMP
   const int threads = options.threads >= 0 ? options.threads : scene.threads;
   if (threads > 0) omp_set_num_threads(threads);
 #endif
-  Runner<D> runner(std::move(scene), options, out);
+  Runner<D> runner(std::move(scene), options, out, std::move(lock));
   return runner.run(!options.resumeDir.empty());
 }
 
 }  // namespace
 
 RunResult runScene(const RunOptions& options) {
+  // A resumed run holds its folder from the start: no other run may write
+  // its checkpoint while it is read.
+  std::unique_ptr<OutputLock> lock;
+  if (!options.resumeDir.empty() && fs::is_directory(options.resumeDir)) lock = std::make_unique<OutputLock>(options.resumeDir);
   const std::string scenePath = options.resumeDir.empty() ? options.scene : checkpointScene(options.resumeDir);
   AnySceneDef scene = readScene(scenePath);
   if (options.note) std::visit([&](const auto& s) { for (const std::string& n : s.notes) options.note(n); }, scene);
-  if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) return runOf<2>(std::move(*s2), options);
-  return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), options);
+  if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) return runOf<2>(std::move(*s2), options, std::move(lock));
+  return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), options, std::move(lock));
 }
 
 }  // namespace lsdem::io
