@@ -105,25 +105,56 @@ std::string readWholeFile(const std::string& path) {
 // Why the last write failed (a full disk: "No space left on device").
 std::string writeError() { return errno != 0 ? std::strerror(errno) : "write failed"; }
 
+// How many bytes of a CSV file a resumed run keeps: the `recorded` size the
+// checkpoint saw (whole rows), or, when the file is shorter or holds NUL
+// bytes before that size (cut by a kill or a full disk, or a machine crash
+// that left a block of zeros), what lies before its last whole row. Reads
+// and checks only: nothing is changed until every output has been checked.
+std::uint64_t keptCsvSize(const fs::path& path, std::uint64_t recorded) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string(), 0, "", "missing or unreadable: the run's outputs are incomplete, cannot resume");
+  std::uint64_t read = 0, wholeRows = 0;
+  std::string chunk(std::size_t(1) << 20, '\0');
+  while (read < recorded) {
+    in.read(chunk.data(), std::streamsize(std::min<std::uint64_t>(chunk.size(), recorded - read)));
+    const std::size_t n = std::size_t(in.gcount());
+    if (n == 0) break;
+    const std::size_t nul = std::string_view(chunk.data(), n).find('\0');
+    const std::size_t valid = nul == std::string_view::npos ? n : nul;
+    const std::size_t lastBreak = std::string_view(chunk.data(), valid).rfind('\n');
+    if (lastBreak != std::string_view::npos) wholeRows = read + lastBreak + 1;
+    read += valid;
+    if (valid < n) break;
+  }
+  return read == recorded ? recorded : wholeRows;
+}
+
 // One CSV file of the run, appended row by row and flushed, so a run that
 // stops keeps every row written. A resumed run cuts it back to the size it had
 // at the checkpoint. Every row is checked before it is written: a non-finite
 // number (the simulation diverged) stops the run instead of reaching the file.
+// A write that fails (a full disk) stops the run, naming the file.
 class CsvFile {
  public:
-  void open(const fs::path& path, const std::string& header, std::optional<std::uint64_t> resumeSize) {
+  /// A new file holding the header.
+  void create(const fs::path& path, const std::string& header) {
     path_ = path;
     columns_ = cells(header);
-    if (resumeSize) {
-      if (!fs::exists(path)) throw std::runtime_error("resume: " + path.string() + " is missing");
-      fs::resize_file(path, *resumeSize);
-      out_.open(path, std::ios::app | std::ios::binary);
-    } else {
-      out_.open(path, std::ios::trunc | std::ios::binary);
-      out_ << header << '\n';
-    }
-    if (!out_) throw std::runtime_error("cannot write " + path.string());
-    out_.flush();
+    out_.open(path, std::ios::trunc | std::ios::binary);
+    if (!out_) throw std::runtime_error("cannot write " + path.string() + ": " + writeError());
+    write(header + '\n');
+  }
+  /// A resumed run's file, cut to its first `size` bytes (keptCsvSize) and
+  /// appended to; the header again when nothing of it is kept.
+  void resume(const fs::path& path, const std::string& header, std::uint64_t size) {
+    path_ = path;
+    columns_ = cells(header);
+    std::error_code ec;
+    fs::resize_file(path, size, ec);
+    if (ec) throw std::runtime_error("cannot cut " + path.string() + " back to the checkpoint: " + ec.message());
+    out_.open(path, std::ios::app | std::ios::binary);
+    if (!out_) throw std::runtime_error("cannot write " + path.string() + ": " + writeError());
+    if (size == 0) write(header + '\n');
   }
   /// One row (no line break).
   void row(const std::string& line) { write(line + '\n'); }
@@ -404,13 +435,8 @@ class Runner {
   }
 
   void openOutputs(const std::optional<std::map<std::string, std::uint64_t>>& sizes) {
-    const auto size = [&](const std::string& name) -> std::optional<std::uint64_t> {
-      if (!sizes) return std::nullopt;
-      const auto it = sizes->find(name);
-      if (it == sizes->end()) throw InputError((out_ / kCheckpointFile).string(), 0, name, "missing in the checkpoint");
-      return it->second;
-    };
-    // history.csv
+    // The CSV files and their headers.
+    std::vector<std::pair<std::string, std::string>> files;
     std::string header =
         "step,time_s,dt_s,critical_dt_s,dt_limit_id,dt_limit_generation,dt_limit_diameter_m,dt_limit_nodes,"
         "dt_limit_mass_kg,dt_limit_stiffness_N_per_m,dt_limit_patch_nodes,dt_limit_contact,particles,contacts,breakages,removed_mass_kg,"
@@ -425,23 +451,35 @@ class Runner {
       header += "," + tool.name + "_power_W";
     }
     if (scene_.specimen) header += ",height_m,stress_Pa,strain,void_ratio";
-    csv_["history.csv"].open(out_ / "history.csv", header, size("history.csv"));
-    csv_["psd.csv"].open(out_ / "psd.csv", "time_s,sieve_size_m,percent_passing", size("psd.csv"));
-    csv_["shape_stats.csv"].open(out_ / "shape_stats.csv",
-                                 "time_s,strain,particles,mean_circularity,mean_aspect_ratio,mean_sieve_size_m,"
-                                 "shape_particles",
-                                 size("shape_stats.csv"));
-    csv_["shape_histograms.csv"].open(out_ / "shape_histograms.csv", "time_s,strain,quantity,bin_low,bin_high,count",
-                                      size("shape_histograms.csv"));
-    csv_["removed.csv"].open(out_ / "removed.csv", "id,time_s,mass_kg,volume,sieve_size_m,reason", size("removed.csv"));
+    files.emplace_back("history.csv", header);
+    files.emplace_back("psd.csv", "time_s,sieve_size_m,percent_passing");
+    files.emplace_back("shape_stats.csv",
+                       "time_s,strain,particles,mean_circularity,mean_aspect_ratio,mean_sieve_size_m,shape_particles");
+    files.emplace_back("shape_histograms.csv", "time_s,strain,quantity,bin_low,bin_high,count");
+    files.emplace_back("removed.csv", "id,time_s,mass_kg,volume,sieve_size_m,reason");
     {
       std::ostringstream h;
       writeBreakageLogHeader<D>(h);
       std::string s = h.str();
       if (!s.empty() && s.back() == '\n') s.pop_back();
-      csv_["breakage_log.csv"].open(out_ / "breakage_log.csv", s, size("breakage_log.csv"));
+      files.emplace_back("breakage_log.csv", s);
     }
-    // ParaView series.
+    // A resumed run checks every file before it changes any: one that is
+    // missing or damaged leaves them all as they were.
+    std::map<std::string, std::uint64_t> kept;
+    if (sizes) {
+      for (const auto& [name, h] : files) {
+        const auto it = sizes->find(name);
+        if (it == sizes->end()) throw InputError((out_ / kCheckpointFile).string(), 0, name, "missing in the checkpoint");
+        kept[name] = keptCsvSize(out_ / name, it->second);
+        if (kept[name] < it->second && options_.note) {
+          options_.note((out_ / name).string() + ": cut short of the " + std::to_string(it->second) +
+                        " bytes the checkpoint saw (a kill, a full disk or a crash): continued after its last whole "
+                        "row, at byte " + std::to_string(kept[name]) + "; the rows between are missing");
+        }
+      }
+    }
+    // ParaView series (a resumed run's are read, and refused when damaged, here).
     FrameWriterDef<D> def;
     def.directory = out_;
     def.encoding = scene_.output.ascii ? VtkEncoding::Ascii : VtkEncoding::Binary;
@@ -451,10 +489,16 @@ class Runner {
     def.contacts = scene_.output.contacts;
     if (scene_.domain) def.extent = *scene_.domain;
     def.resume = resumed_;
-    if (scene_.output.frames > 0) {
-      frameWriter_.emplace(def);
-      if (resumed_) frameWriter_->truncateAfter(lastFrameTime_);
+    if (scene_.output.frames > 0) frameWriter_.emplace(def);
+    // Now the files are cut back to the checkpoint, or made.
+    for (const auto& [name, h] : files) {
+      if (sizes) {
+        csv_[name].resume(out_ / name, h, kept[name]);
+      } else {
+        csv_[name].create(out_ / name, h);
+      }
     }
+    if (frameWriter_ && resumed_) frameWriter_->truncateAfter(lastFrameTime_);
   }
 
   void writeHistoryRow() {

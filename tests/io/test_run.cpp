@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 using namespace lsdem;
@@ -565,4 +566,85 @@ history_rows = 3000
   const std::string history = readFile(dir.path / "out" / "history.csv");
   EXPECT_GT(lines(history).size(), 10u) << "the rows before the divergence stay";
   for (const char* bad : {"inf", "nan"}) EXPECT_EQ(history.find(bad), std::string::npos) << bad;
+}
+
+// A resume that fails (an output missing or damaged) changes none of the
+// outputs it would have cut back and appended to (issue 16: history.csv was
+// cut before the missing file was found).
+TEST(Run, AFailedResumeLeavesTheOutputsAsTheyWere) {
+  for (const std::string damage : {"psd.csv missing", "particles.pvd damaged"}) {
+    TempDir dir("failed_resume");
+    io::RunOptions run;
+    run.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 2\nhistory_rows = 2")).string();
+    run.outDir = (dir.path / "out").string();
+    run.steps = 7;  // rows at steps 0, 3, 6, the checkpoint, then the last row at step 7
+    io::runScene(run);
+    const fs::path out = dir.path / "out";
+    if (damage == "psd.csv missing") {
+      fs::remove(out / "psd.csv");
+    } else {
+      std::ofstream(out / "particles.pvd", std::ios::trunc) << "<VTKFile><Collection><DataSet file=\"x\"/>";
+    }
+    std::map<std::string, std::string> before;
+    for (const char* file : {"history.csv", "shape_stats.csv", "removed.csv", "breakage_log.csv", "particles.pvd"}) {
+      before[file] = readFile(out / file);
+    }
+    ASSERT_EQ(lines(before["history.csv"]).size(), 1u + 4u);
+    io::RunOptions resume;
+    resume.resumeDir = run.outDir;
+    resume.steps = 2;
+    try {
+      io::runScene(resume);
+      ADD_FAILURE() << damage << ": resumed";
+    } catch (const io::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(damage.substr(0, damage.find(' '))), std::string::npos) << e.what();
+    }
+    for (const auto& [file, text] : before) EXPECT_EQ(readFile(out / file), text) << damage << ": " << file;
+  }
+}
+
+// A CSV file cut mid-row short of the checkpoint's size, or whose tail the
+// checkpoint saw became zeros (a machine crash), is continued after its last
+// whole row: no NUL bytes, no partial row (issue 16: it was padded with
+// NULs); the resume says so.
+TEST(Run, ResumeRepairsACsvCutMidRow) {
+  for (const bool zeros : {false, true}) {
+    TempDir dir(zeros ? "repair_zeros" : "repair_cut");
+    io::RunOptions run;
+    run.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 2\nhistory_rows = 1000")).string();
+    run.outDir = (dir.path / "out").string();
+    run.steps = 20;  // a row per step: 21 rows
+    io::runScene(run);
+    const fs::path history = dir.path / "out" / "history.csv";
+    const std::string whole = readFile(history);
+    const auto rows = lines(whole);
+    ASSERT_EQ(rows.size(), 22u);
+    // Cut in the middle of the row of step 18.
+    const std::size_t cut = whole.size() - rows[21].size() - 1 - rows[20].size() - 1 - rows[19].size() / 2;
+    std::string damaged = whole.substr(0, cut);
+    if (zeros) damaged.append(whole.size() - cut, '\0');
+    std::ofstream(history, std::ios::binary | std::ios::trunc) << damaged;
+
+    io::RunOptions resume;
+    resume.resumeDir = run.outDir;
+    resume.steps = 3;
+    std::string notes;
+    resume.note = [&](const std::string& line) { notes += line + "\n"; };
+    io::runScene(resume);
+    EXPECT_NE(notes.find(history.string() + ": cut short of the " + std::to_string(whole.size()) + " bytes"),
+              std::string::npos)
+        << notes;
+    const std::string repaired = readFile(history);
+    EXPECT_EQ(repaired.find('\0'), std::string::npos);
+    ASSERT_FALSE(repaired.empty());
+    EXPECT_EQ(repaired.back(), '\n');
+    const auto after = lines(repaired);
+    const std::size_t columns = split(after[0]).size();
+    for (const std::string& row : after) EXPECT_EQ(split(row).size(), columns) << row;
+    // Rows to step 17, then steps 21, 22, 23 of the resumed part.
+    ASSERT_EQ(after.size(), 1u + 18u + 3u);
+    EXPECT_EQ(after[18], rows[18]);
+    EXPECT_EQ(split(after[19])[0], "21");
+    EXPECT_EQ(split(after.back())[0], "23");
+  }
 }
