@@ -68,7 +68,7 @@ std::uint64_t fnv1a(const std::string& bytes) {
   return h;
 }
 
-std::string readWholeFile(const std::string& path);
+std::string readWholeFile(const std::string& path, bool mustExist = true);
 
 // A checkpoint's bytes, its magic, format version and CRC-32 checked, the
 // checksum removed.
@@ -94,8 +94,11 @@ std::string readCheckpointFile(const std::string& path) {
   return bytes;
 }
 
-std::string readWholeFile(const std::string& path) {
+// A file's bytes; a file that cannot be read is an InputError, or empty
+// when it need not exist.
+std::string readWholeFile(const std::string& path, bool mustExist) {
   std::ifstream in(path, std::ios::binary);
+  if (!in && !mustExist) return {};
   if (!in) throw InputError(path, 0, "", "cannot read the file");
   std::ostringstream s;
   s << in.rdbuf();
@@ -106,13 +109,20 @@ std::string readWholeFile(const std::string& path) {
 std::string writeError() { return errno != 0 ? std::strerror(errno) : "write failed"; }
 
 // How many bytes of a CSV file a resumed run keeps: the `recorded` size the
-// checkpoint saw (whole rows), or, when the file is shorter or holds NUL
+// checkpoint saw (whole rows; the first is `header`), or, when the file is shorter or holds NUL
 // bytes before that size (cut by a kill or a full disk, or a machine crash
 // that left a block of zeros), what lies before its last whole row. Reads
 // and checks only: nothing is changed until every output has been checked.
-std::uint64_t keptCsvSize(const fs::path& path, std::uint64_t recorded) {
+std::uint64_t keptCsvSize(const fs::path& path, std::uint64_t recorded, const std::string& header) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path.string(), 0, "", "missing or unreadable: the run's outputs are incomplete, cannot resume");
+  // Rows are appended under the columns this scene writes.
+  std::string first;
+  if (std::getline(in, first) && !in.eof() && first != header) {
+    throw InputError(path.string(), 1, "", "its columns are not those this scene writes (another scene's file?)");
+  }
+  in.clear();
+  in.seekg(0);
   std::uint64_t read = 0, wholeRows = 0;
   std::string chunk(std::size_t(1) << 20, '\0');
   while (read < recorded) {
@@ -230,8 +240,14 @@ struct Schedule {
 template <int D>
 class Runner {
  public:
-  Runner(SceneDef<D> scene, const RunOptions& options, const std::string& outDir, std::unique_ptr<OutputLock> lock)
-      : scene_(std::move(scene)), options_(options), out_(outDir), lock_(std::move(lock)) {}
+  Runner(SceneDef<D> scene, std::string sceneText, const RunOptions& options, const std::string& outDir,
+         std::unique_ptr<OutputLock> lock)
+      : scene_(std::move(scene)),
+        sceneText_(std::move(sceneText)),
+        sceneHash_(fnv1a(sceneText_)),
+        options_(options),
+        out_(outDir),
+        lock_(std::move(lock)) {}
 
   RunResult run(bool resume) {
     const Clock::time_point start = Clock::now();
@@ -248,7 +264,11 @@ class Runner {
     setEnd(world);
     // Everything is checked: now the outputs.
     claimOutputFolder(resume);
-    if (!resume) fs::copy_file(scene_.file, out_ / "scene.toml", fs::copy_options::overwrite_existing);
+    // The copy of the scene the run read: its identity for a resume (a
+    // forced resume with another scene replaces it).
+    if (!resume || readWholeFile((out_ / "scene.toml").string(), false) != sceneText_) {
+      writeFileAtomically(out_ / "scene.toml", sceneText_);
+    }
     openOutputs(sizes);
 
     // Frames at the start of a new run (a resumed run has them already).
@@ -471,7 +491,7 @@ class Runner {
       for (const auto& [name, h] : files) {
         const auto it = sizes->find(name);
         if (it == sizes->end()) throw InputError((out_ / kCheckpointFile).string(), 0, name, "missing in the checkpoint");
-        kept[name] = keptCsvSize(out_ / name, it->second);
+        kept[name] = keptCsvSize(out_ / name, it->second, h);
         if (kept[name] < it->second && options_.note) {
           options_.note((out_ / name).string() + ": cut short of the " + std::to_string(it->second) +
                         " bytes the checkpoint saw (a kill, a full disk or a crash): continued after its last whole "
@@ -845,7 +865,7 @@ class Runner {
     put(kCheckpointVersion);
     put(std::int32_t(D));
     putBytes(fs::absolute(scene_.file).string());
-    put(fnv1a(readWholeFile(scene_.file)));
+    put(sceneHash_);
     put(std::uint64_t(shapes.size()));
     for (const geometry::Shape<D>* s : shapes) {
       std::ostringstream g(std::ios::binary);
@@ -929,6 +949,8 @@ class Runner {
   }
 
   SceneDef<D> scene_;
+  std::string sceneText_;    // the scene file's text as the run read it
+  std::uint64_t sceneHash_;  // its hash, the run's identity in checkpoints
   RunOptions options_;
   fs::path out_;
   std::unique_ptr<OutputLock> lock_;  // held while the run writes into out_
@@ -953,8 +975,12 @@ class Runner {
   Clock::time_point start_;
 };
 
-// The scene path stored in a checkpoint, checked against the file's content now.
-std::string checkpointScene(const std::string& dir) {
+// The scene a resumed run uses: the one given, else the one the checkpoint
+// names, else (it moved) the copy in the output folder. It must be the
+// checkpoint's scene, and the folder's copy too (a checkpoint copied in from
+// another run is not this folder's), unless forced.
+std::string resumeScene(const RunOptions& options) {
+  const std::string& dir = options.resumeDir;
   const std::string path = (fs::path(dir) / kCheckpointFile).string();
   if (!fs::exists(path)) throw InputError(path, 0, "", "no checkpoint to resume from (is this a run's output folder?)");
   const std::string bytes = readCheckpointFile(path);
@@ -964,24 +990,42 @@ std::string checkpointScene(const std::string& dir) {
   std::memcpy(&n, bytes.data() + pos, 8);
   pos += 8;
   if (n > bytes.size() - pos - 8) throw InputError(path, 0, "", "truncated checkpoint");
-  const std::string scene(bytes.data() + pos, std::size_t(n));
+  const std::string named(bytes.data() + pos, std::size_t(n));
   pos += std::size_t(n);
   std::uint64_t hash = 0;
   std::memcpy(&hash, bytes.data() + pos, 8);
-  // A scene file that moved: the copy the run keeps in its output folder, when it is the same scene.
+
   const fs::path copy = fs::path(dir) / "scene.toml";
-  if (!fs::exists(scene)) {
-    if (fs::exists(copy) && fnv1a(readWholeFile(copy.string())) == hash) return copy.string();
-    throw InputError(path, 0, "", "its scene file " + scene + " no longer exists (nor does an unchanged copy in " + dir + ")");
+  const bool haveCopy = fs::exists(copy);
+  const bool copyMatches = haveCopy && fnv1a(readWholeFile(copy.string())) == hash;
+  std::string scene = options.scene;
+  if (scene.empty()) {
+    if (fs::exists(named)) {
+      scene = named;
+    } else if (haveCopy) {
+      scene = copy.string();
+    } else {
+      throw InputError(path, 0, "", "its scene file " + named + " no longer exists (nor does a copy in " + dir + ")");
+    }
   }
-  if (fnv1a(readWholeFile(scene)) != hash) {
-    throw InputError(scene, 0, "", "the scene file changed since the checkpoint in " + dir + " was written");
+  std::optional<InputError> mismatch;
+  if (haveCopy && !copyMatches) {
+    mismatch.emplace(path, 0, "",
+                     "written by a run of another scene than " + copy.string() +
+                         " (a checkpoint copied from another run, or an edited copy)");
+  } else if (fnv1a(readWholeFile(scene)) != hash) {
+    mismatch.emplace(scene, 0, "",
+                     options.scene.empty() ? "the scene file changed since the checkpoint in " + dir + " was written"
+                                           : "not the scene of the run in " + dir + " (its checkpoint names " + named + ")");
   }
+  if (!mismatch) return scene;
+  if (!options.force) throw InputError(mismatch->file(), 0, "", mismatch->problem() + "; give --force to resume with it anyway");
+  if (options.note) options.note(std::string(mismatch->what()) + ": resumed with " + scene + " anyway (--force)");
   return scene;
 }
 
 template <int D>
-RunResult runOf(SceneDef<D> scene, const RunOptions& options, std::unique_ptr<OutputLock> lock) {
+RunResult runOf(SceneDef<D> scene, std::string sceneText, const RunOptions& options, std::unique_ptr<OutputLock> lock) {
   const std::string out =
       !options.resumeDir.empty() ? options.resumeDir : (!options.outDir.empty() ? options.outDir : scene.output.dir);
   // A folder that exists is claimed before the world is built: another run
@@ -994,7 +1038,7 @@ RunResult runOf(SceneDef<D> scene, const RunOptions& options, std::unique_ptr<Ou
   const int threads = options.threads >= 0 ? options.threads : scene.threads;
   if (threads > 0) omp_set_num_threads(threads);
 #endif
-  Runner<D> runner(std::move(scene), options, out, std::move(lock));
+  Runner<D> runner(std::move(scene), std::move(sceneText), options, out, std::move(lock));
   return runner.run(!options.resumeDir.empty());
 }
 
@@ -1005,11 +1049,12 @@ RunResult runScene(const RunOptions& options) {
   // its checkpoint while it is read.
   std::unique_ptr<OutputLock> lock;
   if (!options.resumeDir.empty() && fs::is_directory(options.resumeDir)) lock = std::make_unique<OutputLock>(options.resumeDir);
-  const std::string scenePath = options.resumeDir.empty() ? options.scene : checkpointScene(options.resumeDir);
+  const std::string scenePath = options.resumeDir.empty() ? options.scene : resumeScene(options);
   AnySceneDef scene = readScene(scenePath);
+  std::string text = readWholeFile(scenePath);
   if (options.note) std::visit([&](const auto& s) { for (const std::string& n : s.notes) options.note(n); }, scene);
-  if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) return runOf<2>(std::move(*s2), options, std::move(lock));
-  return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), options, std::move(lock));
+  if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) return runOf<2>(std::move(*s2), std::move(text), options, std::move(lock));
+  return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), std::move(text), options, std::move(lock));
 }
 
 }  // namespace lsdem::io

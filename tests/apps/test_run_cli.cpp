@@ -219,3 +219,28 @@ TEST(RunCli, AStaleLockOfAKilledRunIsTakenOver) {
   EXPECT_FALSE(fs::exists(out / "lsdem.lock"));
   fs::remove_all(dir);
 }
+
+// A resume with an edited scene is refused in one line with exit code 2
+// (the run's outputs unchanged); --force resumes with it as it is now;
+// --force without --resume is a usage error.
+TEST(RunCli, ResumeWithAnEditedSceneNeedsForce) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_force";
+  const fs::path out = dir / "out";
+  const fs::path scene = longScene(dir);
+  ASSERT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--steps", "3", "--quiet"}), 0);
+  std::ofstream(scene, std::ios::app) << "progress_seconds = 5.0\n";
+  const std::string history = readFile(out / "history.csv");
+  const lsdem::test::ProcessResult refused =
+      runCaptured({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "2", "--quiet"});
+  EXPECT_EQ(refused.code, 2) << refused.output;
+  EXPECT_EQ(refused.output, "lsdem: " + scene.string() + ": the scene file changed since the checkpoint in " +
+                                out.string() + " was written; give --force to resume with it anyway\n");
+  EXPECT_EQ(readFile(out / "history.csv"), history);
+  const lsdem::test::ProcessResult forced =
+      runCaptured({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "2", "--force", "--quiet"});
+  EXPECT_EQ(forced.code, 0) << forced.output;
+  EXPECT_NE(forced.output.find("anyway (--force)"), std::string::npos) << forced.output;
+  EXPECT_EQ(readFile(out / "scene.toml"), readFile(scene));
+  EXPECT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--force", "--quiet"}), 2);
+  fs::remove_all(dir);
+}

@@ -648,3 +648,70 @@ TEST(Run, ResumeRepairsACsvCutMidRow) {
     EXPECT_EQ(split(after.back())[0], "23");
   }
 }
+
+// A checkpoint carries the hash of the scene text its run read (kept as
+// scene.toml in the folder): a checkpoint copied in from another run's
+// folder, or a resume given another scene, is refused and changes nothing;
+// forced, the run continues with the scene given, whose copy then replaces
+// scene.toml (and later resumes need no force).
+TEST(Run, ResumeWithAnotherSceneIsRefusedUnlessForced) {
+  TempDir dir("scene_identity");
+  fs::create_directories(dir.path / "a");
+  fs::create_directories(dir.path / "b");
+  const fs::path sceneA = writeScene(dir.path / "a", kDiscScene);
+  const fs::path sceneB = writeScene(dir.path / "b", editScene(kDiscScene, "gravity = [0.0, -9.81]", "gravity = [0.0, -5.0]"));
+  for (const fs::path& scene : {sceneA, sceneB}) {
+    io::RunOptions run;
+    run.scene = scene.string();
+    run.outDir = (scene.parent_path() / "out").string();
+    run.steps = 5;
+    io::runScene(run);
+  }
+  const fs::path outA = dir.path / "a" / "out", outB = dir.path / "b" / "out";
+  const auto refusal = [](io::RunOptions o) {
+    o.steps = 2;
+    try {
+      io::runScene(o);
+    } catch (const io::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("resumed");
+  };
+
+  // A's checkpoint copied into B's folder.
+  const std::string checkpointB = readFile(outB / "checkpoint.lsc");
+  const std::string historyB = readFile(outB / "history.csv");
+  fs::copy_file(outA / "checkpoint.lsc", outB / "checkpoint.lsc", fs::copy_options::overwrite_existing);
+  io::RunOptions foreign;
+  foreign.resumeDir = outB.string();
+  EXPECT_EQ(refusal(foreign), (outB / "checkpoint.lsc").string() + ": written by a run of another scene than " +
+                                  (outB / "scene.toml").string() +
+                                  " (a checkpoint copied from another run, or an edited copy); give --force to resume "
+                                  "with it anyway");
+  EXPECT_EQ(readFile(outB / "history.csv"), historyB);
+  std::ofstream(outB / "checkpoint.lsc", std::ios::binary | std::ios::trunc) << checkpointB;
+
+  // B's scene given to resume A's run.
+  io::RunOptions given;
+  given.resumeDir = outA.string();
+  given.scene = sceneB.string();
+  EXPECT_NE(refusal(given).find(sceneB.string() + ": not the scene of the run in " + outA.string()), std::string::npos)
+      << refusal(given);
+  // A's own scene given: resumed.
+  given.scene = sceneA.string();
+  EXPECT_EQ(refusal(given), "resumed");
+
+  // Forced with B's scene: a note, B's text becomes A's folder's copy and
+  // identity, and the next resume needs no force.
+  given.scene = sceneB.string();
+  given.force = true;
+  std::string notes;
+  given.note = [&](const std::string& line) { notes += line + "\n"; };
+  EXPECT_EQ(refusal(given), "resumed");
+  EXPECT_NE(notes.find("resumed with " + sceneB.string() + " anyway (--force)"), std::string::npos) << notes;
+  EXPECT_EQ(readFile(outA / "scene.toml"), readFile(sceneB));
+  io::RunOptions next;
+  next.resumeDir = outA.string();
+  next.scene = sceneB.string();
+  EXPECT_EQ(refusal(next), "resumed");
+}
