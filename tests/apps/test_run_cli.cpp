@@ -244,3 +244,61 @@ TEST(RunCli, ResumeWithAnEditedSceneNeedsForce) {
   EXPECT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--force", "--quiet"}), 2);
   fs::remove_all(dir);
 }
+
+namespace {
+
+// Files in `dir` and below whose name ends in ".tmp".
+std::size_t temporaryFiles(const fs::path& dir) {
+  std::size_t n = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) n += e.path().extension() == ".tmp";
+  return n;
+}
+
+}  // namespace
+
+// A write that fails (here a file size limit, as a full disk) stops the run
+// at once: exit code 1, one line naming the file and the reason, no
+// temporary file or lock left. The last periodic checkpoint stays whole: the
+// run resumes from it once the limit is gone, its history cut back to whole rows.
+TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_full";
+  const fs::path scene = longScene(dir);
+  std::string text = kLongScene;
+  text.replace(text.find("frames = 100000"), 15, "frames = 10\ncheckpoint_every = 0.05");
+  text.replace(text.find("history_rows = 100000"), 21, "history_rows = 100000000");  // a row per step
+  std::ofstream(scene, std::ios::trunc) << text;
+  const auto runLimited = [&](const fs::path& out, long long limit) {
+    return runCaptured({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--quiet"}, limit);
+  };
+
+  // history.csv reaches 200 kB first.
+  const fs::path out = dir / "history";
+  const lsdem::test::ProcessResult history = runLimited(out, 200000);
+  EXPECT_EQ(history.code, 1) << history.output;
+  EXPECT_EQ(history.output, "lsdem: error: cannot write " + (out / "history.csv").string() + ": File too large\n");
+  EXPECT_EQ(fs::file_size(out / "history.csv"), 200000u);
+  EXPECT_FALSE(fs::exists(out / "lsdem.lock"));
+  EXPECT_EQ(temporaryFiles(out), 0u);
+  ASSERT_EQ(runToExit({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "3", "--quiet"}), 0);
+  const std::string rows = readFile(out / "history.csv");
+  EXPECT_EQ(rows.find('\0'), std::string::npos);
+  EXPECT_EQ(rows.back(), '\n');
+  std::istringstream lines(rows);
+  std::string header;
+  std::getline(lines, header);
+  for (std::string row; std::getline(lines, row);) {
+    ASSERT_EQ(std::count(row.begin(), row.end(), ','), std::count(header.begin(), header.end(), ',')) << row;
+  }
+
+  // 16 kB: the first particles frame (written to a temporary file, then
+  // renamed) is too large.
+  const fs::path small = dir / "frame";
+  const lsdem::test::ProcessResult frame = runLimited(small, 16384);
+  EXPECT_EQ(frame.code, 1) << frame.output;
+  EXPECT_EQ(frame.output, "lsdem: error: cannot write '" + (small / "frames" / "particles_000000.vtp").string() +
+                              "': File too large\n");
+  EXPECT_FALSE(fs::exists(small / "frames" / "particles_000000.vtp"));
+  EXPECT_EQ(temporaryFiles(small), 0u);
+  EXPECT_FALSE(fs::exists(small / "lsdem.lock"));
+  fs::remove_all(dir);
+}
