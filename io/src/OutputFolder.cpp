@@ -26,9 +26,9 @@ namespace fs = std::filesystem;
 // The files a run writes into its folder, besides scene.toml and frames/
 // (docs/outputs.md).
 constexpr std::array<const char*, 13> kOutputFiles = {
-    "summary.json",  "history.csv",  "checkpoint.lsc", "psd.csv",       "shape_stats.csv",
-    "shape_histograms.csv", "removed.csv", "breakage_log.csv", "product_psd.csv", "particles.pvd",
-    "surfaces.pvd",  "boundaries.pvd", "contacts.pvd"};
+    "summary.json",     "history.csv",     "checkpoint.lsc", "psd.csv",      "shape_stats.csv",
+    "shape_histograms.csv", "removed.csv", "breakage_log.csv", "product_psd.csv",
+    "particles.pvd",    "surfaces.pvd",    "boundaries.pvd", "contacts.pvd"};
 
 // A frame of a ParaView series: frames/<series>_NNNNNN.vtp (or its temporary file).
 bool isFrameFile(const std::string& name) {
@@ -66,7 +66,8 @@ OutputLock::OutputLock(const fs::path& dir) : path_(dir / kLockFile) {
       const int error = errno;
       const long pid = pidIn(fd);
       // Without flock on this file system, a live pid holds the folder.
-      if (error == EWOULDBLOCK || (pid > 0 && pid != long(::getpid()) && (::kill(pid_t(pid), 0) == 0 || errno == EPERM))) {
+      const bool alive = pid > 0 && pid != long(::getpid()) && (::kill(pid_t(pid), 0) == 0 || errno == EPERM);
+      if (error == EWOULDBLOCK || alive) {
         ::close(fd);
         refuseHeld(path_, pid);
       }

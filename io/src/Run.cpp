@@ -115,7 +115,9 @@ std::string writeError() { return errno != 0 ? std::strerror(errno) : "write fai
 // and checks only: nothing is changed until every output has been checked.
 std::uint64_t keptCsvSize(const fs::path& path, std::uint64_t recorded, const std::string& header) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string(), 0, "", "missing or unreadable: the run's outputs are incomplete, cannot resume");
+  if (!in) {
+    throw InputError(path.string(), 0, "", "missing or unreadable: the run's outputs are incomplete, cannot resume");
+  }
   // Rows are appended under the columns this scene writes.
   std::string first;
   if (std::getline(in, first) && !in.eof() && first != header) {
@@ -490,7 +492,9 @@ class Runner {
     if (sizes) {
       for (const auto& [name, h] : files) {
         const auto it = sizes->find(name);
-        if (it == sizes->end()) throw InputError((out_ / kCheckpointFile).string(), 0, name, "missing in the checkpoint");
+        if (it == sizes->end()) {
+          throw InputError((out_ / kCheckpointFile).string(), 0, name, "missing in the checkpoint");
+        }
         kept[name] = keptCsvSize(out_ / name, it->second, h);
         if (kept[name] < it->second && options_.note) {
           options_.note((out_ / name).string() + ": cut short of the " + std::to_string(it->second) +
@@ -1015,11 +1019,14 @@ std::string resumeScene(const RunOptions& options) {
                          " (a checkpoint copied from another run, or an edited copy)");
   } else if (fnv1a(readWholeFile(scene)) != hash) {
     mismatch.emplace(scene, 0, "",
-                     options.scene.empty() ? "the scene file changed since the checkpoint in " + dir + " was written"
-                                           : "not the scene of the run in " + dir + " (its checkpoint names " + named + ")");
+                     options.scene.empty()
+                         ? "the scene file changed since the checkpoint in " + dir + " was written"
+                         : "not the scene of the run in " + dir + " (its checkpoint names " + named + ")");
   }
   if (!mismatch) return scene;
-  if (!options.force) throw InputError(mismatch->file(), 0, "", mismatch->problem() + "; give --force to resume with it anyway");
+  if (!options.force) {
+    throw InputError(mismatch->file(), 0, "", mismatch->problem() + "; give --force to resume with it anyway");
+  }
   if (options.note) options.note(std::string(mismatch->what()) + ": resumed with " + scene + " anyway (--force)");
   return scene;
 }
@@ -1048,12 +1055,16 @@ RunResult runScene(const RunOptions& options) {
   // A resumed run holds its folder from the start: no other run may write
   // its checkpoint while it is read.
   std::unique_ptr<OutputLock> lock;
-  if (!options.resumeDir.empty() && fs::is_directory(options.resumeDir)) lock = std::make_unique<OutputLock>(options.resumeDir);
+  if (!options.resumeDir.empty() && fs::is_directory(options.resumeDir)) {
+    lock = std::make_unique<OutputLock>(options.resumeDir);
+  }
   const std::string scenePath = options.resumeDir.empty() ? options.scene : resumeScene(options);
   AnySceneDef scene = readScene(scenePath);
   std::string text = readWholeFile(scenePath);
   if (options.note) std::visit([&](const auto& s) { for (const std::string& n : s.notes) options.note(n); }, scene);
-  if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) return runOf<2>(std::move(*s2), std::move(text), options, std::move(lock));
+  if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) {
+    return runOf<2>(std::move(*s2), std::move(text), options, std::move(lock));
+  }
   return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), std::move(text), options, std::move(lock));
 }
 
