@@ -1,6 +1,6 @@
 /// @file RunCommand.cpp
-/// @brief `lsdem run SCENE.toml [--out DIR] [--steps N] [--threads N] [--quiet]`
-/// and `lsdem run --resume DIR`: runs a scene (io/Run.h) with a progress line,
+/// @brief `lsdem run SCENE.toml [--out DIR] [--overwrite] [--steps N] [--threads N] [--quiet]`
+/// and `lsdem run [SCENE.toml] --resume DIR [--force]`: runs a scene (io/Run.h) with a progress line,
 /// and stops cleanly on Ctrl-C or SIGTERM (final frame, summary and checkpoint
 /// written; exit code 130 or 143, 128 + the signal).
 
@@ -49,18 +49,20 @@ struct RunArgs {
   long long steps = -1;
   int threads = -1;
   bool quiet = false;
+  bool overwrite = false;
+  bool force = false;
 };
 
 void runCommand(const RunArgs& a) {
-  if (a.scene.empty() == a.resume.empty()) {
-    throw CLI::ValidationError("lsdem run", "give a scene file, or --resume DIR (not both)");
-  }
+  if (a.scene.empty() && a.resume.empty()) throw CLI::ValidationError("lsdem run", "give a scene file, or --resume DIR");
   io::RunOptions o;
   o.scene = a.scene;
   o.outDir = a.out;
   o.resumeDir = a.resume;
   if (a.steps >= 0) o.steps = std::uint64_t(a.steps);
   o.threads = a.threads;
+  o.overwrite = a.overwrite;
+  o.force = a.force;
   o.stop = &gStop;
   o.note = [](const std::string& line) { std::cerr << "lsdem: note: " << line << '\n'; };
   const bool terminal = isatty(fileno(stderr)) != 0;
@@ -106,7 +108,15 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--steps", args->steps, "run this many steps instead of the scene's duration")->check(CLI::NonNegativeNumber);
   cmd->add_option("--threads", args->threads, "OpenMP threads (0: all cores; default: the scene's)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--resume", args->resume, "continue the run whose outputs are in DIR from its checkpoint");
+  CLI::Option* resume = cmd->add_option(
+      "--resume", args->resume,
+      "continue the run whose outputs are in DIR from its checkpoint (with the scene given, or the checkpoint's)");
+  cmd->add_flag("--overwrite", args->overwrite,
+                "replace the outputs of another run in the output folder (without it such a folder is refused)")
+      ->excludes(resume);
+  cmd->add_flag("--force", args->force,
+                "resume even when the scene is not the checkpoint's (edited, or another run's checkpoint)")
+      ->needs(resume);
   cmd->add_flag("--quiet,-q", args->quiet, "no progress line and no final report");
   cmd->callback([args] { runCommand(*args); });
 }

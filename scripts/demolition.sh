@@ -14,7 +14,7 @@ lsdem="${LSDEM:-./build/apps/lsdem}"
 [ -x "$lsdem" ] || bash scripts/build.sh
 python3 scripts/make_demolition_assets.py
 mkdir -p docs/images
-"$lsdem" run apps/scenes/demolition/demolition.toml --out "$out"
+"$lsdem" run apps/scenes/demolition/demolition.toml --out "$out" --overwrite
 "$lsdem" plot "$out"
 # The bucket forces (history.csv columns <tool>_force_*_N: the force of the
 # wall pieces on each bucket) against time: $out/plots/bucket_forces.png.

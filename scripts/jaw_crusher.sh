@@ -32,7 +32,7 @@ for css in "${settings[@]}"; do
   [ -f "$scene" ] || { echo "jaw_crusher.sh: no scene $scene (settings: 100 80 50)" >&2; exit 2; }
   if [ "${SKIP_RUN:-0}" != 1 ]; then
     echo "== CSS $css mm: $scene -> $out/css$css" >&2
-    args=(run "$scene" --out "$out/css$css")
+    args=(run "$scene" --out "$out/css$css" --overwrite)
     [ -n "${THREADS:-}" ] && args+=(--threads "$THREADS")
     "$lsdem" "${args[@]}"
   fi

@@ -69,7 +69,7 @@ for c in "${cases[@]}"; do
   d="$out/$c"
   if [ "${SKIP_RUN:-0}" != 1 ]; then
     echo "== oedometer $c: $scene -> $d" >&2
-    args=(run "$scene" --out "$d")
+    args=(run "$scene" --out "$d" --overwrite)
     [ -n "${THREADS:-}" ] && args+=(--threads "$THREADS")
     "$lsdem" "${args[@]}"
   fi

@@ -5,5 +5,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh
-./build/apps/lsdem run apps/scenes/three_grains/three_grains_2d.toml --out three_grains_2d-out
+./build/apps/lsdem run apps/scenes/three_grains/three_grains_2d.toml --out three_grains_2d-out --overwrite
 ./build/apps/lsdem plot three_grains_2d-out

@@ -22,7 +22,7 @@ root="${LSDEM_OUT:-.}"
 mkdir -p docs/images "$root"
 
 if [ "$which" = 2d ] || [ "$which" = both ]; then
-  "$lsdem" run apps/scenes/three_grains/three_grains_2d.toml --out "$root/three_grains_2d-out"
+  "$lsdem" run apps/scenes/three_grains/three_grains_2d.toml --out "$root/three_grains_2d-out" --overwrite
   "$lsdem" plot "$root/three_grains_2d-out"
   for frame in 0 40 60 last; do
     "$lsdem" render "$root/three_grains_2d-out" --frame "$frame" --size 480x800 \
@@ -31,7 +31,7 @@ if [ "$which" = 2d ] || [ "$which" = both ]; then
 fi
 
 if [ "$which" = 3d ] || [ "$which" = both ]; then
-  "$lsdem" run apps/scenes/three_grains/three_grains_3d.toml --out "$root/three_grains_3d-out"
+  "$lsdem" run apps/scenes/three_grains/three_grains_3d.toml --out "$root/three_grains_3d-out" --overwrite
   "$lsdem" plot "$root/three_grains_3d-out"
   # 80 frames over 0.045 s: 0 the stack as placed, 50 (0.028 s) just after
   # the bottom grain's first splits, last (0.045 s) the end.

@@ -15,6 +15,7 @@
 #include "lsdem/io/Vtk.h"
 
 #include "Checksum.h"
+#include "OutputFolder.h"
 
 #include <algorithm>
 #include <charconv>
@@ -67,7 +68,7 @@ std::uint64_t fnv1a(const std::string& bytes) {
   return h;
 }
 
-std::string readWholeFile(const std::string& path);
+std::string readWholeFile(const std::string& path, bool mustExist = true);
 
 // A checkpoint's bytes, its magic, format version and CRC-32 checked, the
 // checksum removed.
@@ -93,8 +94,11 @@ std::string readCheckpointFile(const std::string& path) {
   return bytes;
 }
 
-std::string readWholeFile(const std::string& path) {
+// A file's bytes; a file that cannot be read is an InputError, or empty
+// when it need not exist.
+std::string readWholeFile(const std::string& path, bool mustExist) {
   std::ifstream in(path, std::ios::binary);
+  if (!in && !mustExist) return {};
   if (!in) throw InputError(path, 0, "", "cannot read the file");
   std::ostringstream s;
   s << in.rdbuf();
@@ -104,25 +108,65 @@ std::string readWholeFile(const std::string& path) {
 // Why the last write failed (a full disk: "No space left on device").
 std::string writeError() { return errno != 0 ? std::strerror(errno) : "write failed"; }
 
+// How many bytes of a CSV file a resumed run keeps: the `recorded` size the
+// checkpoint saw (whole rows; the first is `header`), or, when the file is shorter or holds NUL
+// bytes before that size (cut by a kill or a full disk, or a machine crash
+// that left a block of zeros), what lies before its last whole row. Reads
+// and checks only: nothing is changed until every output has been checked.
+std::uint64_t keptCsvSize(const fs::path& path, std::uint64_t recorded, const std::string& header) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw InputError(path.string(), 0, "", "missing or unreadable: the run's outputs are incomplete, cannot resume");
+  }
+  // Rows are appended under the columns this scene writes.
+  std::string first;
+  if (std::getline(in, first) && !in.eof() && first != header) {
+    throw InputError(path.string(), 1, "", "its columns are not those this scene writes (another scene's file?)");
+  }
+  in.clear();
+  in.seekg(0);
+  std::uint64_t read = 0, wholeRows = 0;
+  std::string chunk(std::size_t(1) << 20, '\0');
+  while (read < recorded) {
+    in.read(chunk.data(), std::streamsize(std::min<std::uint64_t>(chunk.size(), recorded - read)));
+    const std::size_t n = std::size_t(in.gcount());
+    if (n == 0) break;
+    const std::size_t nul = std::string_view(chunk.data(), n).find('\0');
+    const std::size_t valid = nul == std::string_view::npos ? n : nul;
+    const std::size_t lastBreak = std::string_view(chunk.data(), valid).rfind('\n');
+    if (lastBreak != std::string_view::npos) wholeRows = read + lastBreak + 1;
+    read += valid;
+    if (valid < n) break;
+  }
+  return read == recorded ? recorded : wholeRows;
+}
+
 // One CSV file of the run, appended row by row and flushed, so a run that
 // stops keeps every row written. A resumed run cuts it back to the size it had
 // at the checkpoint. Every row is checked before it is written: a non-finite
 // number (the simulation diverged) stops the run instead of reaching the file.
+// A write that fails (a full disk) stops the run, naming the file.
 class CsvFile {
  public:
-  void open(const fs::path& path, const std::string& header, std::optional<std::uint64_t> resumeSize) {
+  /// A new file holding the header.
+  void create(const fs::path& path, const std::string& header) {
     path_ = path;
     columns_ = cells(header);
-    if (resumeSize) {
-      if (!fs::exists(path)) throw std::runtime_error("resume: " + path.string() + " is missing");
-      fs::resize_file(path, *resumeSize);
-      out_.open(path, std::ios::app | std::ios::binary);
-    } else {
-      out_.open(path, std::ios::trunc | std::ios::binary);
-      out_ << header << '\n';
-    }
-    if (!out_) throw std::runtime_error("cannot write " + path.string());
-    out_.flush();
+    out_.open(path, std::ios::trunc | std::ios::binary);
+    if (!out_) throw std::runtime_error("cannot write " + path.string() + ": " + writeError());
+    write(header + '\n');
+  }
+  /// A resumed run's file, cut to its first `size` bytes (keptCsvSize) and
+  /// appended to; the header again when nothing of it is kept.
+  void resume(const fs::path& path, const std::string& header, std::uint64_t size) {
+    path_ = path;
+    columns_ = cells(header);
+    std::error_code ec;
+    fs::resize_file(path, size, ec);
+    if (ec) throw std::runtime_error("cannot cut " + path.string() + " back to the checkpoint: " + ec.message());
+    out_.open(path, std::ios::app | std::ios::binary);
+    if (!out_) throw std::runtime_error("cannot write " + path.string() + ": " + writeError());
+    if (size == 0) write(header + '\n');
   }
   /// One row (no line break).
   void row(const std::string& line) { write(line + '\n'); }
@@ -198,8 +242,14 @@ struct Schedule {
 template <int D>
 class Runner {
  public:
-  Runner(SceneDef<D> scene, const RunOptions& options, const std::string& outDir)
-      : scene_(std::move(scene)), options_(options), out_(outDir) {}
+  Runner(SceneDef<D> scene, std::string sceneText, const RunOptions& options, const std::string& outDir,
+         std::unique_ptr<OutputLock> lock)
+      : scene_(std::move(scene)),
+        sceneText_(std::move(sceneText)),
+        sceneHash_(fnv1a(sceneText_)),
+        options_(options),
+        out_(outDir),
+        lock_(std::move(lock)) {}
 
   RunResult run(bool resume) {
     const Clock::time_point start = Clock::now();
@@ -215,8 +265,12 @@ class Runner {
     }
     setEnd(world);
     // Everything is checked: now the outputs.
-    fs::create_directories(out_);
-    if (!resume) fs::copy_file(scene_.file, out_ / "scene.toml", fs::copy_options::overwrite_existing);
+    claimOutputFolder(resume);
+    // The copy of the scene the run read: its identity for a resume (a
+    // forced resume with another scene replaces it).
+    if (!resume || readWholeFile((out_ / "scene.toml").string(), false) != sceneText_) {
+      writeFileAtomically(out_ / "scene.toml", sceneText_);
+    }
     openOutputs(sizes);
 
     // Frames at the start of a new run (a resumed run has them already).
@@ -390,14 +444,21 @@ class Runner {
   }
 
   // ---- outputs ----
+  // The folder is created and locked; a new run refuses another run's
+  // outputs in it, or removes them with `overwrite`.
+  void claimOutputFolder(bool resume) {
+    std::error_code ec;
+    fs::create_directories(out_, ec);
+    if (ec) throw std::runtime_error("cannot create the output folder " + out_.string() + ": " + ec.message());
+    if (!lock_) lock_ = std::make_unique<OutputLock>(out_);
+    if (resume) return;
+    checkOutputFolder(out_, options_.overwrite);
+    removeRunOutputs(out_);
+  }
+
   void openOutputs(const std::optional<std::map<std::string, std::uint64_t>>& sizes) {
-    const auto size = [&](const std::string& name) -> std::optional<std::uint64_t> {
-      if (!sizes) return std::nullopt;
-      const auto it = sizes->find(name);
-      if (it == sizes->end()) throw InputError((out_ / kCheckpointFile).string(), 0, name, "missing in the checkpoint");
-      return it->second;
-    };
-    // history.csv
+    // The CSV files and their headers.
+    std::vector<std::pair<std::string, std::string>> files;
     std::string header =
         "step,time_s,dt_s,critical_dt_s,dt_limit_id,dt_limit_generation,dt_limit_diameter_m,dt_limit_nodes,"
         "dt_limit_mass_kg,dt_limit_stiffness_N_per_m,dt_limit_patch_nodes,dt_limit_contact,particles,contacts,breakages,removed_mass_kg,"
@@ -412,23 +473,37 @@ class Runner {
       header += "," + tool.name + "_power_W";
     }
     if (scene_.specimen) header += ",height_m,stress_Pa,strain,void_ratio";
-    csv_["history.csv"].open(out_ / "history.csv", header, size("history.csv"));
-    csv_["psd.csv"].open(out_ / "psd.csv", "time_s,sieve_size_m,percent_passing", size("psd.csv"));
-    csv_["shape_stats.csv"].open(out_ / "shape_stats.csv",
-                                 "time_s,strain,particles,mean_circularity,mean_aspect_ratio,mean_sieve_size_m,"
-                                 "shape_particles",
-                                 size("shape_stats.csv"));
-    csv_["shape_histograms.csv"].open(out_ / "shape_histograms.csv", "time_s,strain,quantity,bin_low,bin_high,count",
-                                      size("shape_histograms.csv"));
-    csv_["removed.csv"].open(out_ / "removed.csv", "id,time_s,mass_kg,volume,sieve_size_m,reason", size("removed.csv"));
+    files.emplace_back("history.csv", header);
+    files.emplace_back("psd.csv", "time_s,sieve_size_m,percent_passing");
+    files.emplace_back("shape_stats.csv",
+                       "time_s,strain,particles,mean_circularity,mean_aspect_ratio,mean_sieve_size_m,shape_particles");
+    files.emplace_back("shape_histograms.csv", "time_s,strain,quantity,bin_low,bin_high,count");
+    files.emplace_back("removed.csv", "id,time_s,mass_kg,volume,sieve_size_m,reason");
     {
       std::ostringstream h;
       writeBreakageLogHeader<D>(h);
       std::string s = h.str();
       if (!s.empty() && s.back() == '\n') s.pop_back();
-      csv_["breakage_log.csv"].open(out_ / "breakage_log.csv", s, size("breakage_log.csv"));
+      files.emplace_back("breakage_log.csv", s);
     }
-    // ParaView series.
+    // A resumed run checks every file before it changes any: one that is
+    // missing or damaged leaves them all as they were.
+    std::map<std::string, std::uint64_t> kept;
+    if (sizes) {
+      for (const auto& [name, h] : files) {
+        const auto it = sizes->find(name);
+        if (it == sizes->end()) {
+          throw InputError((out_ / kCheckpointFile).string(), 0, name, "missing in the checkpoint");
+        }
+        kept[name] = keptCsvSize(out_ / name, it->second, h);
+        if (kept[name] < it->second && options_.note) {
+          options_.note((out_ / name).string() + ": cut short of the " + std::to_string(it->second) +
+                        " bytes the checkpoint saw (a kill, a full disk or a crash): continued after its last whole "
+                        "row, at byte " + std::to_string(kept[name]) + "; the rows between are missing");
+        }
+      }
+    }
+    // ParaView series (a resumed run's are read, and refused when damaged, here).
     FrameWriterDef<D> def;
     def.directory = out_;
     def.encoding = scene_.output.ascii ? VtkEncoding::Ascii : VtkEncoding::Binary;
@@ -438,10 +513,16 @@ class Runner {
     def.contacts = scene_.output.contacts;
     if (scene_.domain) def.extent = *scene_.domain;
     def.resume = resumed_;
-    if (scene_.output.frames > 0) {
-      frameWriter_.emplace(def);
-      if (resumed_) frameWriter_->truncateAfter(lastFrameTime_);
+    if (scene_.output.frames > 0) frameWriter_.emplace(def);
+    // Now the files are cut back to the checkpoint, or made.
+    for (const auto& [name, h] : files) {
+      if (sizes) {
+        csv_[name].resume(out_ / name, h, kept[name]);
+      } else {
+        csv_[name].create(out_ / name, h);
+      }
     }
+    if (frameWriter_ && resumed_) frameWriter_->truncateAfter(lastFrameTime_);
   }
 
   void writeHistoryRow() {
@@ -804,7 +885,7 @@ class Runner {
     put(kCheckpointVersion);
     put(std::int32_t(D));
     putBytes(fs::absolute(scene_.file).string());
-    put(fnv1a(readWholeFile(scene_.file)));
+    put(sceneHash_);
     put(std::uint64_t(shapes.size()));
     for (const geometry::Shape<D>* s : shapes) {
       std::ostringstream g(std::ios::binary);
@@ -888,8 +969,11 @@ class Runner {
   }
 
   SceneDef<D> scene_;
+  std::string sceneText_;    // the scene file's text as the run read it
+  std::uint64_t sceneHash_;  // its hash, the run's identity in checkpoints
   RunOptions options_;
   fs::path out_;
+  std::unique_ptr<OutputLock> lock_;  // held while the run writes into out_
   SceneWorld<D> sw_;
   bool resumed_ = false;
   bool byTime_ = true;
@@ -911,8 +995,12 @@ class Runner {
   Clock::time_point start_;
 };
 
-// The scene path stored in a checkpoint, checked against the file's content now.
-std::string checkpointScene(const std::string& dir) {
+// The scene a resumed run uses: the one given, else the one the checkpoint
+// names, else (it moved) the copy in the output folder. It must be the
+// checkpoint's scene, and the folder's copy too (a checkpoint copied in from
+// another run is not this folder's), unless forced.
+std::string resumeScene(const RunOptions& options) {
+  const std::string& dir = options.resumeDir;
   const std::string path = (fs::path(dir) / kCheckpointFile).string();
   if (!fs::exists(path)) throw InputError(path, 0, "", "no checkpoint to resume from (is this a run's output folder?)");
   const std::string bytes = readCheckpointFile(path);
@@ -922,42 +1010,78 @@ std::string checkpointScene(const std::string& dir) {
   std::memcpy(&n, bytes.data() + pos, 8);
   pos += 8;
   if (n > bytes.size() - pos - 8) throw InputError(path, 0, "", "truncated checkpoint");
-  const std::string scene(bytes.data() + pos, std::size_t(n));
+  const std::string named(bytes.data() + pos, std::size_t(n));
   pos += std::size_t(n);
   std::uint64_t hash = 0;
   std::memcpy(&hash, bytes.data() + pos, 8);
-  // A scene file that moved: the copy the run keeps in its output folder, when it is the same scene.
+
   const fs::path copy = fs::path(dir) / "scene.toml";
-  if (!fs::exists(scene)) {
-    if (fs::exists(copy) && fnv1a(readWholeFile(copy.string())) == hash) return copy.string();
-    throw InputError(path, 0, "", "its scene file " + scene + " no longer exists (nor does an unchanged copy in " + dir + ")");
+  const bool haveCopy = fs::exists(copy);
+  const bool copyMatches = haveCopy && fnv1a(readWholeFile(copy.string())) == hash;
+  std::string scene = options.scene;
+  if (scene.empty()) {
+    if (fs::exists(named)) {
+      scene = named;
+    } else if (haveCopy) {
+      scene = copy.string();
+    } else {
+      throw InputError(path, 0, "", "its scene file " + named + " no longer exists (nor does a copy in " + dir + ")");
+    }
   }
-  if (fnv1a(readWholeFile(scene)) != hash) {
-    throw InputError(scene, 0, "", "the scene file changed since the checkpoint in " + dir + " was written");
+  std::optional<InputError> mismatch;
+  if (haveCopy && !copyMatches) {
+    mismatch.emplace(path, 0, "",
+                     "written by a run of another scene than " + copy.string() +
+                         " (a checkpoint copied from another run, or an edited copy)");
+  } else if (fnv1a(readWholeFile(scene)) != hash) {
+    mismatch.emplace(scene, 0, "",
+                     options.scene.empty()
+                         ? "the scene file changed since the checkpoint in " + dir + " was written"
+                         : "not the scene of the run in " + dir + " (its checkpoint names " + named + ")");
   }
+  if (!mismatch) return scene;
+  if (!options.force) {
+    throw InputError(mismatch->file(), 0, "", mismatch->problem() + "; give --force to resume with it anyway");
+  }
+  if (options.note) options.note(std::string(mismatch->what()) + ": resumed with " + scene + " anyway (--force)");
   return scene;
 }
 
 template <int D>
-RunResult runOf(SceneDef<D> scene, const RunOptions& options) {
+RunResult runOf(SceneDef<D> scene, std::string sceneText, const RunOptions& options, std::unique_ptr<OutputLock> lock) {
   const std::string out =
       !options.resumeDir.empty() ? options.resumeDir : (!options.outDir.empty() ? options.outDir : scene.output.dir);
+  // A folder that exists is claimed before the world is built: another run
+  // in it is refused at once.
+  if (!lock && fs::is_directory(out)) {
+    lock = std::make_unique<OutputLock>(out);
+    checkOutputFolder(out, options.overwrite);
+  }
 #ifdef LSDEM_HAVE_OPENMP
   const int threads = options.threads >= 0 ? options.threads : scene.threads;
   if (threads > 0) omp_set_num_threads(threads);
 #endif
-  Runner<D> runner(std::move(scene), options, out);
+  Runner<D> runner(std::move(scene), std::move(sceneText), options, out, std::move(lock));
   return runner.run(!options.resumeDir.empty());
 }
 
 }  // namespace
 
 RunResult runScene(const RunOptions& options) {
-  const std::string scenePath = options.resumeDir.empty() ? options.scene : checkpointScene(options.resumeDir);
+  // A resumed run holds its folder from the start: no other run may write
+  // its checkpoint while it is read.
+  std::unique_ptr<OutputLock> lock;
+  if (!options.resumeDir.empty() && fs::is_directory(options.resumeDir)) {
+    lock = std::make_unique<OutputLock>(options.resumeDir);
+  }
+  const std::string scenePath = options.resumeDir.empty() ? options.scene : resumeScene(options);
   AnySceneDef scene = readScene(scenePath);
+  std::string text = readWholeFile(scenePath);
   if (options.note) std::visit([&](const auto& s) { for (const std::string& n : s.notes) options.note(n); }, scene);
-  if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) return runOf<2>(std::move(*s2), options);
-  return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), options);
+  if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) {
+    return runOf<2>(std::move(*s2), std::move(text), options, std::move(lock));
+  }
+  return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), std::move(text), options, std::move(lock));
 }
 
 }  // namespace lsdem::io

@@ -352,11 +352,15 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
       throw std::runtime_error("cannot write '" + file.string() + "': cannot open '" + tmp.string() +
                                "': " + std::strerror(errno));
     }
+    // A failed write, flush or close (a full disk, a file size limit, a
+    // network file system reporting late) leaves the target as it was.
+    errno = 0;
     out.write(content.data(), std::streamsize(content.size()));
     out.flush();
+    if (out) out.close();
     if (!out) {
-      const std::string reason = std::strerror(errno);
-      out.close();
+      const std::string reason = errno != 0 ? std::strerror(errno) : "write failed";
+      if (out.is_open()) out.close();
       std::error_code ignored;
       std::filesystem::remove(tmp, ignored);
       throw std::runtime_error("cannot write '" + file.string() + "': " + reason);

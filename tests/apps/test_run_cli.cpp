@@ -1,6 +1,7 @@
 // `lsdem run` as a user runs it: Ctrl-C and SIGTERM stop cleanly (final
 // summary and checkpoint written, exit code 130 / 143) and `--resume`
-// continues the run.
+// continues the run; an output folder holds one run at a time (its lock
+// file) and another run's outputs are not overwritten unless asked.
 
 #include "support/Process.h"
 
@@ -8,6 +9,7 @@
 
 #include <signal.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +17,7 @@
 #include <thread>
 
 namespace fs = std::filesystem;
+using lsdem::test::runCaptured;
 using lsdem::test::runToExit;
 
 namespace {
@@ -58,14 +61,21 @@ std::string readFile(const fs::path& p) {
   return s.str();
 }
 
-// Starts the long scene into `out` (under `dir`), waits until it has written
-// three frames and sends it `signal`; its exit code (-1: it never wrote the
-// frames, or the signal killed it instead of stopping it).
-int interruptedRun(const fs::path& dir, const fs::path& out, int signal) {
+std::size_t lineCount(const std::string& text) { return std::size_t(std::count(text.begin(), text.end(), '\n')); }
+
+// Writes the long scene into `dir` (emptied first); its path.
+fs::path longScene(const fs::path& dir) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const fs::path scene = dir / "long.toml";
   std::ofstream(scene) << kLongScene;
+  return scene;
+}
+
+// Starts the long scene into `out` (under `dir`) and waits until it has
+// written three frames; its pid, or -1 (then it is killed).
+pid_t startLongRun(const fs::path& dir, const fs::path& out) {
+  const fs::path scene = longScene(dir);
   const pid_t pid = lsdem::test::spawnProcess({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--quiet"});
   if (pid < 0) {
     ADD_FAILURE() << "lsdem did not start";
@@ -76,14 +86,23 @@ int interruptedRun(const fs::path& dir, const fs::path& out, int signal) {
   while (!fs::exists(frame) && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  const bool started = fs::exists(frame);
-  kill(pid, started ? signal : SIGKILL);
-  const int code = lsdem::test::waitForExit(pid);
-  if (!started) {
+  if (!fs::exists(frame)) {
+    kill(pid, SIGKILL);
+    lsdem::test::waitForExit(pid);
     ADD_FAILURE() << "the run did not start";
     return -1;
   }
-  return code;
+  return pid;
+}
+
+// Starts the long scene into `out` (under `dir`), waits until it has written
+// three frames and sends it `signal`; its exit code (-1: it never wrote the
+// frames, or the signal killed it instead of stopping it).
+int interruptedRun(const fs::path& dir, const fs::path& out, int signal) {
+  const pid_t pid = startLongRun(dir, out);
+  if (pid < 0) return -1;
+  kill(pid, signal);
+  return lsdem::test::waitForExit(pid);
 }
 
 }  // namespace
@@ -95,6 +114,7 @@ TEST(RunCli, CtrlCStopsCleanlyAndResumeContinues) {
   ASSERT_EQ(interruptedRun(dir, out, SIGINT), 130);
   EXPECT_NE(readFile(out / "summary.json").find("\"stopped_early\": true"), std::string::npos);
   EXPECT_TRUE(fs::exists(out / "checkpoint.lsc"));
+  EXPECT_FALSE(fs::exists(out / "lsdem.lock")) << "the lock is removed when Ctrl-C stops the run";
 
   // Resume for a few more steps.
   EXPECT_EQ(runToExit({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "20", "--quiet"}), 0);
@@ -111,6 +131,174 @@ TEST(RunCli, SigtermStopsCleanlyWithCode143) {
   const fs::path out = dir / "out";
   ASSERT_EQ(interruptedRun(dir, out, SIGTERM), 143) << "killed by the signal instead of stopping";
   EXPECT_NE(readFile(out / "summary.json").find("\"stopped_early\": true"), std::string::npos);
+  EXPECT_FALSE(fs::exists(out / "lsdem.lock")) << "the lock is removed when SIGTERM stops the run";
   EXPECT_EQ(runToExit({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "5", "--quiet"}), 0);
+  EXPECT_FALSE(fs::exists(out / "lsdem.lock"));
+  fs::remove_all(dir);
+}
+
+// A new run into a folder that holds another run's outputs is refused with
+// one line and exit code 2, and nothing in it changes; --overwrite replaces
+// those outputs (the old run's later frames go too), --resume continues them.
+TEST(RunCli, AnotherRunsOutputsAreRefusedUnlessOverwrite) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_overwrite";
+  const fs::path out = dir / "out";
+  const fs::path scene = longScene(dir);
+  const std::vector<std::string> run = {LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--quiet"};
+  const auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = run;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return args;
+  };
+  ASSERT_EQ(runToExit(with({"--steps", "5"})), 0);
+  const std::string history = readFile(out / "history.csv");
+  ASSERT_TRUE(fs::exists(out / "frames" / "particles_000005.vtp"));
+
+  const lsdem::test::ProcessResult again = runCaptured(with({"--steps", "2"}));
+  EXPECT_EQ(again.code, 2) << again.output;
+  EXPECT_EQ(lineCount(again.output), 1u) << again.output;
+  EXPECT_EQ(again.output.rfind("lsdem: " + out.string() + ": holds the outputs of another run (summary.json", 0), 0u)
+      << again.output;
+  EXPECT_NE(again.output.find("--overwrite"), std::string::npos) << again.output;
+  EXPECT_EQ(readFile(out / "history.csv"), history) << "a refused run changes nothing";
+  // The same folder named another way is refused alike.
+  EXPECT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string() + "/", "--quiet"}), 2);
+
+  // --resume continues the run in the folder.
+  EXPECT_EQ(runToExit({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "1", "--quiet"}), 0);
+  // --overwrite starts afresh: two steps, three frames; the old frames 3-6 are gone.
+  ASSERT_EQ(runToExit(with({"--steps", "2", "--overwrite"})), 0);
+  EXPECT_EQ(lineCount(readFile(out / "history.csv")), 1u + 3u);
+  EXPECT_TRUE(fs::exists(out / "frames" / "particles_000002.vtp"));
+  EXPECT_FALSE(fs::exists(out / "frames" / "particles_000003.vtp"));
+  EXPECT_FALSE(fs::exists(out / "lsdem.lock"));
+  fs::remove_all(dir);
+}
+
+// Two runs into one folder at the same time: the second is stopped by the
+// first's lock file (naming its pid), whether it starts afresh with
+// --overwrite or resumes; the first is undisturbed and removes its lock when
+// it ends.
+TEST(RunCli, ASecondRunIntoABusyFolderIsStoppedByTheLock) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_lock";
+  const fs::path out = dir / "out";
+  const pid_t first = startLongRun(dir, out);
+  ASSERT_GT(first, 0);
+  EXPECT_EQ(readFile(out / "lsdem.lock"), std::to_string(first) + "\n");
+  const std::string lockHeld = "lsdem: " + (out / "lsdem.lock").string() + ": another lsdem run (pid " +
+                               std::to_string(first) + ") is writing into this folder";
+  for (const std::vector<std::string>& second :
+       {std::vector<std::string>{LSDEM_BINARY, "run", (dir / "long.toml").string(), "--out", out.string(), "--overwrite",
+                                 "--steps", "2", "--quiet"},
+        std::vector<std::string>{LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "2", "--quiet"}}) {
+    const lsdem::test::ProcessResult r = runCaptured(second);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_EQ(lineCount(r.output), 1u) << r.output;
+    EXPECT_EQ(r.output.rfind(lockHeld, 0), 0u) << r.output;
+  }
+  kill(first, SIGINT);
+  EXPECT_EQ(lsdem::test::waitForExit(first), 130);
+  EXPECT_FALSE(fs::exists(out / "lsdem.lock"));
+  EXPECT_NE(readFile(out / "summary.json").find("\"stopped_early\": true"), std::string::npos);
+  fs::remove_all(dir);
+}
+
+// A lock file left by a run that was killed (SIGKILL: no clean-up) names a
+// dead process: the next run takes it over.
+TEST(RunCli, AStaleLockOfAKilledRunIsTakenOver) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_stale";
+  const fs::path out = dir / "out";
+  const pid_t killed = startLongRun(dir, out);
+  ASSERT_GT(killed, 0);
+  kill(killed, SIGKILL);
+  EXPECT_EQ(lsdem::test::waitForExit(killed), -1);
+  ASSERT_EQ(readFile(out / "lsdem.lock"), std::to_string(killed) + "\n") << "SIGKILL leaves the lock file";
+  EXPECT_EQ(runToExit({LSDEM_BINARY, "run", (dir / "long.toml").string(), "--out", out.string(), "--overwrite",
+                       "--steps", "2", "--quiet"}),
+            0);
+  EXPECT_FALSE(fs::exists(out / "lsdem.lock"));
+  fs::remove_all(dir);
+}
+
+// A resume with an edited scene is refused in one line with exit code 2
+// (the run's outputs unchanged); --force resumes with it as it is now;
+// --force without --resume is a usage error.
+TEST(RunCli, ResumeWithAnEditedSceneNeedsForce) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_force";
+  const fs::path out = dir / "out";
+  const fs::path scene = longScene(dir);
+  ASSERT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--steps", "3", "--quiet"}), 0);
+  std::ofstream(scene, std::ios::app) << "progress_seconds = 5.0\n";
+  const std::string history = readFile(out / "history.csv");
+  const lsdem::test::ProcessResult refused =
+      runCaptured({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "2", "--quiet"});
+  EXPECT_EQ(refused.code, 2) << refused.output;
+  EXPECT_EQ(refused.output, "lsdem: " + scene.string() + ": the scene file changed since the checkpoint in " +
+                                out.string() + " was written; give --force to resume with it anyway\n");
+  EXPECT_EQ(readFile(out / "history.csv"), history);
+  const lsdem::test::ProcessResult forced =
+      runCaptured({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "2", "--force", "--quiet"});
+  EXPECT_EQ(forced.code, 0) << forced.output;
+  EXPECT_NE(forced.output.find("anyway (--force)"), std::string::npos) << forced.output;
+  EXPECT_EQ(readFile(out / "scene.toml"), readFile(scene));
+  EXPECT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--force", "--quiet"}), 2);
+  fs::remove_all(dir);
+}
+
+namespace {
+
+// Files in `dir` and below whose name ends in ".tmp".
+std::size_t temporaryFiles(const fs::path& dir) {
+  std::size_t n = 0;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) n += e.path().extension() == ".tmp";
+  return n;
+}
+
+}  // namespace
+
+// A write that fails (here a file size limit, as a full disk) stops the run
+// at once: exit code 1, one line naming the file and the reason, no
+// temporary file or lock left. The last periodic checkpoint stays whole: the
+// run resumes from it once the limit is gone, its history cut back to whole rows.
+TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
+  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_full";
+  const fs::path scene = longScene(dir);
+  std::string text = kLongScene;
+  text.replace(text.find("frames = 100000"), 15, "frames = 10\ncheckpoint_every = 0.05");
+  text.replace(text.find("history_rows = 100000"), 21, "history_rows = 100000000");  // a row per step
+  std::ofstream(scene, std::ios::trunc) << text;
+  const auto runLimited = [&](const fs::path& out, long long limit) {
+    return runCaptured({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--quiet"}, limit);
+  };
+
+  // history.csv reaches 200 kB first.
+  const fs::path out = dir / "history";
+  const lsdem::test::ProcessResult history = runLimited(out, 200000);
+  EXPECT_EQ(history.code, 1) << history.output;
+  EXPECT_EQ(history.output, "lsdem: error: cannot write " + (out / "history.csv").string() + ": File too large\n");
+  EXPECT_EQ(fs::file_size(out / "history.csv"), 200000u);
+  EXPECT_FALSE(fs::exists(out / "lsdem.lock"));
+  EXPECT_EQ(temporaryFiles(out), 0u);
+  ASSERT_EQ(runToExit({LSDEM_BINARY, "run", "--resume", out.string(), "--steps", "3", "--quiet"}), 0);
+  const std::string rows = readFile(out / "history.csv");
+  EXPECT_EQ(rows.find('\0'), std::string::npos);
+  EXPECT_EQ(rows.back(), '\n');
+  std::istringstream lines(rows);
+  std::string header;
+  std::getline(lines, header);
+  for (std::string row; std::getline(lines, row);) {
+    ASSERT_EQ(std::count(row.begin(), row.end(), ','), std::count(header.begin(), header.end(), ',')) << row;
+  }
+
+  // 16 kB: the first particles frame (written to a temporary file, then
+  // renamed) is too large.
+  const fs::path small = dir / "frame";
+  const lsdem::test::ProcessResult frame = runLimited(small, 16384);
+  EXPECT_EQ(frame.code, 1) << frame.output;
+  EXPECT_EQ(frame.output, "lsdem: error: cannot write '" + (small / "frames" / "particles_000000.vtp").string() +
+                              "': File too large\n");
+  EXPECT_FALSE(fs::exists(small / "frames" / "particles_000000.vtp"));
+  EXPECT_EQ(temporaryFiles(small), 0u);
+  EXPECT_FALSE(fs::exists(small / "lsdem.lock"));
   fs::remove_all(dir);
 }

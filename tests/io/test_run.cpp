@@ -12,6 +12,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 using namespace lsdem;
@@ -565,4 +566,152 @@ history_rows = 3000
   const std::string history = readFile(dir.path / "out" / "history.csv");
   EXPECT_GT(lines(history).size(), 10u) << "the rows before the divergence stay";
   for (const char* bad : {"inf", "nan"}) EXPECT_EQ(history.find(bad), std::string::npos) << bad;
+}
+
+// A resume that fails (an output missing or damaged) changes none of the
+// outputs it would have cut back and appended to (issue 16: history.csv was
+// cut before the missing file was found).
+TEST(Run, AFailedResumeLeavesTheOutputsAsTheyWere) {
+  for (const std::string damage : {"psd.csv missing", "particles.pvd damaged"}) {
+    TempDir dir("failed_resume");
+    io::RunOptions run;
+    run.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 2\nhistory_rows = 2")).string();
+    run.outDir = (dir.path / "out").string();
+    run.steps = 7;  // rows at steps 0, 3, 6, the checkpoint, then the last row at step 7
+    io::runScene(run);
+    const fs::path out = dir.path / "out";
+    if (damage == "psd.csv missing") {
+      fs::remove(out / "psd.csv");
+    } else {
+      std::ofstream(out / "particles.pvd", std::ios::trunc) << "<VTKFile><Collection><DataSet file=\"x\"/>";
+    }
+    std::map<std::string, std::string> before;
+    for (const char* file : {"history.csv", "shape_stats.csv", "removed.csv", "breakage_log.csv", "particles.pvd"}) {
+      before[file] = readFile(out / file);
+    }
+    ASSERT_EQ(lines(before["history.csv"]).size(), 1u + 4u);
+    io::RunOptions resume;
+    resume.resumeDir = run.outDir;
+    resume.steps = 2;
+    try {
+      io::runScene(resume);
+      ADD_FAILURE() << damage << ": resumed";
+    } catch (const io::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(damage.substr(0, damage.find(' '))), std::string::npos) << e.what();
+    }
+    for (const auto& [file, text] : before) EXPECT_EQ(readFile(out / file), text) << damage << ": " << file;
+  }
+}
+
+// A CSV file cut mid-row short of the checkpoint's size, or whose tail the
+// checkpoint saw became zeros (a machine crash), is continued after its last
+// whole row: no NUL bytes, no partial row (issue 16: it was padded with
+// NULs); the resume says so.
+TEST(Run, ResumeRepairsACsvCutMidRow) {
+  for (const bool zeros : {false, true}) {
+    TempDir dir(zeros ? "repair_zeros" : "repair_cut");
+    io::RunOptions run;
+    run.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 2\nhistory_rows = 1000")).string();
+    run.outDir = (dir.path / "out").string();
+    run.steps = 20;  // a row per step: 21 rows
+    io::runScene(run);
+    const fs::path history = dir.path / "out" / "history.csv";
+    const std::string whole = readFile(history);
+    const auto rows = lines(whole);
+    ASSERT_EQ(rows.size(), 22u);
+    // Cut in the middle of the row of step 18.
+    const std::size_t cut = whole.size() - rows[21].size() - 1 - rows[20].size() - 1 - rows[19].size() / 2;
+    std::string damaged = whole.substr(0, cut);
+    if (zeros) damaged.append(whole.size() - cut, '\0');
+    std::ofstream(history, std::ios::binary | std::ios::trunc) << damaged;
+
+    io::RunOptions resume;
+    resume.resumeDir = run.outDir;
+    resume.steps = 3;
+    std::string notes;
+    resume.note = [&](const std::string& line) { notes += line + "\n"; };
+    io::runScene(resume);
+    EXPECT_NE(notes.find(history.string() + ": cut short of the " + std::to_string(whole.size()) + " bytes"),
+              std::string::npos)
+        << notes;
+    const std::string repaired = readFile(history);
+    EXPECT_EQ(repaired.find('\0'), std::string::npos);
+    ASSERT_FALSE(repaired.empty());
+    EXPECT_EQ(repaired.back(), '\n');
+    const auto after = lines(repaired);
+    const std::size_t columns = split(after[0]).size();
+    for (const std::string& row : after) EXPECT_EQ(split(row).size(), columns) << row;
+    // Rows to step 17, then steps 21, 22, 23 of the resumed part.
+    ASSERT_EQ(after.size(), 1u + 18u + 3u);
+    EXPECT_EQ(after[18], rows[18]);
+    EXPECT_EQ(split(after[19])[0], "21");
+    EXPECT_EQ(split(after.back())[0], "23");
+  }
+}
+
+// A checkpoint carries the hash of the scene text its run read (kept as
+// scene.toml in the folder): a checkpoint copied in from another run's
+// folder, or a resume given another scene, is refused and changes nothing;
+// forced, the run continues with the scene given, whose copy then replaces
+// scene.toml (and later resumes need no force).
+TEST(Run, ResumeWithAnotherSceneIsRefusedUnlessForced) {
+  TempDir dir("scene_identity");
+  fs::create_directories(dir.path / "a");
+  fs::create_directories(dir.path / "b");
+  const fs::path sceneA = writeScene(dir.path / "a", kDiscScene);
+  const fs::path sceneB = writeScene(dir.path / "b", editScene(kDiscScene, "gravity = [0.0, -9.81]", "gravity = [0.0, -5.0]"));
+  for (const fs::path& scene : {sceneA, sceneB}) {
+    io::RunOptions run;
+    run.scene = scene.string();
+    run.outDir = (scene.parent_path() / "out").string();
+    run.steps = 5;
+    io::runScene(run);
+  }
+  const fs::path outA = dir.path / "a" / "out", outB = dir.path / "b" / "out";
+  const auto refusal = [](io::RunOptions o) {
+    o.steps = 2;
+    try {
+      io::runScene(o);
+    } catch (const io::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("resumed");
+  };
+
+  // A's checkpoint copied into B's folder.
+  const std::string checkpointB = readFile(outB / "checkpoint.lsc");
+  const std::string historyB = readFile(outB / "history.csv");
+  fs::copy_file(outA / "checkpoint.lsc", outB / "checkpoint.lsc", fs::copy_options::overwrite_existing);
+  io::RunOptions foreign;
+  foreign.resumeDir = outB.string();
+  EXPECT_EQ(refusal(foreign), (outB / "checkpoint.lsc").string() + ": written by a run of another scene than " +
+                                  (outB / "scene.toml").string() +
+                                  " (a checkpoint copied from another run, or an edited copy); give --force to resume "
+                                  "with it anyway");
+  EXPECT_EQ(readFile(outB / "history.csv"), historyB);
+  std::ofstream(outB / "checkpoint.lsc", std::ios::binary | std::ios::trunc) << checkpointB;
+
+  // B's scene given to resume A's run.
+  io::RunOptions given;
+  given.resumeDir = outA.string();
+  given.scene = sceneB.string();
+  EXPECT_NE(refusal(given).find(sceneB.string() + ": not the scene of the run in " + outA.string()), std::string::npos)
+      << refusal(given);
+  // A's own scene given: resumed.
+  given.scene = sceneA.string();
+  EXPECT_EQ(refusal(given), "resumed");
+
+  // Forced with B's scene: a note, B's text becomes A's folder's copy and
+  // identity, and the next resume needs no force.
+  given.scene = sceneB.string();
+  given.force = true;
+  std::string notes;
+  given.note = [&](const std::string& line) { notes += line + "\n"; };
+  EXPECT_EQ(refusal(given), "resumed");
+  EXPECT_NE(notes.find("resumed with " + sceneB.string() + " anyway (--force)"), std::string::npos) << notes;
+  EXPECT_EQ(readFile(outA / "scene.toml"), readFile(sceneB));
+  io::RunOptions next;
+  next.resumeDir = outA.string();
+  next.scene = sceneB.string();
+  EXPECT_EQ(refusal(next), "resumed");
 }

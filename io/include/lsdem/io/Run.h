@@ -30,11 +30,13 @@ struct RunProgress {
 };
 
 struct RunOptions {
-  std::string scene;                        ///< scene file (a resumed run uses the checkpoint's)
+  std::string scene;                        ///< scene file; when resuming, empty: the checkpoint's (or its copy in the folder)
   std::string outDir;                       ///< output folder; empty: the scene's [output] dir
   std::optional<std::uint64_t> steps;       ///< run this many steps (from the start or the checkpoint) instead of the scene's end
   int threads = -1;                         ///< OpenMP threads; < 0: the scene's; 0: all cores
   std::string resumeDir;                    ///< non-empty: continue the run whose outputs are in this folder
+  bool overwrite = false;                   ///< a new run replaces another run's outputs in its folder (else refused)
+  bool force = false;                       ///< resume even with a scene that is not the checkpoint's (else refused)
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by Ctrl-C) to stop after the current step
   std::function<void(const RunProgress&)> progress;  ///< called every [output] progress_seconds and at the end
   std::function<void(const std::string&)> note;      ///< called with each line of the scene's notes before the run starts
@@ -55,8 +57,12 @@ struct RunResult {
 };
 
 /// @brief Runs (or resumes) a scene and writes its outputs.
-/// @note Throws InputError for a bad scene or checkpoint, std::runtime_error
-/// when an output cannot be written. A run that stops early (stop flag)
+/// @note Throws InputError for a bad scene or checkpoint, for an output
+/// folder that another live run holds (its lock file, `lsdem.lock`), and for
+/// a new run into a folder holding another run's outputs unless `overwrite`,
+/// for a resume with a scene whose text is not the checkpoint's (edited,
+/// given, or a checkpoint copied from another run's folder) unless `force`;
+/// std::runtime_error when an output cannot be written. A run that stops early (stop flag)
 /// writes a final frame, summary and checkpoint first.
 RunResult runScene(const RunOptions& options);
 
