@@ -13,7 +13,8 @@
 ///      particle whose criterion fails at its strength is queued with its
 ///      fracture plane (fracturePlane, or bucklingPlane for slender grains when
 ///      the buckling mode is on; held, not queued, when no plane is defined),
-///      and so is each manual break that is due;
+///      unless it is smaller than minBreakableVolume; each manual break that
+///      is due is queued too;
 ///   3. the queue is applied in ascending global id: the parent is split by
 ///      its plane (mapped to the parent's body frame); a contact plane that
 ///      only grazes the grain is moved, parallel, to the centroid; if that
