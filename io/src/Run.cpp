@@ -753,9 +753,13 @@ class Runner {
     const auto& p = sw_.world->particles();
     double worst = 0.0, sum = 0.0;
     std::size_t checked = 0, regridded = 0, over3 = 0, worstIndex = 0;
+    // On a grid of its own finer than the one it was cut from.
+    const auto isRegridded = [](const geometry::Shape<D>& shape) {
+      return shape.grid().spacing() < 0.999 * shape.contactSpacing();
+    };
     for (std::size_t i = 0; i < p.size(); ++i) {
       const geometry::Shape<D>& shape = *p.shape[i];
-      if (shape.grid().spacing() < 0.999 * shape.contactSpacing()) ++regridded;
+      if (isRegridded(shape)) ++regridded;
       if (p.generation[i] == 0) continue;
       if (shape.descriptors().equivalentDiameter < scene_.output.shapeMinCells * shape.grid().spacing()) continue;
       const double enclosed = geometry::enclosedVolume<D>(shape.grid());
@@ -785,7 +789,7 @@ class Runner {
           .field("generation", p.generation[worstIndex])
           .field("diameter", shape.descriptors().equivalentDiameter)
           .field("parent_cells_across", shape.descriptors().equivalentDiameter / shape.contactSpacing())
-          .field("regridded", shape.grid().spacing() < 0.999 * shape.contactSpacing())
+          .field("regridded", isRegridded(shape))
           .endObject();
     }
     j.endObject();

@@ -3,6 +3,7 @@
 // continues the run; an output folder holds one run at a time (its lock
 // file) and another run's outputs are not overwritten unless asked.
 
+#include "support/Files.h"
 #include "support/Process.h"
 
 #include <gtest/gtest.h>
@@ -19,6 +20,8 @@
 namespace fs = std::filesystem;
 using lsdem::test::runCaptured;
 using lsdem::test::runToExit;
+
+using lsdem::test::readFile;
 
 namespace {
 
@@ -53,13 +56,6 @@ gravity = [0.0, -9.81]
 frames = 100000
 history_rows = 100000
 )";
-
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 std::size_t lineCount(const std::string& text) { return std::size_t(std::count(text.begin(), text.end(), '\n')); }
 

@@ -3,6 +3,7 @@
 // scene, shape, mesh or asset that no longer loads fails here, not in a
 // long script run.
 
+#include "support/Files.h"
 #include "support/Process.h"
 
 #include <gtest/gtest.h>
@@ -16,6 +17,8 @@
 
 namespace fs = std::filesystem;
 
+using lsdem::test::readFile;
+
 namespace {
 
 std::vector<fs::path> shippedScenes() {
@@ -25,13 +28,6 @@ std::vector<fs::path> shippedScenes() {
   }
   std::sort(scenes.begin(), scenes.end());
   return scenes;
-}
-
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 class ShippedScene : public ::testing::TestWithParam<fs::path> {};

@@ -1,6 +1,7 @@
 // Running scenes: the outputs a run writes (read back and checked), mass
 // balance with breakage, and a resumed run equal to an uninterrupted one.
 
+#include "support/Files.h"
 #include "support/VtpReader.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/Run.h"
@@ -17,6 +18,8 @@
 
 using namespace lsdem;
 namespace fs = std::filesystem;
+
+using lsdem::test::readFile;
 
 namespace {
 
@@ -103,13 +106,6 @@ struct TempDir {
   }
   ~TempDir() { fs::remove_all(path); }
 };
-
-std::string readFile(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 std::vector<std::string> lines(const std::string& text) {
   std::vector<std::string> out;
