@@ -5,6 +5,7 @@
 
 #include "Commands.h"
 
+#include "lsdem/geometry/Contours.h"
 #include "lsdem/io/JsonWriter.h"
 #include "lsdem/io/ShapeFile.h"
 
@@ -22,6 +23,7 @@ using geometry::Shape;
 struct ShapeReport {
   int dimension;
   double volume;
+  double enclosedVolume;  // inside the zero level set as the surfaces output draws it
   Eigen::VectorXd centroid;
   Eigen::VectorXd inertiaPrincipal;  // 3 principal moments in 3D; the polar moment in 2D
   double surfaceArea, circularity, aspectRatio, equivalentDiameter, sieveSize, intermediateAxis;
@@ -40,6 +42,7 @@ ShapeReport report(const io::ShapeDecl& decl) {
   ShapeReport r;
   r.dimension = D;
   r.volume = mass.volume;
+  r.enclosedVolume = geometry::enclosedVolume<D>(shape->grid());
   // The centroid in the frame the shape was declared in (its grid frame).
   r.centroid = shape->bodyToGrid().translation;
   if constexpr (D == 3) {
@@ -64,7 +67,9 @@ ShapeReport report(const io::ShapeDecl& decl) {
 
 void printJson(const ShapeReport& r) {
   io::JsonWriter w(std::cout);
-  w.beginObject().field("dimension", r.dimension).field("volume", r.volume).field("centroid", r.centroid);
+  w.beginObject().field("dimension", r.dimension).field("volume", r.volume)
+      .field(r.dimension == 2 ? "enclosed_area" : "enclosed_volume", r.enclosedVolume)
+      .field("centroid", r.centroid);
   if (r.dimension == 3) {
     w.field("inertia_principal", r.inertiaPrincipal);
   } else {
@@ -98,6 +103,9 @@ void printText(const ShapeReport& r, const std::string& file) {
   };
   std::printf("shape %s (%dD), per unit density\n", file.c_str(), r.dimension);
   std::printf("  %-22s %.6g %s\n", two ? "area" : "volume", r.volume, two ? "m^2" : "m^3");
+  std::printf("  %-22s %.6g %s (%+.2f %% from the %s)\n", two ? "enclosed area" : "enclosed volume",
+              r.enclosedVolume, two ? "m^2" : "m^3", 100.0 * (r.enclosedVolume / r.volume - 1.0),
+              two ? "area" : "volume");
   std::printf("  %-22s %s m\n", "centroid", vec(r.centroid).c_str());
   if (two) {
     std::printf("  %-22s %.6g m^4\n", "polar moment", r.inertiaPrincipal[0]);

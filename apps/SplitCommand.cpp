@@ -7,6 +7,7 @@
 #include "Commands.h"
 
 #include "lsdem/breakage/Split.h"
+#include "lsdem/geometry/Contours.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/JsonWriter.h"
 #include "lsdem/io/ShapeFile.h"
@@ -26,6 +27,7 @@ struct SplitOptionsCli {
   std::string file;
   std::string plane;
   bool json = false;
+  double regridCells = 0.0;
 };
 
 // "nx,ny[,nz],d" -> D + 1 finite numbers, or a one-line error.
@@ -66,7 +68,14 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
   const geometry::Rigid<D>& toGrid = shape->bodyToGrid();
   breakage::FractureSurface<D> surface;
   surface.plane = geometry::HalfSpace<D>{geometry::Vec<D>(toGrid.rotation.transpose() * n), d - n.dot(toGrid.translation)};
-  const breakage::SplitResult<D> result = breakage::splitShape(*shape, surface);
+  breakage::SplitOptions splitOptions;
+  splitOptions.regridCells = opts.regridCells;
+  breakage::validateSplitOptions(splitOptions);
+  const breakage::SplitResult<D> result = breakage::splitShape(*shape, surface, splitOptions);
+  // The volume each fragment's own zero level set encloses (as the surfaces
+  // output draws it): its mass should be rho times this.
+  std::vector<double> enclosed;
+  for (const auto& f : result.fragments) enclosed.push_back(geometry::enclosedVolume<D>(f.shape->grid()));
 
   double correctedSum = 0.0;
   for (const auto& f : result.fragments) correctedSum += f.volume;
@@ -79,6 +88,7 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
       w.beginObject()
           .field("volume", f.volume)
           .field("grid_volume", f.rawVolume)
+          .field("enclosed_volume", enclosed[std::size_t(&f - result.fragments.data())])
           .field("regridded", f.regridded)
           .field("centroid", centroidOf(f))
           .field("nodes", f.shape->nodes().size())
@@ -102,7 +112,8 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
     std::printf("  fragment %zu: %s %.9g (its own grid gives %.9g%s), centroid (", k, D == 2 ? "area" : "volume",
                 f.volume, f.rawVolume, f.regridded ? ", re-gridded" : "");
     for (int a = 0; a < D; ++a) std::printf("%s%.6g", a ? ", " : "", c[a]);
-    std::printf("), %zu nodes\n", f.shape->nodes().size());
+    std::printf("), %zu nodes; its surface encloses %.9g (%+.2f %%)\n", f.shape->nodes().size(), enclosed[k],
+                100.0 * (f.volume / enclosed[k] - 1.0));
   }
   std::printf("  share quadrature error %.3e (relative, removed); sum %.9g\n", result.rawRelativeError, correctedSum);
 }
@@ -114,6 +125,9 @@ void addSplitCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("split", "Split the shape of a [shape] table by a plane (level-set splitting)");
   cmd->add_option("file", opts->file, "TOML file with a [shape] table (keys: docs/shapes.md)")->required();
   cmd->add_option("--plane", opts->plane, "the plane n.x = d as nx,ny[,nz],d in the shape's frame, metres")->required();
+  cmd->add_option("--regrid-cells", opts->regridCells,
+                  "re-grid a fragment thinner than this many parent cells ([effects.breakage] regrid_cells; 0: off)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--json", opts->json, "Print JSON instead of text");
   cmd->callback([opts] {
     const io::ShapeDecl decl = io::readShapeFile(opts->file);

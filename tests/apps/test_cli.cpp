@@ -74,6 +74,11 @@ TEST(Cli, ShapeJsonOfTheSphere) {
   EXPECT_NEAR(jsonNumber(r.out, "equivalent_diameter"), 1.0, 0.005);
   EXPECT_NEAR(jsonNumber(r.out, "sieve_size"), 1.0, 0.01);
   EXPECT_NEAR(jsonNumber(r.out, "aspect_ratio"), 1.0, 0.01);
+  // The volume its surface (as the surfaces output draws it) encloses: the
+  // polygonised sphere, a little inside the true one.
+  const double enclosed = jsonNumber(r.out, "enclosed_volume");
+  EXPECT_LT(enclosed, 4.0 / 3.0 * pi * 0.125);
+  EXPECT_GT(enclosed, 0.99 * 4.0 / 3.0 * pi * 0.125);
   EXPECT_GT(jsonNumber(r.out, "nodes"), 100);
   EXPECT_GT(jsonNumber(r.out, "bytes"), 1000);
   for (const char* key : {"\"dimension\": 3", "\"centroid\"", "\"inertia_principal\"", "\"grid_cells\""}) {
@@ -139,6 +144,24 @@ TEST(Cli, SplitSphereGivesSphericalCaps) {
   const std::string rest = r.out.substr(cz);
   ASSERT_TRUE(std::regex_search(rest, m, std::regex("\\[\\s*[-0-9.e+]+,\\s*[-0-9.e+]+,\\s*([-0-9.e+]+)")));
   EXPECT_NEAR(std::stod(m[1]), 3 * (2 * R - h) * (2 * R - h) / (4 * (3 * R - h)), 0.01 * R);
+}
+
+// --regrid-cells: the cap 0.25 thick (5 cells, a smallest extent below 10) gets a
+// finer grid of its own; each fragment's surface encloses its mass volume to
+// within the rounding of the rim (docs/breakage.md).
+TEST(Cli, SplitRegridsAThinCapAndReportsEnclosedVolumes) {
+  const Result r = run("split " + example("sphere.toml") + " --plane 0,0,1,0.25 --regrid-cells 10 --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const std::size_t second = r.out.find("\"side\": -1") + 10;
+  const std::string cap = r.out.substr(second);
+  EXPECT_NE(cap.find("\"regridded\": true"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"regridded\": false"), std::string::npos) << r.out;
+  for (const std::string& fragment : {r.out, cap}) {
+    const double volume = jsonNumber(fragment, "volume"), enclosed = jsonNumber(fragment, "enclosed_volume");
+    EXPECT_NEAR(enclosed, volume, 0.03 * volume);
+  }
+  const Result bad = run("split " + example("sphere.toml") + " --plane 0,0,1,0.25 --regrid-cells -1");
+  EXPECT_EQ(bad.code, 2) << bad.out;
 }
 
 TEST(Cli, SplitRejectsABadPlane) {
