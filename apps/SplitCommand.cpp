@@ -70,25 +70,26 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
   surface.plane = geometry::HalfSpace<D>{geometry::Vec<D>(toGrid.rotation.transpose() * n), d - n.dot(toGrid.translation)};
   breakage::SplitOptions splitOptions;
   splitOptions.regridCells = opts.regridCells;
-  breakage::validateSplitOptions(splitOptions);
   const breakage::SplitResult<D> result = breakage::splitShape(*shape, surface, splitOptions);
   // The volume each fragment's own zero level set encloses (as the surfaces
   // output draws it): its mass should be rho times this.
   std::vector<double> enclosed;
-  for (const auto& f : result.fragments) enclosed.push_back(geometry::enclosedVolume<D>(f.shape->grid()));
-
   double correctedSum = 0.0;
-  for (const auto& f : result.fragments) correctedSum += f.volume;
+  for (const auto& f : result.fragments) {
+    enclosed.push_back(geometry::enclosedVolume<D>(f.shape->grid()));
+    correctedSum += f.volume;
+  }
   auto centroidOf = [&](const breakage::Fragment<D>& f) { return toGrid.apply(f.childToParent.translation); };
 
   if (opts.json) {
     io::JsonWriter w(std::cout);
     w.beginObject().field("dimension", D).field("split", result.isSplit).key("fragments").beginArray();
-    for (const auto& f : result.fragments) {
+    for (std::size_t k = 0; k < result.fragments.size(); ++k) {
+      const auto& f = result.fragments[k];
       w.beginObject()
           .field("volume", f.volume)
           .field("grid_volume", f.rawVolume)
-          .field("enclosed_volume", enclosed[std::size_t(&f - result.fragments.data())])
+          .field("enclosed_volume", enclosed[k])
           .field("regridded", f.regridded)
           .field("centroid", centroidOf(f))
           .field("nodes", f.shape->nodes().size())
