@@ -61,23 +61,18 @@ printf '%-58s %-26s %-26s %s\n' "case" "expected" "got" "verdict"
 # ---------------------------------------------------------------- scenes --
 scene=$root/apps/scenes/three_grains/three_grains_2d.toml
 mkdir -p "$work/scenes"
-mutate_line() {  # NAME SED-EXPRESSION: the 2D three-grains scene with one change
+# A case of the 2D three-grains scene with one change that must be refused.
+refused_scene() {  # NAME SED-EXPRESSION DESCRIPTION
   local file=$work/scenes/$1.toml
   sed -e "$2" "$scene" > "$file"
-  echo "$file"
+  row "scene: $3" "exit 2, 1 line" "$(outcome run "$file" --out "$work/o_$1")"
 }
-f=$(mutate_line negative_density 's/^density = .*/density = -2650.0/')
-row "scene: negative density" "exit 2, 1 line" "$(outcome run "$f" --out "$work/o_density")"
-f=$(mutate_line tiny_duration 's/^duration = .*/duration = 1e-308/')
-row "scene: duration = 1e-308 (once hung)" "exit 2, 1 line" "$(outcome run "$f" --out "$work/o_duration")"
-f=$(mutate_line tiny_checkpoint 's/^checkpoint_every = .*/checkpoint_every = 1e-308/')
-row "scene: checkpoint_every = 1e-308 (once hung)" "exit 2, 1 line" "$(outcome run "$f" --out "$work/o_checkpoint")"
-f=$(mutate_line huge_gravity 's/^gravity = .*/gravity = [0.0, -1e308]/')
-row "scene: gravity = -1e308 (once gave NaN rows)" "exit 2, 1 line" "$(outcome run "$f" --out "$work/o_gravity")"
-f=$(mutate_line comma_name 's/^name = "platen"/name = "pla,ten"/')
-row "scene: a comma in a plane's name" "exit 2, 1 line" "$(outcome run "$f" --out "$work/o_name")"
-f=$(mutate_line unknown_key 's/^\[output\]/[output]\nframs = 3/')
-row "scene: a misspelled key" "exit 2, 1 line" "$(outcome run "$f" --out "$work/o_key")"
+refused_scene negative_density 's/^density = .*/density = -2650.0/' "negative density"
+refused_scene tiny_duration 's/^duration = .*/duration = 1e-308/' "duration = 1e-308 (once hung)"
+refused_scene tiny_checkpoint 's/^checkpoint_every = .*/checkpoint_every = 1e-308/' "checkpoint_every = 1e-308 (once hung)"
+refused_scene huge_gravity 's/^gravity = .*/gravity = [0.0, -1e308]/' "gravity = -1e308 (once gave NaN rows)"
+refused_scene comma_name 's/^name = "platen"/name = "pla,ten"/' "a comma in a plane's name"
+refused_scene unknown_key 's/^\[output\]/[output]\nframs = 3/' "a misspelled key"
 
 # Random single-byte mutations: every run ends with 0, 1 or 2 (never a
 # signal or a hang); runs are cut to 3 steps.
@@ -110,20 +105,20 @@ endloop
 endfacet
 endsolid nan
 EOF
-row "mesh: NaN vertex in an STL (once SIGFPE)" "exit 2, 1 line" \
-  "$(outcome mesh2ls "$work/meshes/nan.stl" --spacing 0.1 -o "$work/meshes/nan.lsg")"
+# A broken mesh that mesh2ls must refuse.
+refused_mesh() {  # FILE DESCRIPTION
+  row "mesh: $2" "exit 2, 1 line" "$(outcome mesh2ls "$work/meshes/$1" --spacing 0.1 -o "$work/meshes/$1.lsg")"
+}
+refused_mesh nan.stl "NaN vertex in an STL (once SIGFPE)"
 ply_header() {  # FORMAT VERTICES FACES END
   printf 'ply\nformat %s 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\nelement face %d\nproperty list uchar int vertex_indices\n%s\n' "$@"
 }
 { ply_header ascii 4 4 end_header; printf '0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 99\n'; } > "$work/meshes/index.ply"
-row "mesh: face index out of range in a PLY (once SIGSEGV)" "exit 2, 1 line" \
-  "$(outcome mesh2ls "$work/meshes/index.ply" --spacing 0.1 -o "$work/meshes/index.lsg")"
+refused_mesh index.ply "face index out of range in a PLY (once SIGSEGV)"
 { ply_header binary_little_endian 4 4 end_header; printf '\x00\x00\x00\x00\x00\x00'; } > "$work/meshes/truncated.ply"
-row "mesh: truncated binary PLY (once crashed)" "exit 2, 1 line" \
-  "$(outcome mesh2ls "$work/meshes/truncated.ply" --spacing 0.1 -o "$work/meshes/truncated.lsg")"
+refused_mesh truncated.ply "truncated binary PLY (once crashed)"
 { ply_header ascii 4 4 end_headr; printf '0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n'; } > "$work/meshes/header.ply"
-row "mesh: misspelled end_header in a PLY (once hung)" "exit 2, 1 line" \
-  "$(outcome mesh2ls "$work/meshes/header.ply" --spacing 0.1 -o "$work/meshes/header.lsg")"
+refused_mesh header.ply "misspelled end_header in a PLY (once hung)"
 
 # ---------------------------------------------------------- grain files --
 grain=$work/meshes/cube.lsg
