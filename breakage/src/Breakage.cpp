@@ -173,6 +173,45 @@ void Breakage<D>::queueFailures(World<D>& world) {
 }
 
 template <int D>
+geometry::SignedDistance<D> Breakage<D>::clearanceAround(const World<D>& world, std::size_t i) {
+  const Particles<D>& p = world.particles();
+  const Shape<D>& shape = *p.shape[i];
+  const Vec<D> centre = p.position[i];
+  const double reach = shape.boundingRadius() + 4.0 * shape.grid().spacing();
+  around_.clear();
+  for (std::size_t j = 0; j < p.size(); ++j) {
+    if (j == i) continue;
+    const double radius = p.shape[j]->boundingRadius();
+    if ((p.position[j] - centre).norm() > reach + radius) continue;
+    around_.push_back({p.shape[j].get(), p.rotation(j), p.position[j], Vec<D>::Zero(), radius});
+  }
+  for (const dynamics::Plane<D>& plane : world.planes()) {
+    around_.push_back({nullptr, Mat<D>::Identity(), plane.point, plane.normal, 0.0});
+  }
+  for (const dynamics::ToolPose<D>& tool : world.toolPoses()) {
+    const double radius = tool.shape->boundingRadius();
+    if ((tool.position - centre).norm() > reach + radius) continue;
+    around_.push_back({tool.shape, dynamics::Rotation<D>::matrix(tool.orientation), tool.position, Vec<D>::Zero(), radius});
+  }
+  // The nearest body's level set at the point; a body whose bounding sphere
+  // is farther than the nearest value so far is not looked up.
+  return [this, rotation = p.rotation(i), centre](const Vec<D>& xBody) {
+    const Vec<D> x = centre + rotation * xBody;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Neighbour& n : around_) {
+      if (!n.shape) {
+        nearest = std::min(nearest, n.normal.dot(x - n.position));
+        continue;
+      }
+      const Vec<D> r = x - n.position;
+      if (r.norm() - n.radius >= nearest) continue;
+      nearest = std::min(nearest, n.shape->value(n.rotation.transpose() * r));
+    }
+    return nearest;
+  };
+}
+
+template <int D>
 void Breakage<D>::applyQueue(World<D>& world) {
   Particles<D>& p = world.particles();
   dynamics::EnergyLedger& ledger = world.energyLedger();
@@ -198,9 +237,12 @@ void Breakage<D>::applyQueue(World<D>& world) {
     } else {
       surface.plane = HalfSpace<D>{rotation.transpose() * q.plane.normal, q.plane.offset - q.plane.normal.dot(p.position[i])};
     }
+    // The split moves no surface near another body.
+    const geometry::SignedDistance<D> clearance =
+        def_.split.matchEnclosedVolume ? clearanceAround(world, i) : geometry::SignedDistance<D>{};
     SplitResult<D> split;
     try {
-      split = splitShape(shape, surface, def_.split);
+      split = splitShape(shape, surface, def_.split, clearance);
     } catch (const std::exception& e) {
       // A manual break is logged and skipped; a failure the criterion found is a bug worth stopping for.
       if (!q.manual) throw;
@@ -217,7 +259,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
       // The plane through the contacts grazes the grain (one side holds no
       // interior grid node): the same orientation through the centroid.
       surface.plane->offset = 0.0;
-      split = splitShape(shape, surface, def_.split);
+      split = splitShape(shape, surface, def_.split, clearance);
       if (!split.isSplit) {
         // No cut resolves at this grid: the grain stays whole from now on
         // rather than being retried every step.

@@ -1,6 +1,7 @@
 #include "lsdem/breakage/Split.h"
 
 #include "lsdem/geometry/Components.h"
+#include "lsdem/geometry/Contours.h"
 #include "lsdem/geometry/Csg.h"
 #include "lsdem/geometry/MassProperties.h"
 #include "lsdem/geometry/NodeSet.h"
@@ -425,20 +426,110 @@ Grid<D> regridPiece(const Grid<D>& parentGrid, const geometry::SignedDistance<D>
   return grid;
 }
 
+/// A fragment's free surface moved out by `delta` (SplitOptions::
+/// matchEnclosedVolume): phi' = phi - delta w(x), with the weight
+///     w = clamp((|phi_f(x)| - b) / g, 0, 1) clamp(c(x) / h - 2, 0, 1),
+///     b = max(sqrt(D) g, the largest shift allowed),
+/// with g the spacing of the piece's own grid, h the parent's, c the
+/// clearance (the distance to the nearest other body, splitShape's
+/// `clearance`). w is 0 within b of the fracture surface: every grid value of
+/// a cell the cut face crosses (a cell diagonal), and with them the face,
+/// stays exactly as cut, and no point across the cut comes inside (there
+/// phi >= |phi_f| > b >= delta), so siblings do not overlap. Likewise it is
+/// 0 within max(sqrt(D) g, 2 x the largest shift) of another piece of the same
+/// side (a concave grain's pieces on one side can lie a fraction of a cell
+/// apart, and both move). It is 0 within two parent cells of
+/// any other body, so the surface moves into nothing (contact overlaps are
+/// small fractions of a cell: a shift into a neighbour of even 0.05 cells
+/// made springs a hundred times stiffer than the load's); 1 from b + g off
+/// the cut and three parent cells off every other body.
+template <int D>
+struct SurfaceShift {
+  const geometry::SignedDistance<D>* psi = nullptr;        ///< the fracture surface, parent grid frame
+  const geometry::SignedDistance<D>* clearance = nullptr;  ///< parent body frame; empty: nothing around
+  const Rigid<D>* bodyToGrid = nullptr;
+  double cell = 0.0;     ///< the parent's grid spacing
+  double ownCell = 0.0;  ///< the piece's grid spacing
+  double cutBand = 0.0;  ///< b: no shift this close to the cut
+  double pieceBand = 0.0;  ///< no shift this close to another piece of the side
+  const Side<D>* side = nullptr;  ///< the piece's side
+  std::size_t piece = 0;          ///< the piece's index in it
+  double delta = 0.0;    ///< world units, > 0 outward
+  double weight(const Vec<D>& x) const {
+    double apart = std::abs((*psi)(x)) - cutBand;
+    for (std::size_t k = 0; k < side->pieces.size(); ++k) {
+      if (k == piece || distanceToBox(side->pieces[k], x) - pieceBand >= apart) continue;
+      apart = std::min(apart, side->pieces[k].value(x) - pieceBand);
+    }
+    const double fromCut = std::clamp(apart / ownCell, 0.0, 1.0);
+    if (fromCut == 0.0 || !*clearance) return fromCut;
+    return fromCut * std::clamp((*clearance)(bodyToGrid->applyInverse(x)) / cell - 2.0, 0.0, 1.0);
+  }
+  double at(const Vec<D>& x) const { return delta == 0.0 ? 0.0 : delta * weight(x); }
+};
+
+/// Moves the surface of a piece's grid (SurfaceShift) until the volume its
+/// zero set encloses, as the surfaces output draws it (enclosedVolume), is
+/// `target` (its share of the parent's volume) to 1e-4, the shift at most
+/// `maxShift` either way. The enclosed volume V(delta) grows with delta at the
+/// rate of the weighted surface area; the first step takes that area from the
+/// grid (sum of w times a cosine delta kernel 3 cells wide), the next ones
+/// are secant steps on V (at most 4 evaluations, 2 as a rule). Returns the shift applied.
+template <int D>
+SurfaceShift<D> matchEnclosedVolume(Grid<D>& grid, const SurfaceShift<D>& unshifted, double target, double maxShift) {
+  SurfaceShift<D> shift = unshifted;
+  const double tolerance = 1e-4 * target;
+  double v0 = geometry::enclosedVolume<D>(grid);
+  if (!(maxShift > 0.0) || !(target > 0.0) || !(v0 > 0.0) || std::abs(v0 - target) <= tolerance) return shift;
+
+  const std::vector<float> base = grid.values();
+  std::vector<float> weights(grid.size());
+  const double h = grid.spacing(), band = 1.5 * h, pi = std::acos(-1.0);
+  double area = 0.0;
+  geometry::Index<D> j = geometry::Index<D>::Zero();
+  // Only values within a few cells of the zero set can move it.
+  const double reach = std::sqrt(double(D)) * h + maxShift;
+  for (std::size_t n = 0; n < grid.size(); ++n, grid.advance(j)) {
+    if (!(std::abs(base[n]) < reach)) continue;
+    weights[n] = float(shift.weight(grid.nodePosition(j)));
+    if (std::abs(base[n]) < band) area += weights[n] * (1.0 + std::cos(pi * base[n] / band)) / (2.0 * band);
+  }
+  area *= std::pow(h, D);
+  if (!(area > 0.0)) return shift;
+  const auto volumeAt = [&](double delta) {
+    for (std::size_t n = 0; n < grid.size(); ++n) grid[n] = float(base[n] - delta * weights[n]);
+    return geometry::enclosedVolume<D>(grid);
+  };
+  double d0 = 0.0, f0 = v0 - target;
+  double d1 = std::clamp(-f0 / area, -maxShift, maxShift);
+  double f1 = volumeAt(d1) - target;
+  for (int evaluation = 1; evaluation < 4 && std::abs(f1) > tolerance && f1 != f0; ++evaluation) {
+    const double d2 = std::clamp(d1 - f1 * (d1 - d0) / (f1 - f0), -maxShift, maxShift);
+    if (d2 == d1) break;  // held at the bound
+    d0 = d1;
+    f0 = f1;
+    d1 = d2;
+    f1 = volumeAt(d1) - target;
+  }
+  shift.delta = d1;
+  return shift;
+}
+
 /// Nodes made on a re-gridded piece lie on its new grid's zero set, which
 /// samples the piece's level set in the parent (pieceLevelSet) and so differs
 /// from it by the new grid's interpolation error, up to a few thousandths of
 /// a parent cell: a node a little outside the parent would start inside
 /// whatever the parent touched (or its sibling). Each such node is moved in
 /// along the new grid's normal until it is within 1e-4 parent cells of the
-/// parent's surface (at most a few hundredths of a cell).
+/// parent's surface moved by `shift` (at most a few hundredths of a cell).
 template <int D>
 void pullInsideParent(NodeSet<D>& nodes, const Grid<D>& fineGrid, const Grid<D>& parentGrid,
-                      const geometry::SignedDistance<D>& psi, const Side<D>& side, std::size_t piece) {
+                      const geometry::SignedDistance<D>& psi, const Side<D>& side, std::size_t piece,
+                      const SurfaceShift<D>& shift) {
   const double tolerance = 1e-4 * parentGrid.spacing();
   for (Vec<D>& x : nodes.positions) {
     for (int iteration = 0; iteration < 8; ++iteration) {
-      const double outside = pieceLevelSet(parentGrid, psi, side, piece, x);
+      const double outside = pieceLevelSet(parentGrid, psi, side, piece, x) - shift.at(x);
       if (!(outside > tolerance)) break;
       Vec<D> grad;
       fineGrid.valueAndGradient(x, grad);
@@ -483,13 +574,17 @@ void validateSplitOptions(const SplitOptions& options) {
   if (!std::isfinite(options.regridMinVolume) || options.regridMinVolume < 0.0) {
     fail("regridMinVolume must be finite and >= 0, got " + std::to_string(options.regridMinVolume));
   }
+  if (!(options.maxSurfaceShift >= 0.0 && options.maxSurfaceShift <= 1.0)) {
+    fail("maxSurfaceShift must be in [0, 1] cells, got " + std::to_string(options.maxSurfaceShift));
+  }
   if (options.minFragmentNodes < 1) {
     fail("minFragmentNodes must be >= 1, got " + std::to_string(options.minFragmentNodes));
   }
 }
 
 template <int D>
-SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surface, const SplitOptions& options) {
+SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surface, const SplitOptions& options,
+                          const geometry::SignedDistance<D>& clearance) {
   // Check the arguments.
   if (!surface.plane && !surface.field) {
     throw std::invalid_argument("splitShape: the fracture surface has neither a plane nor a field");
@@ -585,6 +680,15 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
                                 &planeGrid->normal, sides, reference)
                 : partitionMass(grid, epsilon, psi, static_cast<const Vec<D>*>(nullptr), sides, reference);
   const double cellVolume = std::pow(h, D);
+  std::vector<geometry::MassProperties<D>> pieceMass;
+  double sharesTotal = 0.0;
+  for (const geometry::MassSums<D>& share : shares) {
+    pieceMass.push_back(share.properties(childOptions.massMethod, cellVolume, reference));
+    sharesTotal += pieceMass.back().volume;
+  }
+  // The factor that makes the shares carry the parent's volume (the one
+  // applied below, over the kept pieces: the same unless a piece is dropped).
+  const double shareScale = sharesTotal > 0.0 ? result.parentVolume / sharesTotal : 1.0;
 
   // Each piece: its grid (re-gridded when small), its nodes, its share of the mass.
   struct Piece {
@@ -603,7 +707,18 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
       Piece piece;
       piece.side = side.sign;
       piece.nodesPerCell = nodesPerCell;
-      piece.mass = shares[slotOf(sides, s, k)].properties(childOptions.massMethod, cellVolume, reference);
+      piece.mass = pieceMass[slotOf(sides, s, k)];
+      // Its surface moved to enclose its share of the parent's volume, when asked.
+      const auto matchSurface = [&](Grid<D>& pieceGrid) {
+        const double g = pieceGrid.spacing(), maxShift = options.maxSurfaceShift * h;
+        const double diagonal = std::sqrt(double(D)) * g;
+        const SurfaceShift<D> unshifted{&psi,  &clearance, &bodyToGrid, h, g, std::max(diagonal, maxShift),
+                                        std::max(diagonal, 2.0 * maxShift), &side, k, 0.0};
+        if (!options.matchEnclosedVolume) return unshifted;
+        const SurfaceShift<D> shift = matchEnclosedVolume(pieceGrid, unshifted, piece.mass.volume * shareScale, maxShift);
+        result.largestSurfaceShift = std::max(result.largestSurfaceShift, std::abs(shift.delta) / h);
+        return shift;
+      };
       // A piece thinner than regridCells of its cells gets a finer grid of its
       // own (within the memory bound) and nodes made afresh on it.
       if (options.regridCells > 0.0 && piece.mass.volume > options.regridMinVolume) {
@@ -614,9 +729,10 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
         if (count > double(options.regridMaxNodes)) fine *= std::pow(count / double(options.regridMaxNodes), 1.0 / D);
         if (fine < 0.9 * h) {
           Grid<D> refined = regridPiece(grid, psi, side, k, where, fine, options.paddingCells);
+          const SurfaceShift<D> shift = matchSurface(refined);
           const double density = options.regridKeepsNodeSpacing ? nodesPerCell * refined.spacing() / h : nodesPerCell;
           NodeSet<D> nodes = nodesWithFloor(refined, density, options.minFragmentNodes);
-          pullInsideParent(nodes, refined, grid, psi, side, k);
+          pullInsideParent(nodes, refined, grid, psi, side, k, shift);
           if (!nodes.empty()) {
             piece.grid = std::move(refined);
             piece.nodes = std::move(nodes);
@@ -628,10 +744,14 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
         }
       }
       if (!piece.regridded) {
+        // A copy: a later piece of this side may be re-gridded beside it.
+        piece.grid = side.pieces[k];
+        matchSurface(piece.grid);
         NodeSet<D> nodes = std::move(side.nodes[k]);
         // Back onto the piece's own phi = 0: the multilinear interpolant rounds the
-        // max() kink of eq. 14-15 at the new rim by up to ~h/4.
-        for (Vec<D>& x : nodes.positions) x = geometry::projectOntoZero(side.pieces[k], x, 1e-4, 10);
+        // max() kink of eq. 14-15 at the new rim by up to ~h/4, and the
+        // surface may have been moved out (matchEnclosedVolume).
+        for (Vec<D>& x : nodes.positions) x = geometry::projectOntoZero(piece.grid, x, 1e-4, 10);
         // A node the projection could not bring to the piece's surface (a
         // parent node several cells from the piece it was given to, left up to a
         // cell outside it and outside the parent; or one beside a sliver whose
@@ -640,7 +760,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
         // projection is within 1e-4 cells.
         std::size_t keptCount = 0;
         for (std::size_t n = 0; n < nodes.size(); ++n) {
-          if (!(std::abs(side.pieces[k].value(nodes.positions[n])) <= 1e-3 * h)) continue;
+          if (!(std::abs(piece.grid.value(nodes.positions[n])) <= 1e-3 * h)) continue;
           nodes.positions[keptCount] = nodes.positions[n];
           nodes.weights[keptCount] = nodes.weights[n];
           ++keptCount;
@@ -649,8 +769,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
         nodes.weights.resize(keptCount);
         // Nodes that landed on one point are one node.
         mergeCoincidentNodes(nodes, 0.25 * h / nodesPerCell);
-        if (nodes.empty()) nodes = nodesWithFloor(side.pieces[k], nodesPerCell, 1);
-        piece.grid = side.pieces[k];  // a copy: a later piece of this side may be re-gridded beside it
+        if (nodes.empty()) nodes = nodesWithFloor(piece.grid, nodesPerCell, 1);
         piece.nodes = std::move(nodes);
       }
       if (piece.nodes.empty() || !(piece.mass.volume > 0.0)) {
@@ -665,11 +784,18 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
   if (kept.size() < 2) return result;
   result.isSplit = true;
   result.rawVolumeSum = keptVolume;
-  result.rawRelativeError = (keptVolume + result.droppedRawVolume - result.parentVolume) / result.parentVolume;
+  // The shares' quadrature against the parent's own grid's estimate (sub-cell
+  // samples along the cut against node samples; ~1e-4). A fragment's volume is
+  // its share of its own parent's, which its grid's estimate need not equal
+  // (a surface moved to enclose it, SplitOptions::matchEnclosedVolume, gives
+  // a smoothed-Heaviside volume about 1 % above it): the parent's volume is
+  // not the reference for the quadrature.
+  const double parentGridVolume = geometry::massProperties(grid, childOptions.massMethod).volume;
+  result.rawRelativeError = (keptVolume + result.droppedRawVolume - parentGridVolume) / parentGridVolume;
 
-  // Carry the parent's volume exactly: the shares' quadrature differs from the
-  // parent's estimate by rawRelativeError (sub-cell samples along the cut
-  // against node samples; ~1e-4), removed by one common factor.
+  // Carry the parent's volume exactly: the shares differ from it by the
+  // quadrature (rawRelativeError) and, for a fragment, by its grid's estimate
+  // against its share; one common factor removes both.
   const double scale = result.parentVolume / keptVolume;
   const Rigid<D> gridToParentBody = bodyToGrid.inverse();
   for (Piece& piece : kept) {
@@ -741,8 +867,10 @@ FragmentState<D> fragmentState(const Fragment<D>& fragment, const Vec<D>& parent
   return state;
 }
 
-template SplitResult<2> splitShape<2>(const Shape<2>&, const FractureSurface<2>&, const SplitOptions&);
-template SplitResult<3> splitShape<3>(const Shape<3>&, const FractureSurface<3>&, const SplitOptions&);
+template SplitResult<2> splitShape<2>(const Shape<2>&, const FractureSurface<2>&, const SplitOptions&,
+                                          const geometry::SignedDistance<2>&);
+template SplitResult<3> splitShape<3>(const Shape<3>&, const FractureSurface<3>&, const SplitOptions&,
+                                          const geometry::SignedDistance<3>&);
 template FragmentState<2> fragmentState<2>(const Fragment<2>&, const Vec<2>&, const Mat<2>&, const Vec<2>&,
                                            const dynamics::Spin<2>&);
 template FragmentState<3> fragmentState<3>(const Fragment<3>&, const Vec<3>&, const Mat<3>&, const Vec<3>&,

@@ -207,6 +207,10 @@ class Breakage final : public dynamics::Effect<D> {
   bool isBelowMinimum(const geometry::Shape<D>& shape) const;
   void queueFailures(dynamics::World<D>& world);
   void applyQueue(dynamics::World<D>& world);
+  /// The bodies within reach of particle i's surface (other particles whose
+  /// bounding spheres come within a few of its cells, every plane, tools
+  /// likewise) into around_, and splitShape's `clearance` over them.
+  geometry::SignedDistance<D> clearanceAround(const dynamics::World<D>& world, std::size_t i);
 
   BreakageDef<D> def_;
   std::unique_ptr<Criterion> criterion_;
@@ -214,6 +218,15 @@ class Breakage final : public dynamics::Effect<D> {
   // Reused buffers.
   std::vector<geometry::Mat<D>> stress_;
   GrainContactPoints<D> points_;
+  /// A body near a grain being split: its shape placed in the world (or a plane).
+  struct Neighbour {
+    const geometry::Shape<D>* shape = nullptr;  ///< nullptr: a plane
+    geometry::Mat<D> rotation;                  ///< body -> world
+    geometry::Vec<D> position;                  ///< body origin / a point of the plane, world frame
+    geometry::Vec<D> normal;                    ///< a plane's normal
+    double radius = 0.0;                        ///< bounding radius
+  };
+  std::vector<Neighbour> around_;
   std::vector<Pending> queue_;
   std::vector<std::size_t> parents_;
   std::vector<dynamics::ParticleDef<D>> adds_;

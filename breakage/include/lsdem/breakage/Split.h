@@ -158,11 +158,19 @@ struct SplitOptions {
   /// world units^D, >= 0 (the breakage effect sets its fines size: such
   /// pieces leave the simulation at once).
   double regridMinVolume = 0.0;
+  /// Move each fragment's surface (not its cut face) so that it encloses its
+  /// share of the parent's volume (file comment, "Surface matched to the
+  /// mass"): the uniform outward shift that puts back what the cut's rim lost.
+  bool matchEnclosedVolume = true;
+  /// The largest shift of matchEnclosedVolume, in cells of the parent's grid,
+  /// in [0, 1]; a fragment that needs more (a chip a few cells across) is
+  /// moved this far and keeps the rest of its deviation.
+  double maxSurfaceShift = 0.25;
 };
 
 /// @brief Checks SplitOptions: nodesPerCell finite and >= 0, paddingCells >= 3,
 /// regridCells finite and >= 0, regridMaxFactor >= 1, regridMaxNodes >= 64,
-/// minFragmentNodes >= 1, regridMinVolume finite and >= 0.
+/// minFragmentNodes >= 1, regridMinVolume finite and >= 0, maxSurfaceShift in [0, 1].
 /// @note Throws std::invalid_argument naming the option and its value.
 void validateSplitOptions(const SplitOptions& options);
 
@@ -192,6 +200,9 @@ struct SplitResult {
   /// 3D: Frobenius norms of the tensors), with the corrected inertias about the
   /// fragments' centre of mass: the relative change of spin angular momentum (file comment).
   double inertiaRelativeError = 0.0;
+  /// The largest |shift| of a fragment's surface (SplitOptions::
+  /// matchEnclosedVolume), in cells of the parent's grid; 0 when off.
+  double largestSurfaceShift = 0.0;
 };
 
 /// @brief eq. 14-15: splits `parent` by `surface` into fragment shapes.
@@ -225,6 +236,10 @@ struct SplitResult {
 /// @param parent the grain to split.
 /// @param surface the fracture surface in the parent's body frame.
 /// @param options node density and padding.
+/// @param clearance distance from a point of the parent's body frame to the
+/// nearest other body (world units; a lower bound will do): matchEnclosedVolume
+/// moves no surface within 2 parent cells of another body (file comment).
+/// Empty: nothing around the grain.
 /// @return the fragments and the bookkeeping (see SplitResult).
 /// @note Throws std::invalid_argument when the surface has neither a plane nor
 /// a field, the field gives NaN at a grid node, the plane's normal is zero or not finite or its offset not finite,
@@ -232,7 +247,7 @@ struct SplitResult {
 /// Deterministic: the same fragments for any number of threads.
 template <int D>
 SplitResult<D> splitShape(const geometry::Shape<D>& parent, const FractureSurface<D>& surface,
-                          const SplitOptions& options = {});
+                          const SplitOptions& options = {}, const geometry::SignedDistance<D>& clearance = {});
 
 /// Where a fragment starts and how it moves when its parent breaks.
 template <int D>
@@ -255,8 +270,10 @@ FragmentState<D> fragmentState(const Fragment<D>& fragment, const geometry::Vec<
                                const geometry::Mat<D>& parentRotation, const geometry::Vec<D>& parentVelocity,
                                const dynamics::Spin<D>& parentSpin);
 
-extern template SplitResult<2> splitShape<2>(const geometry::Shape<2>&, const FractureSurface<2>&, const SplitOptions&);
-extern template SplitResult<3> splitShape<3>(const geometry::Shape<3>&, const FractureSurface<3>&, const SplitOptions&);
+extern template SplitResult<2> splitShape<2>(const geometry::Shape<2>&, const FractureSurface<2>&, const SplitOptions&,
+                                                 const geometry::SignedDistance<2>&);
+extern template SplitResult<3> splitShape<3>(const geometry::Shape<3>&, const FractureSurface<3>&, const SplitOptions&,
+                                                 const geometry::SignedDistance<3>&);
 extern template FragmentState<2> fragmentState<2>(const Fragment<2>&, const geometry::Vec<2>&, const geometry::Mat<2>&,
                                                   const geometry::Vec<2>&, const dynamics::Spin<2>&);
 extern template FragmentState<3> fragmentState<3>(const Fragment<3>&, const geometry::Vec<3>&, const geometry::Mat<3>&,
