@@ -589,6 +589,12 @@ class SceneReader {
     } else {
       r.fail("regrid_nodes", "must be \"parent_spacing\" or \"per_new_cell\", got \"" + regridNodes + "\"");
     }
+    // Fragment surfaces moved to enclose their share of the parent (Split.h).
+    def.split.matchEnclosedVolume = r.boolean("match_enclosed_volume", def.split.matchEnclosedVolume);
+    def.split.maxSurfaceShift = r.number("max_surface_shift", def.split.maxSurfaceShift);
+    if (!(def.split.maxSurfaceShift >= 0.0 && def.split.maxSurfaceShift <= 1.0)) {
+      r.fail("max_surface_shift", "must be in [0, 1] cells of the parent's grid");
+    }
     def.buckling = r.boolean("buckling", false);
     def.bucklingRatio = r.number("buckling_ratio", def.bucklingRatio);
     if (!(def.bucklingRatio > 1.0)) r.fail("buckling_ratio", "must be > 1");
