@@ -428,7 +428,7 @@ Grid<D> regridPiece(const Grid<D>& parentGrid, const geometry::SignedDistance<D>
 
 /// A fragment's free surface moved out by `delta` (SplitOptions::
 /// matchEnclosedVolume): phi' = phi - delta w(x), with the weight
-///     w = clamp((|phi_f(x)| - b) / g, 0, 1) clamp(c(x) / h - 2, 0, 1),
+///     w = clamp((|phi_f(x)| - b) / g, 0, 1) clamp((c(x) - 2 delta_max) / h, 0, 1),
 ///     b = max(sqrt(D) g, the largest shift allowed),
 /// with g the spacing of the piece's own grid, h the parent's, c the
 /// clearance (the distance to the nearest other body, splitShape's
@@ -438,11 +438,12 @@ Grid<D> regridPiece(const Grid<D>& parentGrid, const geometry::SignedDistance<D>
 /// phi >= |phi_f| > b >= delta), so siblings do not overlap. Likewise it is
 /// 0 within max(sqrt(D) g, 2 x the largest shift) of another piece of the same
 /// side (a concave grain's pieces on one side can lie a fraction of a cell
-/// apart, and both move). It is 0 within two parent cells of
+/// apart, and both move). It is 0 within twice the largest shift of
 /// any other body, so the surface moves into nothing (contact overlaps are
 /// small fractions of a cell: a shift into a neighbour of even 0.05 cells
-/// made springs a hundred times stiffer than the load's); 1 from b + g off
-/// the cut and three parent cells off every other body.
+/// made springs a hundred times stiffer than the load's; a point c away
+/// moves at most delta (c - 2 delta_max) / h < c), and 1 from b + g off the
+/// cut and a parent cell more than that off every other body.
 template <int D>
 struct SurfaceShift {
   const geometry::SignedDistance<D>* psi = nullptr;        ///< the fracture surface, parent grid frame
@@ -452,6 +453,7 @@ struct SurfaceShift {
   double ownCell = 0.0;  ///< the piece's grid spacing
   double cutBand = 0.0;  ///< b: no shift this close to the cut
   double pieceBand = 0.0;  ///< no shift this close to another piece of the side
+  double clearanceBand = 0.0;  ///< nor this close to another body
   const Side<D>* side = nullptr;  ///< the piece's side
   std::size_t piece = 0;          ///< the piece's index in it
   double delta = 0.0;    ///< world units, > 0 outward
@@ -463,7 +465,7 @@ struct SurfaceShift {
     }
     const double fromCut = std::clamp(apart / ownCell, 0.0, 1.0);
     if (fromCut == 0.0 || !*clearance) return fromCut;
-    return fromCut * std::clamp((*clearance)(bodyToGrid->applyInverse(x)) / cell - 2.0, 0.0, 1.0);
+    return fromCut * std::clamp(((*clearance)(bodyToGrid->applyInverse(x)) - clearanceBand) / cell, 0.0, 1.0);
   }
   double at(const Vec<D>& x) const { return delta == 0.0 ? 0.0 : delta * weight(x); }
 };
@@ -713,7 +715,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
         const double g = pieceGrid.spacing(), maxShift = options.maxSurfaceShift * h;
         const double diagonal = std::sqrt(double(D)) * g;
         const SurfaceShift<D> unshifted{&psi,  &clearance, &bodyToGrid, h, g, std::max(diagonal, maxShift),
-                                        std::max(diagonal, 2.0 * maxShift), &side, k, 0.0};
+                                        std::max(diagonal, 2.0 * maxShift), 2.0 * maxShift, &side, k, 0.0};
         if (!options.matchEnclosedVolume) return unshifted;
         const SurfaceShift<D> shift = matchEnclosedVolume(pieceGrid, unshifted, piece.mass.volume * shareScale, maxShift);
         result.largestSurfaceShift = std::max(result.largestSurfaceShift, std::abs(shift.delta) / h);

@@ -238,7 +238,7 @@ struct SplitResult {
 /// @param options node density and padding.
 /// @param clearance distance from a point of the parent's body frame to the
 /// nearest other body (world units; a lower bound will do): matchEnclosedVolume
-/// moves no surface within 2 parent cells of another body (file comment).
+/// moves no surface within twice its largest shift of another body (file comment).
 /// Empty: nothing around the grain.
 /// @return the fragments and the bookkeeping (see SplitResult).
 /// @note Throws std::invalid_argument when the surface has neither a plane nor
