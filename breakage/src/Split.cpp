@@ -128,12 +128,48 @@ NodeSet<D> planeNodes(const Grid<D>& parentGrid, const HalfSpace<D>& planeGrid, 
 /// which has the same zero level set; only exterior values farther than a
 /// cell diagonal from the piece differ (connectedComponents raises them
 /// towards the distance, which LS-DEM does not need).
+///
+/// Specks are not pieces: a component of fewer than 2^D interior nodes (not
+/// one cell's worth) with a node diagonal to a node of a larger component.
+/// Where a cut meets a grain's surface at a shallow angle, single interior
+/// nodes along the rim touch the piece only across a cell's diagonal; each
+/// became a fragment of about one cell's volume (a 64^3 sphere cut 0.7 radii
+/// off centre gave 9 of them beside the cap, each re-gridded: 773 ms for the
+/// split against 47 ms). Their share of the mass goes to the pieces around
+/// them (partitionMass gives every sample of a side to one of its pieces).
 template <int D>
 std::vector<Grid<D>> sidePieces(const Grid<D>& side, int padding) {
   std::vector<int> labels;
   const int count = geometry::labelComponents(side, labels);
   if (count == 0) return {};
-  if (count > 1) return geometry::connectedComponents(side, padding);
+  if (count > 1) {
+    std::vector<Grid<D>> pieces = geometry::connectedComponents(side, padding);
+    constexpr int kSpeckNodes = 1 << D;
+    std::vector<int> nodes(std::size_t(count), 0);
+    for (int label : labels) {
+      if (label >= 0) ++nodes[std::size_t(label)];
+    }
+    std::vector<char> speck(std::size_t(count), 0);
+    int neighbours = 1;
+    for (int a = 0; a < D; ++a) neighbours *= 3;
+    for (std::size_t n = 0; n < side.size(); ++n) {
+      const int label = labels[n];
+      if (label < 0 || nodes[std::size_t(label)] >= kSpeckNodes || speck[std::size_t(label)]) continue;
+      const geometry::Index<D> i = side.unlinear(n);
+      for (int q = 0; q < neighbours; ++q) {
+        geometry::Index<D> j = i;
+        for (int a = 0, rest = q; a < D; ++a, rest /= 3) j[a] += rest % 3 - 1;
+        if (!side.inBounds(j)) continue;
+        const int other = labels[side.linear(j)];
+        if (other >= 0 && other != label && nodes[std::size_t(other)] >= kSpeckNodes) speck[std::size_t(label)] = 1;
+      }
+    }
+    std::vector<Grid<D>> kept;
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      if (!speck[k]) kept.push_back(std::move(pieces[k]));
+    }
+    return kept;
+  }
 
   // Node bounding box of the single piece.
   geometry::Index<D> lower = side.dims(), upper = geometry::Index<D>::Constant(-1);
