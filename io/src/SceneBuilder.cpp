@@ -137,7 +137,7 @@ class Builder {
     try {
       out.world = std::make_unique<dynamics::World<D>>(def);
     } catch (const std::invalid_argument& e) {
-      throw InputError(scene_.file, 0, "contact", e.what());
+      throw worldError(e.what(), 0, "");
     }
     world_ = out.world.get();
     for (const auto& p : scene_.planes) world_->addPlane(p);
@@ -195,7 +195,11 @@ class Builder {
         dynamics::ParticleDef<D> p;
         p.shape = shape;
         p.density = f.density;
-        world_->anticipateParticle(p);
+        try {
+          world_->anticipateParticle(p);
+        } catch (const std::invalid_argument& e) {
+          throw worldError(e.what(), 0, "particles");
+        }
       }
       auto feed = std::make_unique<dynamics::Feed<D>>(std::move(f));
       out.feeds.push_back(feed.get());
@@ -205,6 +209,22 @@ class Builder {
   }
 
  private:
+  // What the world refused, as an input error at the key that causes it: a
+  // user time step above the critical one (simulation.dt), a contact law
+  // whose stiffness or time step overflows for these grains ([contact]), else
+  // the particles (`line`, `key`).
+  InputError worldError(const std::string& what, int line, const std::string& key) const {
+    const auto lineOf = [&](const std::string& k) {
+      const auto it = scene_.keyLines.find(k);
+      return it != scene_.keyLines.end() ? it->second : 0;
+    };
+    if (what.rfind("dt = ", 0) == 0) return InputError(scene_.file, lineOf("simulation.dt"), "simulation.dt", what);
+    if (key.empty() || what.find("stiffness") != std::string::npos || what.find("time step") != std::string::npos) {
+      return InputError(scene_.file, lineOf("contact"), "contact", what);
+    }
+    return InputError(scene_.file, line, key, what);
+  }
+
   [[noreturn]] void fail(const ParticleGroupDef<D>& g, const std::string& what) const {
     throw InputError(scene_.file, g.line, "particles", what);
   }
@@ -227,7 +247,11 @@ class Builder {
     p.position = x;
     p.orientation = q;
     p.velocity = g.velocity;
-    world_->addParticle(p);
+    try {
+      world_->addParticle(p);
+    } catch (const std::invalid_argument& e) {
+      throw worldError(e.what(), g.line, "particles");
+    }
     index_->add(x, shape, dynamics::Rotation<D>::matrix(q));
   }
 

@@ -154,7 +154,7 @@ class SceneReader {
       r.fail(r.has("steps") ? "steps" : "", "give exactly one of 'duration' (s) and 'steps'");
     }
     if (r.has("duration")) scene_.duration = r.positive("duration");
-    for (const char* key : {"duration", "steps"}) scene_.keyLines[r.pathOf(key)] = r.lineOf(key);
+    for (const char* key : {"duration", "steps", "dt"}) scene_.keyLines[r.pathOf(key)] = r.lineOf(key);
     if (r.has("steps")) {
       const std::int64_t n = r.integer("steps");
       if (n <= 0) r.fail("steps", "must be positive, got " + std::to_string(n));
@@ -203,6 +203,7 @@ class SceneReader {
     const toml::table* t = top.optionalTable("contact");
     if (!t) top.fail("", "missing table [contact] (at least kn)");
     TomlReader r(*t, file_, "contact");
+    scene_.keyLines["contact"] = int(t->source().begin.line);
     const std::string model = r.string("model", "linear");
     if (model == "linear") {
       law.normal = dynamics::NormalModel::Linear;

@@ -270,12 +270,17 @@ TEST(Scene, UnsurvivableValuesNamesAndConflictsAreRefused) {
        edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
             "placement = \"grid\"\nregion = { min = [0.0, 0.0], max = [1e3, 1e3] }"),
        16, "particles", "over the limit of 1e7"},
+      // What the world refuses while the particles are added is an input
+      // error at the key that causes it (exit 1 before; a Hertz modulus of
+      // 1e308 whose stiffness overflows is fuzz/regressions/fuzz_scene/).
+      {"dt_above_critical", edit("steps = 10\n", "steps = 10\ndt = 1.0\n"), 4, "simulation.dt",
+       "exceeds the critical time step"},
   };
   for (const BadCase& c : cases) {
     const fs::path file = writeScene(c.name, c.scene);
     try {
       const io::AnySceneDef scene = io::readScene(file.string());
-      io::buildWorld(as<2>(scene));  // placement limits are found while placing
+      io::buildWorld(as<2>(scene));  // placement limits and the time step are found while placing
       ADD_FAILURE() << c.name << ": accepted";
     } catch (const io::InputError& e) {
       EXPECT_EQ(e.line(), c.line) << c.name << ": " << e.what();
@@ -510,4 +515,21 @@ gravity = [0.0, -9.81]
   const double intervals = w.world->time() / 0.001;
   EXPECT_GE(w.feeds[0]->dropped(), 2u);
   EXPECT_LT(double(w.feeds[0]->dropped()), 0.8 * intervals);
+}
+
+// An input error is one line whatever the parser echoes from the file (found
+// by fuzz_scene: a TOML syntax error quoting "tr\n"; the input is in
+// fuzz/regressions/fuzz_scene/).
+TEST(Scene, InputErrorsAreOneLine) {
+  const io::InputError e("scene.toml", 3, "shapes.a\nb", std::string("saw 'tr\n', then \0 and \t", 23));
+  EXPECT_STREQ(e.what(), "scene.toml:3: shapes.a\\nb: saw 'tr\\n', then \\x00 and \\t");
+  EXPECT_EQ(e.problem(), "saw 'tr\\n', then \\x00 and \\t");
+  std::string text = kBase;
+  text += "[effects]\ngravity = tr\n";
+  try {
+    io::readScene(writeScene("newline_error", text).string());
+    ADD_FAILURE() << "accepted";
+  } catch (const io::InputError& err) {
+    EXPECT_EQ(std::string(err.what()).find('\n'), std::string::npos) << err.what();
+  }
 }

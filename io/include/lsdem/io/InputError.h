@@ -15,6 +15,9 @@ class InputError : public std::runtime_error {
   /// @param line  1-based line of the offending key, 0 when unknown
   /// @param key   dotted key path ("shape.radius"), empty when not about a key
   /// @param what  what is wrong, e.g. "must be positive, got -1"
+  /// what() is always one line: control characters in the file name, key or
+  /// problem (a newline a parser echoes from the file) are written as escapes
+  /// ("\n", "\x00").
   InputError(std::string file, int line, std::string key, const std::string& what);
 
   const std::string& file() const { return file_; }
