@@ -51,6 +51,8 @@ struct RunArgs {
   bool quiet = false;
   bool overwrite = false;
   bool force = false;
+  bool check = false;
+  double splitEnergyLimit = io::kCheckSplitEnergyLimit;
 };
 
 void runCommand(const RunArgs& a) {
@@ -63,6 +65,8 @@ void runCommand(const RunArgs& a) {
   o.threads = a.threads;
   o.overwrite = a.overwrite;
   o.force = a.force;
+  o.check = a.check;
+  o.splitEnergyLimit = a.splitEnergyLimit;
   o.stop = &gStop;
   o.note = [](const std::string& line) { std::cerr << "lsdem: note: " << line << '\n'; };
   const bool terminal = isatty(fileno(stderr)) != 0;
@@ -117,6 +121,13 @@ void addRunCommand(CLI::App& app) {
   cmd->add_flag("--force", args->force,
                 "resume even when the scene is not the checkpoint's (edited, or another run's checkpoint)")
       ->needs(resume);
+  CLI::Option* check = cmd->add_flag(
+      "--check", args->check,
+      "stop the run (exit 1) at a NaN or Inf in the state, or at a split that makes energy (docs/reliability.md)");
+  cmd->add_option("--split-energy-limit", args->splitEnergyLimit,
+                  "with --check: largest energy a split may add, as a fraction of the run's energy scale (default 0.05)")
+      ->check(CLI::NonNegativeNumber)
+      ->needs(check);
   cmd->add_flag("--quiet,-q", args->quiet, "no progress line and no final report");
   cmd->callback([args] { runCommand(*args); });
 }

@@ -1,8 +1,9 @@
 #include "lsdem/breakage/Breakage.h"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -221,6 +222,10 @@ void Breakage<D>::applyQueue(World<D>& world) {
   parents_.clear();
   adds_.clear();
   std::vector<std::size_t> addEvent;
+  const std::size_t firstEvent = events_.size();
+  // The springs each particle holds, for the energy check (stale records: unknown).
+  springs_.clear();
+  if (world.contactsCurrent()) contactSprings(world, springs_, nullptr);
 
   // Split every queued parent while the store's indices are unchanged.
   for (const Pending& q : queue_) {
@@ -286,7 +291,9 @@ void Breakage<D>::applyQueue(World<D>& world) {
     ev.inertiaRelativeError = split.inertiaRelativeError;
     ev.parentMass = world.unscaledMass(i);  // the true mass (World::densityScale)
     ev.parentMomentum = ev.parentMass * p.velocity[i];
-    ev.parentKineticEnergy = p.kineticEnergy(i);
+    const double parentKinetic = p.kineticEnergy(i);           // as the dynamics has it
+    ev.parentKineticEnergy = parentKinetic / world.densityScale(i);  // at the true mass
+    if (!springs_.empty()) ev.parentSpringEnergy = springs_[i];
     if constexpr (D == 2) {
       ev.inertiaEnergyBound =
           0.5 * split.inertiaRelativeError * p.inertia[i] * p.angularVelocity[i] * p.angularVelocity[i];
@@ -345,7 +352,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
         ev.childVolumes.push_back(f.volume);
       }
     }
-    ledger.addedEnergy -= ev.parentKineticEnergy;
+    ledger.addedEnergy -= parentKinetic;
     parents_.push_back(i);
     events_.push_back(std::move(ev));
   }
@@ -356,17 +363,75 @@ void Breakage<D>::applyQueue(World<D>& world) {
   for (std::size_t i : parents_) p.remove(i);
 
   // Fragments enter it in the order of their parents' ids.
+  eventOf_.assign(p.size(), -1);
   for (std::size_t k = 0; k < adds_.size(); ++k) {
     const std::size_t i = p.add(adds_[k]);
     events_[addEvent[k]].children.push_back(p.id[i]);
     ledger.addedEnergy += p.kineticEnergy(i);
+    eventOf_.resize(p.size(), -1);
+    eventOf_[i] = std::int64_t(addEvent[k]);
   }
   world.particlesChanged();
+  checkEnergy(world, firstEvent);
+}
+
+template <int D>
+void Breakage<D>::contactSprings(const World<D>& world, std::vector<double>& perParticle,
+                                 std::vector<BreakageEvent<D>>* events) const {
+  // A particle pair's spring counts for both particles (once when both are
+  // one event's fragments); a boundary's for its particle.
+  const auto& pairs = world.contacts().pairContacts();
+  const std::size_t particlePairs = world.contacts().particleContacts().size();
+  if (events == nullptr) {
+    perParticle.assign(world.particles().size(), 0.0);
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      perParticle[pairs[k].a] += pairs[k].elasticEnergy;
+      if (k < particlePairs) perParticle[pairs[k].b] += pairs[k].elasticEnergy;
+    }
+    return;
+  }
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    const std::int64_t ea = eventOf_[pairs[k].a];
+    const std::int64_t eb = k < particlePairs ? eventOf_[pairs[k].b] : -1;
+    if (ea >= 0) (*events)[std::size_t(ea)].fragmentSpringEnergy += pairs[k].elasticEnergy;
+    if (eb >= 0 && eb != ea) (*events)[std::size_t(eb)].fragmentSpringEnergy += pairs[k].elasticEnergy;
+  }
+}
+
+template <int D>
+void Breakage<D>::checkEnergy(World<D>& world, std::size_t firstEvent) {
+  // The fragments' springs on the new set, evaluated now (the next step would).
+  world.refreshContacts();
+  for (std::size_t e = firstEvent; e < events_.size(); ++e) events_[e].fragmentSpringEnergy = 0.0;
+  contactSprings(world, springs_, &events_);
+  for (std::size_t e = firstEvent; e < events_.size(); ++e) {
+    const BreakageEvent<D>& ev = events_[e];
+    if (std::isnan(ev.parentSpringEnergy)) {
+      ++unchecked_;
+      continue;
+    }
+    const double gain = ev.energyGain();
+    if (!(gain > 0.0)) continue;
+    const double scale = world.energy().scale();
+    const double relative = gain / scale;
+    if (relative > largestGain_) {
+      largestGain_ = relative;
+      largestGainJoules_ = gain;
+    }
+    if (relative > energyLimit_) {
+      std::ostringstream os;
+      os << "breakage energy check: the split of particle " << ev.parent << " at t = " << ev.time
+         << " s gave its fragments " << gain << " J more kinetic + spring energy than the parent had ("
+         << ev.parentKineticEnergy + ev.parentSpringEnergy << " J): " << relative
+         << " of the run's energy scale " << scale << " J, over the limit " << energyLimit_;
+      throw std::runtime_error(os.str());
+    }
+  }
 }
 
 template <int D>
 void Breakage<D>::saveState(dynamics::StateWriter& out) const {
-  out.putTag("breakage 2");  // 2: with the manual breaks not applied
+  out.putTag("breakage 3");  // 2: with the manual breaks not applied; 3: the energy check
   std::vector<std::uint8_t> done(manualDone_.begin(), manualDone_.end());
   out.putVector(done);
   out.put(std::uint64_t(manualNotApplied_.size()));
@@ -403,12 +468,17 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
     out.put(e.parentKineticEnergy);
     out.put(e.inertiaEnergyBound);
     out.put(e.fragmentKineticEnergy);
+    out.put(e.parentSpringEnergy);
+    out.put(e.fragmentSpringEnergy);
   }
+  out.put(largestGain_);
+  out.put(largestGainJoules_);
+  out.put(std::uint64_t(unchecked_));
 }
 
 template <int D>
 void Breakage<D>::loadState(dynamics::StateReader& in) {
-  in.expectTag("breakage 2");
+  in.expectTag("breakage 3");
   std::vector<std::uint8_t> done;
   in.getVector(done);
   manualNotApplied_.resize(std::size_t(in.get<std::uint64_t>()));
@@ -450,7 +520,12 @@ void Breakage<D>::loadState(dynamics::StateReader& in) {
     e.parentKineticEnergy = in.get<double>();
     e.inertiaEnergyBound = in.get<double>();
     e.fragmentKineticEnergy = in.get<double>();
+    e.parentSpringEnergy = in.get<double>();
+    e.fragmentSpringEnergy = in.get<double>();
   }
+  largestGain_ = in.get<double>();
+  largestGainJoules_ = in.get<double>();
+  unchecked_ = std::size_t(in.get<std::uint64_t>());
 }
 
 template class Breakage<2>;

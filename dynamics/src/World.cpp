@@ -88,12 +88,12 @@ const char* stageName(Stage s) {
   return "unknown";
 }
 
-double EnergyLedger::relativeBalanceError() const {
-  const double scale = std::max({std::abs(initial), std::abs(total()), std::abs(gravityWork), std::abs(boundaryWork),
-                                 dampingLoss, contactLoss, removedEnergy, addedEnergy, std::abs(splitRelease),
-                                 std::numeric_limits<double>::min()});
-  return balanceError() / scale;
+double EnergyLedger::scale() const {
+  return std::max({std::abs(initial), std::abs(total()), std::abs(gravityWork), std::abs(boundaryWork), dampingLoss,
+                   contactLoss, removedEnergy, addedEnergy, std::abs(splitRelease), std::numeric_limits<double>::min()});
 }
+
+double EnergyLedger::relativeBalanceError() const { return balanceError() / scale(); }
 
 template <int D>
 World<D>::World(const WorldDef<D>& def) : def_(def), broad_(def.broadPhase), contacts_(def.contact) {
@@ -548,21 +548,25 @@ void World<D>::bookHalfKick(double halfDt, double lead) {
 }
 
 template <int D>
+void World<D>::refreshContacts() {
+  if (forcesValid_) return;
+  const double elasticBefore = contacts_.elasticEnergy();
+  computeForces(0.0);
+  if (steps_ == 0) {
+    refreshEnergy();
+    energy_.initial = energy_.total();
+  } else {
+    energy_.splitRelease += (elasticBefore - contacts_.elasticEnergy());
+  }
+}
+
+template <int D>
 void World<D>::step() {
   if (!(dt_ > 0.0)) {
     throw std::logic_error("no time step: give dt, or add particles so the automatic step can be estimated");
   }
   // Forces of the current state, once, before the first step or after changes.
-  if (!forcesValid_) {
-    const double elasticBefore = contacts_.elasticEnergy();
-    computeForces(0.0);
-    if (steps_ == 0) {
-      refreshEnergy();
-      energy_.initial = energy_.total();
-    } else {
-      energy_.splitRelease += (elasticBefore - contacts_.elasticEnergy());
-    }
-  }
+  refreshContacts();
 
   // The opening half kick books the work of the forces it applies.
   bookHalfKick(0.5 * dt_, 0.25 * dt_);

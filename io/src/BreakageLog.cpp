@@ -1,6 +1,7 @@
 #include "lsdem/io/BreakageLog.h"
 
 #include <charconv>
+#include <cmath>
 #include <string>
 
 namespace lsdem::io {
@@ -36,7 +37,7 @@ void writeBreakageLogHeader(std::ostream& out) {
   out << "time_s,parent_id,child_ids,criterion_value_Pa,strength_Pa,manual,buckling,normal_x,normal_y";
   if (D == 3) out << ",normal_z";
   out << ",plane_offset_m,child_volumes_" << unit << ",fines_volumes_" << unit
-      << ",raw_volume_error,parent_mass_kg,fragment_mass_kg\n";
+      << ",raw_volume_error,parent_mass_kg,fragment_mass_kg,parent_energy_J,fragment_energy_J,energy_gain_J\n";
 }
 
 template <int D>
@@ -46,7 +47,14 @@ void writeBreakageLogRows(std::span<const breakage::BreakageEvent<D>> events, st
         << number(e.strength) << ',' << int(e.manual) << ',' << int(e.buckling);
     for (int a = 0; a < D; ++a) out << ',' << number(e.planeNormal[a]);
     out << ',' << number(e.planeOffset) << ',' << joined(e.childVolumes) << ',' << joined(e.finesVolumes) << ','
-        << number(e.rawVolumeError) << ',' << number(e.parentMass) << ',' << number(e.fragmentMass) << '\n';
+        << number(e.rawVolumeError) << ',' << number(e.parentMass) << ',' << number(e.fragmentMass);
+    // The energy check (BreakageEvent::energyGain): empty cells when it was not made.
+    if (std::isnan(e.parentSpringEnergy)) {
+      out << ",,,\n";
+    } else {
+      out << ',' << number(e.parentKineticEnergy + e.parentSpringEnergy) << ','
+          << number(e.fragmentKineticEnergy + e.fragmentSpringEnergy) << ',' << number(e.energyGain()) << '\n';
+    }
   }
 }
 

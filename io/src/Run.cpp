@@ -254,7 +254,9 @@ class Runner {
   RunResult run(bool resume) {
     const Clock::time_point start = Clock::now();
     start_ = start;
+    if (options_.check) scene_.world.checkFinite = true;
     sw_ = buildWorld(scene_);
+    if (options_.check && sw_.breakage) sw_.breakage->setSplitEnergyLimit(options_.splitEnergyLimit);
     World& world = *sw_.world;
     std::optional<std::map<std::string, std::uint64_t>> sizes;
     if (resume) {
@@ -818,7 +820,10 @@ class Runner {
             .field("raw_volume_error", b.rawVolumeError())
             .field("unsplit_failures", b.unsplitFailures())
             .field("unsplittable", b.unsplittable())
-            .field("skipped_steps", b.skippedSteps());
+            .field("skipped_steps", b.skippedSteps())
+            .field("largest_split_energy_gain", b.largestEnergyGain())
+            .field("largest_split_energy_gain_J", b.largestEnergyGainJoules())
+            .field("unchecked_splits", b.uncheckedSplits());
         j.key("manual_not_applied").beginArray();
         for (const breakage::ManualBreakNotApplied& n : b.manualNotApplied()) {
           j.beginObject().field("time", n.time).field("particle", n.particle).field("reason", n.reason).endObject();

@@ -10,6 +10,7 @@
 #include <regex>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -182,4 +183,25 @@ TEST(Cli, UsageErrorsExitWithCode2) {
     EXPECT_FALSE(r.out.empty()) << args;
   }
   EXPECT_EQ(run("run --help").code, 0);
+}
+
+// `lsdem run --check`: the default scene passes it (22 splits, none makes
+// energy) and reports the check in summary.json; the limit needs --check.
+TEST(Cli, CheckModeRunsTheDefaultScene) {
+  const fs::path out = fs::temp_directory_path() / ("lsdem_test_cli_check_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const Result r = run("run " + std::string(LSDEM_SOURCE_DIR) + "/apps/scenes/three_grains/three_grains_2d.toml --out " +
+                       out.string() + " --quiet --check --split-energy-limit 0.01");
+  ASSERT_EQ(r.code, 0) << r.out;
+  std::ifstream in(out / "summary.json");
+  const std::string summary((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_GE(jsonNumber(summary, "breakages"), 10.0);
+  EXPECT_EQ(jsonNumber(summary, "largest_split_energy_gain"), 0.0);
+  EXPECT_EQ(jsonNumber(summary, "unchecked_splits"), 0.0);
+  fs::remove_all(out);
+
+  const Result usage = run("run " + std::string(LSDEM_SOURCE_DIR) +
+                           "/apps/scenes/three_grains/three_grains_2d.toml --split-energy-limit 0.01");
+  EXPECT_EQ(usage.code, 2) << usage.out;
+  EXPECT_NE(usage.out.find("--check"), std::string::npos) << usage.out;
 }

@@ -48,6 +48,8 @@ void sumOf(const dynamics::Particles<D>& p, const std::vector<std::uint64_t>& id
   }
 }
 
+constexpr double kNoLimit = std::numeric_limits<double>::infinity();
+
 struct CrushResult {
   std::size_t breakages = 0;
   std::size_t fines = 0;
@@ -58,13 +60,15 @@ struct CrushResult {
   double splitRelease = 0.0;  ///< spring energy released by splits / platen work
   double smallestParent = std::numeric_limits<double>::infinity();  ///< volume of the smallest grain that broke, m^D
   double grainVolume = 0.0;   ///< of one initial grain, m^D
+  double largestEnergyGain = 0.0;  ///< Breakage::largestEnergyGain: worst split, fraction of the run's energy scale
+  double meanEnergyChange = 0.0;   ///< mean over splits of energyGain / the parent's kinetic + spring energy
 };
 
 // A box of D-balls crushed by a top plane moving down; breakage with low
 // strengths. Checks mass every step and every event's conservation laws.
 template <int D>
 CrushResult crush(int perRow, int rows, double cells, double speed, double sigma0, std::size_t target,
-                  double minBreakableFraction = 0.0) {
+                  double minBreakableFraction = 0.0, double splitEnergyLimit = kNoLimit) {
   const double r = 0.01;
   const double gap = 2.2 * r;
   const double width = perRow * gap;
@@ -116,6 +120,7 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
   bdef.minBreakableVolume = minBreakableFraction * s->volume();
   auto effect = std::make_unique<Breakage<D>>(bdef);
   Breakage<D>& brk = *effect;
+  brk.setSplitEnergyLimit(splitEnergyLimit);
   w.addEffect(std::move(effect));
 
   const double initialMass = w.particleMass();
@@ -154,8 +159,18 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
       for (double v : ev.childVolumes) parentVolume += v;
       for (double v : ev.finesVolumes) parentVolume += v;
       out.smallestParent = std::min(out.smallestParent, parentVolume);
+      // The energy check, measured on the step's contacts (never stale here:
+      // breakage is the only effect that changes the particles).
+      EXPECT_FALSE(std::isnan(ev.parentSpringEnergy)) << "event " << seen;
+      EXPECT_GE(ev.parentSpringEnergy, 0.0);
+      EXPECT_GE(ev.fragmentSpringEnergy, 0.0);
+      const double before = ev.parentKineticEnergy + ev.parentSpringEnergy;
+      if (before > 0.0) out.meanEnergyChange += ev.energyGain() / before;
     }
   }
+  out.meanEnergyChange /= double(std::max<std::size_t>(brk.breakages(), 1));
+  out.largestEnergyGain = brk.largestEnergyGain();
+  EXPECT_EQ(brk.uncheckedSplits(), 0u);
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   out.breakages = brk.breakages();
   out.grainVolume = s->volume();
@@ -179,9 +194,11 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
   out.energyError = w.energy().relativeBalanceError();
   out.splitRelease = w.energy().splitRelease / w.energy().boundaryWork;
   std::printf("[ crush %dD ] %zu breakages, %zu fines, %zu particles, %llu steps, %.1f s, max mass error %.2e, "
-              "unsplit %zu (unsplittable %zu), skipped %zu, energy balance %.2e, split release %.3f of the platen work\n",
+              "unsplit %zu (unsplittable %zu), skipped %zu, energy balance %.2e, split release %.3f of the platen work, "
+              "splits' energy change mean %.3f of the parent's, largest gain %.3g of the energy scale\n",
               D, out.breakages, out.fines, p.size(), (unsigned long long)out.steps, out.seconds, out.maxMassError,
-              brk.unsplitFailures(), brk.unsplittable(), brk.skippedSteps(), out.energyError, out.splitRelease);
+              brk.unsplitFailures(), brk.unsplittable(), brk.skippedSteps(), out.energyError, out.splitRelease,
+              out.meanEnergyChange, out.largestEnergyGain);
   return out;
 }
 
@@ -195,6 +212,27 @@ TEST(BreakageEffect, CrushingCascade2D) {
   // releases is booked; 22% of the platen work here): measured -0.19%.
   EXPECT_LT(std::abs(r.energyError), 0.01);
   EXPECT_GT(r.splitRelease, 0.05);
+  // The independent energy check of each split: on average a split releases
+  // energy (measured: -35 % of the parent's kinetic + spring energy); the worst
+  // one adds 2.3 % of the run's energy scale (a new node of a fragment born
+  // where a neighbour already overlapped the parent's surface between its
+  // nodes), under `lsdem run --check`'s default limit of 5 %.
+  EXPECT_LT(r.meanEnergyChange, -0.1);
+  EXPECT_LT(r.largestEnergyGain, 0.05);
+  EXPECT_GT(r.largestEnergyGain, 0.0);
+}
+
+// A split that adds more than the limit stops the run, naming the split: the
+// cascade above with a limit below its worst split's 2.3 %.
+TEST(BreakageEffect, EnergyCheckStopsAtASplitThatMakesEnergy) {
+  try {
+    crush<2>(8, 5, 10, 0.5, 2e4, 200, 0.0, 1e-3);
+    ADD_FAILURE() << "no split exceeded 0.1 % of the energy scale";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("breakage energy check: the split of particle"), std::string::npos) << what;
+    EXPECT_NE(what.find("over the limit 0.001"), std::string::npos) << what;
+  }
 }
 
 // 3D crushing cascade: >= 200 breakages (48 balls, 8 cells across, a fast
@@ -206,6 +244,10 @@ TEST(BreakageEffect, CrushingCascade3D) {
   // Energy budget across the splits: measured -0.26% (split release 4.9% of the platen work).
   EXPECT_LT(std::abs(r.energyError), 0.01);
   EXPECT_GT(r.splitRelease, 0.01);
+  // Each split's energy: measured mean change -3.6 % of the parent's, the
+  // worst split +0.05 % of the run's energy scale.
+  EXPECT_LT(r.meanEnergyChange, 0.0);
+  EXPECT_LT(r.largestEnergyGain, 0.05);
 }
 
 // Halting breakage below a size (the paper's first remedy): no grain smaller

@@ -22,16 +22,25 @@ TEST(BreakageLog, HeaderAndRows3D) {
   e.rawVolumeError = -3.1e-4;
   e.parentMass = 9.2e-6;
   e.fragmentMass = 9.2e-6;
+  // The energy check: measured for the second event only (the first one's
+  // contacts were stale: empty cells). Gain = 0.25 + 1.5 - 0.5 - 1 - 0.125.
+  breakage::BreakageEvent<3> checked = e;
+  checked.parentKineticEnergy = 0.5;
+  checked.parentSpringEnergy = 1.0;
+  checked.fragmentKineticEnergy = 0.25;
+  checked.fragmentSpringEnergy = 1.5;
+  checked.inertiaEnergyBound = 0.125;
   std::ostringstream out;
   io::writeBreakageLogHeader<3>(out);
-  const std::vector<breakage::BreakageEvent<3>> events{e, e};
+  const std::vector<breakage::BreakageEvent<3>> events{e, checked};
   io::writeBreakageLogRows<3>(events, out);
   const std::string text = out.str();
   EXPECT_EQ(text.substr(0, text.find('\n')),
             "time_s,parent_id,child_ids,criterion_value_Pa,strength_Pa,manual,buckling,normal_x,normal_y,normal_z,"
-            "plane_offset_m,child_volumes_m3,fines_volumes_m3,raw_volume_error,parent_mass_kg,fragment_mass_kg");
+            "plane_offset_m,child_volumes_m3,fines_volumes_m3,raw_volume_error,parent_mass_kg,fragment_mass_kg,"
+            "parent_energy_J,fragment_energy_J,energy_gain_J");
   const std::string row = "0.125,7,11;12;13,4.2e+07,4e+07,0,0,0,0.6,0.8,-0.001,1e-09;2.5e-09,3e-12,-0.00031,9.2e-06,9.2e-06";
-  EXPECT_EQ(text, text.substr(0, text.find('\n') + 1) + row + "\n" + row + "\n");
+  EXPECT_EQ(text, text.substr(0, text.find('\n') + 1) + row + ",,,\n" + row + ",1.5,1.75,0.125\n");
 }
 
 TEST(BreakageLog, TwoDimensionalColumns) {

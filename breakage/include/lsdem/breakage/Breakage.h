@@ -43,6 +43,22 @@
 /// theirs to removedEnergy. The contact springs' energy a split changes is
 /// booked by the World as splitRelease.
 ///
+/// Energy check, independent of that booking: after each batch the contacts
+/// are evaluated at once on the new set (World::refreshContacts, which the
+/// next step would do anyway), and each event records the mechanical energy
+/// before and after: the parent's kinetic energy plus the springs of every
+/// contact it was part of, against the fragments' kinetic energy (fines
+/// included) plus the springs of every contact the kept fragments are part
+/// of (BreakageEvent::energyGain). A split that cuts through a contact patch
+/// may raise the springs' energy: its new surface nodes are new points of
+/// contact, and with the per-node law a neighbour or wall can already overlap
+/// the parent's surface between its nodes (node-to-surface contact), so a node
+/// born there starts compressed. Such gains are measured against the run's
+/// energy scale (EnergyLedger::scale, the largest term of the budget):
+/// splitEnergyLimit() sets a bound on that fraction, and a split that exceeds
+/// it stops the run (`lsdem run --check`); largestEnergyGain() reports the
+/// worst split either way (docs/breakage.md "Energy check").
+///
 /// Contacts and indices. The stresses need the contact records to describe
 /// the particles as they are. When an effect that ran before this one in the
 /// same afterStep added or removed particles (a removal recorded, or a particle
@@ -65,6 +81,7 @@
 #include "lsdem/geometry/Types.h"
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -140,6 +157,21 @@ struct BreakageEvent {
   /// moments, which bounds the quadratic form).
   double inertiaEnergyBound = 0.0;
   double fragmentKineticEnergy = 0.0;          ///< of all fragments incl. fines, J
+  /// The split's energy check (file comment), J; NaN when the parent's
+  /// springs were not known (contacts stale at the split).
+  /// Elastic energy of every contact the parent was part of, just before the split.
+  double parentSpringEnergy = std::numeric_limits<double>::quiet_NaN();
+  /// Elastic energy of every contact the kept fragments are part of, evaluated
+  /// on the new particle set right after the batch of splits.
+  double fragmentSpringEnergy = std::numeric_limits<double>::quiet_NaN();
+  /// @brief (fragments' kinetic + spring energy) - (parent's kinetic + spring
+  /// energy) - inertiaEnergyBound, J: what the split added beyond what its
+  /// inertia error explains (NaN when not measured). Kinetic energies at true
+  /// masses (World::unscaledMass).
+  double energyGain() const {
+    return fragmentKineticEnergy + fragmentSpringEnergy - parentKineticEnergy - parentSpringEnergy -
+           inertiaEnergyBound;
+  }
 };
 
 /// A manual break that was due but could not be applied: it is logged here
@@ -187,6 +219,17 @@ class Breakage final : public dynamics::Effect<D> {
   std::size_t unsplittable() const { return unsplittable_; }
   /// @brief Steps whose stress evaluation was skipped for stale contacts (file comment).
   std::size_t skippedSteps() const { return skipped_; }
+  /// @brief Stops the run (std::runtime_error out of afterStep, naming the
+  /// split) when a split's energyGain() exceeds `fraction` of the run's energy
+  /// scale (EnergyLedger::scale at the split); +infinity (the default): report only.
+  void setSplitEnergyLimit(double fraction) { energyLimit_ = fraction; }
+  double splitEnergyLimit() const { return energyLimit_; }
+  /// @brief The largest energyGain() of any split so far as a fraction of the
+  /// run's energy scale at that split (0 when none gained), and that gain in J.
+  double largestEnergyGain() const { return largestGain_; }
+  double largestEnergyGainJoules() const { return largestGainJoules_; }
+  /// @brief Splits whose energy was not checked (contacts stale at the split).
+  std::size_t uncheckedSplits() const { return unchecked_; }
   /// @brief Manual breaks that were due but not applied, in order: the
   /// particle was no longer there (broken or removed earlier), the surface
   /// does not cut it at its grid resolution, or the split failed (the
@@ -207,6 +250,13 @@ class Breakage final : public dynamics::Effect<D> {
   bool isBelowMinimum(const geometry::Shape<D>& shape) const;
   void queueFailures(dynamics::World<D>& world);
   void applyQueue(dynamics::World<D>& world);
+  /// The springs' energy of the current contacts: per particle into
+  /// `perParticle` (events null), or added to the fragmentSpringEnergy of the
+  /// events the particles were born in (eventOf_).
+  void contactSprings(const dynamics::World<D>& world, std::vector<double>& perParticle,
+                      std::vector<BreakageEvent<D>>* events) const;
+  /// Evaluates the new set's contacts and checks the energy of events from `firstEvent` on.
+  void checkEnergy(dynamics::World<D>& world, std::size_t firstEvent);
   /// The bodies within reach of particle i's surface (other particles whose
   /// bounding spheres come within a few of its cells, every plane, tools
   /// likewise) into around_, and splitShape's `clearance` over them.
@@ -239,6 +289,13 @@ class Breakage final : public dynamics::Effect<D> {
   std::size_t skipped_ = 0;
   std::size_t removedSeen_ = 0;
   std::vector<ManualBreakNotApplied> manualNotApplied_;
+  // Energy check.
+  std::vector<double> springs_;    // per particle: elastic energy of its contacts
+  std::vector<std::int64_t> eventOf_;  // per particle: the batch event it was born in, -1: none
+  double energyLimit_ = std::numeric_limits<double>::infinity();
+  double largestGain_ = 0.0;
+  double largestGainJoules_ = 0.0;
+  std::size_t unchecked_ = 0;
 };
 
 extern template class Breakage<2>;

@@ -159,7 +159,9 @@ struct EnergyLedger {
     return total() + dampingLoss + contactLoss + removedEnergy + splitRelease - initial - gravityWork - boundaryWork -
            addedEnergy;
   }
-  /// @brief balanceError relative to the largest term of the budget.
+  /// @brief The energy scale of the run: the largest term of the budget, J (> 0).
+  double scale() const;
+  /// @brief balanceError relative to scale().
   double relativeBalanceError() const;
 };
 
@@ -210,6 +212,13 @@ class World {
   // ---- running ----
   /// @brief Advances one step of dt().
   void step();
+  /// @brief Evaluates the contacts and forces of the particles as they are
+  /// now, if they changed since the last evaluation (contactsCurrent() false);
+  /// step() does it first anyway, so calling it between steps changes no
+  /// result. The springs' energy the change took away is booked as
+  /// EnergyLedger::splitRelease. Breakage calls it after a batch of splits
+  /// to measure the fragments' springs.
+  void refreshContacts();
   /// @brief Advances n steps.
   void run(std::uint64_t n);
 

@@ -29,6 +29,10 @@ struct RunProgress {
   bool done = false;              ///< the last report
 };
 
+/// The default bound of `lsdem run --check` on a split's energy gain, as a
+/// fraction of the run's energy scale (docs/breakage.md "Energy check").
+inline constexpr double kCheckSplitEnergyLimit = 0.05;
+
 struct RunOptions {
   std::string scene;                        ///< scene file; when resuming, empty: the checkpoint's (or its copy in the folder)
   std::string outDir;                       ///< output folder; empty: the scene's [output] dir
@@ -37,6 +41,14 @@ struct RunOptions {
   std::string resumeDir;                    ///< non-empty: continue the run whose outputs are in this folder
   bool overwrite = false;                   ///< a new run replaces another run's outputs in its folder (else refused)
   bool force = false;                       ///< resume even with a scene that is not the checkpoint's (else refused)
+  /// Checks that cannot be fooled (`lsdem run --check`): every state value is
+  /// checked for NaN/Inf each step (WorldDef::checkFinite), and a split whose
+  /// fragments hold more mechanical energy than their parent by more than
+  /// `splitEnergyLimit` stops the run (Breakage.h "Energy
+  /// check"; the limit is a fraction of the run's energy scale). Either ends the
+/// run with std::runtime_error (exit 1), outputs kept.
+  bool check = false;
+  double splitEnergyLimit = kCheckSplitEnergyLimit;
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by Ctrl-C) to stop after the current step
   std::function<void(const RunProgress&)> progress;  ///< called every [output] progress_seconds and at the end
   std::function<void(const std::string&)> note;      ///< called with each line of the scene's notes before the run starts
