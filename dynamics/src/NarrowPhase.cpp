@@ -833,7 +833,7 @@ const BoundaryLoads<D>& ContactSolver<D>::accumulate(Particles<D>& particles) {
 
 template <int D>
 void ContactSolver<D>::saveState(StateWriter& out) const {
-  out.putTag("contacts 2");  // 2: with the pair dashpots
+  out.putTag("contacts 3");  // 2: with the pair dashpots; 3: pair records without padding
   out.putVector(pairs_);
   out.putVector(dashpots_);
   out.putVector(nodes_);
@@ -853,7 +853,7 @@ void ContactSolver<D>::saveState(StateWriter& out) const {
 
 template <int D>
 void ContactSolver<D>::loadState(StateReader& in) {
-  in.expectTag("contacts 2");
+  in.expectTag("contacts 3");
   in.getVector(pairs_);
   in.getVector(dashpots_);
   in.getVector(nodes_);

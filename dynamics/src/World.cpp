@@ -631,8 +631,8 @@ void World<D>::saveState(
   out.put(scalingStats_);
   out.put(energy_);
   out.put(lastPower_);
-  out.put(stageSeconds_);
-  out.putVector(effectSeconds_);
+  out.putWallClock(stageSeconds_);
+  out.putWallClockVector(effectSeconds_);
   out.put(std::uint64_t(removed_.size()));
   for (const RemovedParticle& r : removed_) {
     out.put(r.id);

@@ -426,6 +426,20 @@ TEST(GrainFile, BadBinaryInputNamesFileAndKey) {
       crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(scaled.data()), uInt(scaled.size() - 4)));
   std::memcpy(scaled.data() + scaled.size() - 4, &crc, 4);
   expectError(readError<3>(scaled), 0, "body_to_grid_rotation", "is not a rotation");
+  // A header that claims 2^28 nodes (6.4 GB of positions and weights) in a
+  // file of a few kB: refused by the short read of the first megabyte of
+  // values (the array grows by chunks as it is read), not by an allocation.
+  std::string huge = bin;
+  const std::size_t nodeCount = rotation + 8 * 9 + 8 * 3;
+  std::uint64_t claimed = 0;
+  std::memcpy(&claimed, huge.data() + nodeCount, 8);
+  ASSERT_EQ(claimed, sphere->nodes().size());
+  claimed = std::uint64_t(1) << 28;
+  std::memcpy(huge.data() + nodeCount, &claimed, 8);
+  expectError(readError<3>(huge), 0, "body_nodes", "truncated");
+  claimed = (std::uint64_t(1) << 28) + 1;
+  std::memcpy(huge.data() + nodeCount, &claimed, 8);
+  expectError(readError<3>(huge), 0, "body_nodes", "out of range");
   // A missing file.
   try {
     io::readGrainFile<3>("/nonexistent/grain.lsg");

@@ -83,6 +83,9 @@ struct PairDashpot {
   double power = 0.0;          ///< sum over nodes of c_i v_n^2 at the sampled velocities, W (part of dissipatedPower)
   double boundaryPower = 0.0;  ///< plane and tool pairs: sum over nodes of the node's dashpot force . the boundary's velocity there, W
 };
+// No padding: written raw to checkpoints (State.h).
+static_assert(sizeof(PairDashpot<2>) == 6 * sizeof(double));
+static_assert(sizeof(PairDashpot<3>) == 11 * sizeof(double));
 
 namespace detail {
 
@@ -125,6 +128,7 @@ struct HistoryPair {
   std::uint64_t other = 0;  ///< global id of b, or a tagged plane / tool index
   std::uint32_t first = 0, count = 0;
 };
+static_assert(sizeof(HistoryPair) == 24);  // no padding: written raw to checkpoints (State.h)
 
 }  // namespace detail
 

@@ -10,7 +10,11 @@
 ///
 /// Only plain values go through put()/get(): arithmetic types, enums and
 /// fixed-size Eigen vectors, matrices and quaternions (arrays of doubles), and
-/// structs made of those.
+/// structs made of those without implicit padding (a struct that would have
+/// some declares zeroed bytes in its place, as NodeContact does, and asserts
+/// its size): padding would carry whatever memory held, and two saves of one
+/// state would differ. Apart from the wall-clock values (putWallClock), two
+/// worlds in the same state write the same bytes.
 
 #include <cstddef>
 #include <cstdint>
@@ -42,11 +46,34 @@ class StateWriter {
   }
   /// @brief Writes a tag that the reader checks, so a misaligned archive fails loudly.
   void putTag(const char* tag) { putString(tag); }
+  /// @brief Appends a wall-clock value (World's stage times): the only bytes
+  /// of a state that differ between two runs that reach the same state. With
+  /// wallClock(false) they are written as zeros, so two such states compare
+  /// byte for byte (the reader reads them as usual).
+  template <class T>
+  void putWallClock(const T& value) {
+    if (wallClock_) {
+      put(value);
+    } else {
+      bytes_.insert(bytes_.end(), sizeof(T), '\0');
+    }
+  }
+  template <class T>
+  void putWallClockVector(const std::vector<T>& values) {
+    if (wallClock_) {
+      putVector(values);
+    } else {
+      put(std::uint64_t(values.size()));
+      bytes_.insert(bytes_.end(), values.size() * sizeof(T), '\0');
+    }
+  }
+  void setWallClock(bool on) { wallClock_ = on; }
 
   const std::vector<char>& bytes() const { return bytes_; }
 
  private:
   std::vector<char> bytes_;
+  bool wallClock_ = true;
 };
 
 class StateReader {
