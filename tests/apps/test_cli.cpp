@@ -1,6 +1,7 @@
 // End-to-end checks of the `lsdem` command as a user runs it: exit codes,
 // one-line errors, and the JSON of `lsdem shape`.
 
+#include "support/Files.h"
 #include <gtest/gtest.h>
 
 #include <array>
@@ -36,7 +37,7 @@ Result run(const std::string& args) {
 std::string example(const std::string& name) { return std::string(LSDEM_SOURCE_DIR) + "/examples/shapes/" + name; }
 
 std::string writeFile(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_cli";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_cli");
   fs::create_directories(dir);
   std::ofstream(dir / name) << text;
   return (dir / name).string();
@@ -188,7 +189,7 @@ TEST(Cli, UsageErrorsExitWithCode2) {
 // `lsdem run --check`: the default scene passes it (22 splits, none makes
 // energy) and reports the check in summary.json; the limit needs --check.
 TEST(Cli, CheckModeRunsTheDefaultScene) {
-  const fs::path out = fs::temp_directory_path() / ("lsdem_test_cli_check_" + std::to_string(::getpid()));
+  const fs::path out = lsdem::test::tempPath("lsdem_test_cli_check_" + std::to_string(::getpid()));
   fs::remove_all(out);
   const Result r = run("run " + std::string(LSDEM_SOURCE_DIR) + "/apps/scenes/three_grains/three_grains_2d.toml --out " +
                        out.string() + " --quiet --check --split-energy-limit 0.01");

@@ -4,6 +4,7 @@
 // draws PNG files, says when gnuplot is missing (exit 3) and when the folder
 // has nothing to plot (exit 2).
 
+#include "support/Files.h"
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/TriangleMesh.h"
 #include "lsdem/io/GrainFile.h"
@@ -42,7 +43,7 @@ Result run(const std::string& args, const std::string& env = "") {
 }
 
 fs::path tempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("lsdem_test_mesh2ls_plot_" + name);
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_mesh2ls_plot_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

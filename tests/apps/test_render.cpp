@@ -3,6 +3,7 @@
 // the surfaces the run placed; bad folders, frames and options exit 2 with one
 // line; a missing gnuplot exits 3.
 
+#include "support/Files.h"
 #include "lsdem/io/VtpRead.h"
 
 #include <gtest/gtest.h>
@@ -43,7 +44,7 @@ Result run(const std::string& args, const std::string& env = "") {
 // One folder per process: ctest runs the tests of this file side by side, each
 // in its own process that runs the scenes again.
 fs::path tempDir() {
-  const fs::path dir = fs::temp_directory_path() / ("lsdem_test_render_" + std::to_string(getpid()));
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_render_" + std::to_string(getpid()));
   fs::create_directories(dir);
   return dir;
 }

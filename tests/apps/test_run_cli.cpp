@@ -105,7 +105,7 @@ int interruptedRun(const fs::path& dir, const fs::path& out, int signal) {
 
 TEST(RunCli, CtrlCStopsCleanlyAndResumeContinues) {
   // Start a run that would take hours; interrupt it once it has written frames.
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli");
   const fs::path out = dir / "out";
   ASSERT_EQ(interruptedRun(dir, out, SIGINT), 130);
   EXPECT_NE(readFile(out / "summary.json").find("\"stopped_early\": true"), std::string::npos);
@@ -123,7 +123,7 @@ TEST(RunCli, CtrlCStopsCleanlyAndResumeContinues) {
 // SIGTERM (a job scheduler's stop) is handled like Ctrl-C: checkpoint,
 // summary, exit code 143 (128 + 15), and the run resumes.
 TEST(RunCli, SigtermStopsCleanlyWithCode143) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_term";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_term");
   const fs::path out = dir / "out";
   ASSERT_EQ(interruptedRun(dir, out, SIGTERM), 143) << "killed by the signal instead of stopping";
   EXPECT_NE(readFile(out / "summary.json").find("\"stopped_early\": true"), std::string::npos);
@@ -137,7 +137,7 @@ TEST(RunCli, SigtermStopsCleanlyWithCode143) {
 // one line and exit code 2, and nothing in it changes; --overwrite replaces
 // those outputs (the old run's later frames go too), --resume continues them.
 TEST(RunCli, AnotherRunsOutputsAreRefusedUnlessOverwrite) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_overwrite";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_overwrite");
   const fs::path out = dir / "out";
   const fs::path scene = longScene(dir);
   const std::vector<std::string> run = {LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--quiet"};
@@ -176,7 +176,7 @@ TEST(RunCli, AnotherRunsOutputsAreRefusedUnlessOverwrite) {
 // --overwrite or resumes; the first is undisturbed and removes its lock when
 // it ends.
 TEST(RunCli, ASecondRunIntoABusyFolderIsStoppedByTheLock) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_lock";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_lock");
   const fs::path out = dir / "out";
   const pid_t first = startLongRun(dir, out);
   ASSERT_GT(first, 0);
@@ -202,7 +202,7 @@ TEST(RunCli, ASecondRunIntoABusyFolderIsStoppedByTheLock) {
 // A lock file left by a run that was killed (SIGKILL: no clean-up) names a
 // dead process: the next run takes it over.
 TEST(RunCli, AStaleLockOfAKilledRunIsTakenOver) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_stale";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_stale");
   const fs::path out = dir / "out";
   const pid_t killed = startLongRun(dir, out);
   ASSERT_GT(killed, 0);
@@ -220,7 +220,7 @@ TEST(RunCli, AStaleLockOfAKilledRunIsTakenOver) {
 // (the run's outputs unchanged); --force resumes with it as it is now;
 // --force without --resume is a usage error.
 TEST(RunCli, ResumeWithAnEditedSceneNeedsForce) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_force";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_force");
   const fs::path out = dir / "out";
   const fs::path scene = longScene(dir);
   ASSERT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--steps", "3", "--quiet"}), 0);
@@ -257,7 +257,7 @@ std::size_t temporaryFiles(const fs::path& dir) {
 // temporary file or lock left. The last periodic checkpoint stays whole: the
 // run resumes from it once the limit is gone, its history cut back to whole rows.
 TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_cli_full";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_full");
   const fs::path scene = longScene(dir);
   std::string text = kLongScene;
   text.replace(text.find("frames = 100000"), 15, "frames = 10\ncheckpoint_every = 0.05");

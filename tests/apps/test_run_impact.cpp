@@ -7,6 +7,7 @@
 // Barber & Fawcett; Chung & Ooi's oblique impacts). With the old default
 // tangential stiffness (0.8 N/m) the sphere would leave as it came: 1 and 0.
 
+#include "support/Files.h"
 #include "support/Process.h"
 #include "support/VtpReader.h"
 
@@ -62,7 +63,7 @@ vtk = ["particles"]
 }  // namespace
 
 TEST(RunImpact, HertzWithFrictionAndNoKsGrips) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_run_impact";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_impact");
   fs::remove_all(dir);
   fs::create_directories(dir);
   std::ofstream(dir / "oblique.toml") << kObliqueScene;

@@ -36,7 +36,7 @@ class ShippedScene : public ::testing::TestWithParam<fs::path> {};
 
 TEST_P(ShippedScene, RunsAFewSteps) {
   const fs::path scene = GetParam();
-  const fs::path out = fs::temp_directory_path() / ("lsdem_test_shipped_" + scene.stem().string());
+  const fs::path out = lsdem::test::tempPath("lsdem_test_shipped_" + scene.stem().string());
   fs::remove_all(out);
   const lsdem::test::ProcessResult r = lsdem::test::runCaptured(
       {LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--steps", "3", "--threads", "1", "--quiet"});

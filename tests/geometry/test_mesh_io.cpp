@@ -1,3 +1,4 @@
+#include "support/Files.h"
 #include "lsdem/geometry/MeshIO.h"
 
 #include <gtest/gtest.h>
@@ -39,8 +40,7 @@ TriangleMesh cubeMesh(double size) {
 class MeshIO : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("lsdem_mesh_io_" + std::to_string(::getpid()) + "_" +
+    dir_ = lsdem::test::tempPath("lsdem_mesh_io_" + std::to_string(::getpid()) + "_" +
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);

@@ -4,6 +4,7 @@
 // integrator's above 512 particles, the narrow phase's above 32 pairs) and
 // grains break (the splits run in parallel too).
 
+#include "support/Files.h"
 #include "lsdem/io/Scene.h"
 
 #include <gtest/gtest.h>
@@ -108,7 +109,7 @@ FinalState run(int threads, std::size_t steps) {
 #else
   (void)threads;
 #endif
-  const fs::path file = fs::temp_directory_path() / "lsdem_test_determinism.toml";
+  const fs::path file = lsdem::test::tempPath("lsdem_test_determinism.toml");
   std::ofstream(file) << kCollisionScene;
   const io::SceneDef<2> scene = std::get<io::SceneDef<2>>(io::readScene(file.string()));
   fs::remove(file);

@@ -3,6 +3,7 @@
 // form rebuilt from a hand-made grid, shape pools from folders, and one test
 // per kind of bad input checking file, line, key and message.
 
+#include "support/Files.h"
 #include "lsdem/io/GrainFile.h"
 
 #include "lsdem/geometry/ShapeDef.h"
@@ -113,7 +114,7 @@ std::shared_ptr<const Shape<D>> roundTrip(const Shape<D>& shape, io::GrainFormat
 }
 
 fs::path tempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("lsdem_test_grain_" + name);
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_grain_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -2,6 +2,7 @@
 // data files, PNG output (skipped only when gnuplot is absent), clear errors,
 // and the plots of a synthetic run folder.
 
+#include "support/Files.h"
 #include "lsdem/io/Plot.h"
 
 #include "lsdem/io/InputError.h"
@@ -22,7 +23,7 @@ using namespace lsdem;
 namespace {
 
 fs::path tempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("lsdem_test_plot_" + name);
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_plot_" + name);
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

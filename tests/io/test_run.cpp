@@ -100,7 +100,7 @@ width = 0.0096
 
 struct TempDir {
   fs::path path;
-  explicit TempDir(const std::string& name) : path(fs::temp_directory_path() / ("lsdem_test_run_" + name)) {
+  explicit TempDir(const std::string& name) : path(lsdem::test::tempPath("lsdem_test_run_" + name)) {
     fs::remove_all(path);
     fs::create_directories(path);
   }

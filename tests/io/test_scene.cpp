@@ -1,6 +1,7 @@
 // Scene files: what they build (placement, tools, effects) and how bad input
 // is reported (one line with file, line and key; exit code 2 from lsdem run).
 
+#include "support/Files.h"
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/Scene.h"
@@ -41,7 +42,7 @@ positions = [[0.0, 0.05], [0.03, 0.05]]
 )";
 
 fs::path writeScene(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_scene";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_scene");
   fs::create_directories(dir);
   const fs::path p = dir / (name + ".toml");
   std::ofstream(p) << text;
@@ -434,7 +435,7 @@ TEST(Scene, ScaledShapesScaleExactly) {
 }
 
 TEST(Scene, AFolderOfGrainFilesIsAShapePool) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_scene" / "pool";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_scene") / "pool";
   fs::create_directories(dir);
   const auto any = io::readScene(writeScene("pool_base", kBase).string());
   const auto& disc = *as<2>(any).shapes[0];

@@ -1,3 +1,4 @@
+#include "support/Files.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/ShapeFile.h"
 
@@ -14,7 +15,7 @@ namespace {
 
 // Writes `text` to a fresh file in the test's temporary folder and returns its path.
 std::string writeFile(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_shape_file";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_shape_file");
   fs::create_directories(dir);
   const fs::path p = dir / name;
   std::ofstream(p) << text;

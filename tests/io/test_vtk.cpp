@@ -1,3 +1,4 @@
+#include "support/Files.h"
 #include "support/Shapes.h"
 #include "support/VtpReader.h"
 #include "lsdem/dynamics/World.h"
@@ -26,7 +27,7 @@ namespace {
 class ScratchDir {
  public:
   explicit ScratchDir(const std::string& name)
-      : path_(fs::temp_directory_path() / ("lsdem_test_vtk_" + std::to_string(::getpid()) + "_" + name)) {
+      : path_(lsdem::test::tempPath("lsdem_test_vtk_" + std::to_string(::getpid()) + "_" + name)) {
     fs::remove_all(path_);
     fs::create_directories(path_);
   }

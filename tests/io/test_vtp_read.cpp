@@ -3,6 +3,7 @@
 // read; inconsistent or unsupported files are refused with the file, line and
 // element named.
 
+#include "support/Files.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/Vtk.h"
 #include "lsdem/io/VtpRead.h"
@@ -22,7 +23,7 @@ using namespace lsdem::io;
 namespace {
 
 fs::path tempDir() {
-  const fs::path dir = fs::temp_directory_path() / "lsdem_test_vtp_read";
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_vtp_read");
   fs::create_directories(dir);
   return dir;
 }
