@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
@@ -126,7 +127,17 @@ void addRunCommand(CLI::App& app) {
       "stop the run (exit 1) at a NaN or Inf in the state, or at a split that makes energy (docs/reliability.md)");
   cmd->add_option("--split-energy-limit", args->splitEnergyLimit,
                   "with --check: largest energy a split may add, as a fraction of the run's energy scale (default 0.05)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Validator(
+          [](const std::string& text) {
+            double v = 0.0;
+            try {
+              v = std::stod(text);
+            } catch (const std::exception&) {
+              return std::string("must be a number >= 0, got '") + text + "'";
+            }
+            return v >= 0.0 && std::isfinite(v) ? std::string() : "must be a finite number >= 0, got " + text;
+          },
+          "FRACTION >= 0"))
       ->needs(check);
   cmd->add_flag("--quiet,-q", args->quiet, "no progress line and no final report");
   cmd->callback([args] { runCommand(*args); });

@@ -294,12 +294,14 @@ void Breakage<D>::applyQueue(World<D>& world) {
     const double parentKinetic = p.kineticEnergy(i);           // as the dynamics has it
     ev.parentKineticEnergy = parentKinetic / world.densityScale(i);  // at the true mass
     if (!springs_.empty()) ev.parentSpringEnergy = springs_[i];
+    // At the true mass, as the kinetic energies of the event (the store's
+    // inertia is density-scaled for a scaled parent).
     if constexpr (D == 2) {
-      ev.inertiaEnergyBound =
-          0.5 * split.inertiaRelativeError * p.inertia[i] * p.angularVelocity[i] * p.angularVelocity[i];
+      ev.inertiaEnergyBound = 0.5 * split.inertiaRelativeError * p.inertia[i] * p.angularVelocity[i] *
+                              p.angularVelocity[i] / world.densityScale(i);
     } else {
-      ev.inertiaEnergyBound =
-          0.5 * split.inertiaRelativeError * p.inertia[i].norm() * p.angularVelocity[i].squaredNorm();
+      ev.inertiaEnergyBound = 0.5 * split.inertiaRelativeError * p.inertia[i].norm() *
+                              p.angularVelocity[i].squaredNorm() / world.densityScale(i);
     }
     rawVolumeError_ += std::abs(split.rawRelativeError) * split.parentVolume;
 
@@ -411,8 +413,15 @@ void Breakage<D>::checkEnergy(World<D>& world, std::size_t firstEvent) {
       continue;
     }
     const double gain = ev.energyGain();
-    if (!(gain > 0.0)) continue;
     const double scale = world.energy().scale();
+    if (!std::isfinite(gain) || !std::isfinite(scale)) {
+      if (!std::isfinite(energyLimit_)) continue;  // reported by the ledger and the state checks
+      std::ostringstream os;
+      os << "breakage energy check: the split of particle " << ev.parent << " at t = " << ev.time
+         << " s has a non-finite energy (gain " << gain << " J, energy scale " << scale << " J)";
+      throw std::runtime_error(os.str());
+    }
+    if (!(gain > 0.0)) continue;
     const double relative = gain / scale;
     if (relative > largestGain_) {
       largestGain_ = relative;

@@ -612,7 +612,7 @@ void World<D>::run(std::uint64_t n) {
 template <int D>
 void World<D>::saveState(
     StateWriter& out, const std::function<std::uint32_t(const std::shared_ptr<const geometry::Shape<D>>&)>& shapeIndex) const {
-  out.putTag("world 3");  // 3: with the time-step limits and density scaling
+  out.putTag("world 4");  // 3: with the time-step limits and density scaling; 4: whether the contacts are current
   out.put(std::int32_t(D));
   out.put(std::uint64_t(planes_.size()));
   out.put(std::uint64_t(tools_.size()));
@@ -631,6 +631,10 @@ void World<D>::saveState(
   out.put(scalingStats_);
   out.put(energy_);
   out.put(lastPower_);
+  // A state saved after an effect changed the particles (outflow, a feed) has
+  // stale contact records: the resumed run must re-evaluate them, as the
+  // uninterrupted one does.
+  out.put(std::uint8_t(forcesValid_ ? 1 : 0));
   out.putWallClock(stageSeconds_);
   out.putWallClockVector(effectSeconds_);
   out.put(std::uint64_t(removed_.size()));
@@ -666,7 +670,7 @@ void World<D>::saveState(
 template <int D>
 void World<D>::loadState(StateReader& in,
                          const std::function<std::shared_ptr<const geometry::Shape<D>>(std::uint32_t)>& shapeAt) {
-  in.expectTag("world 3");
+  in.expectTag("world 4");
   const auto mismatch = [](const std::string& what, std::uint64_t saved, std::uint64_t here) {
     throw std::runtime_error("checkpoint does not fit this scene: " + what + " " + std::to_string(saved) +
                              " in the checkpoint, " + std::to_string(here) + " in the scene");
@@ -691,6 +695,7 @@ void World<D>::loadState(StateReader& in,
   scalingStats_ = in.get<DensityScalingStats>();
   energy_ = in.get<EnergyLedger>();
   lastPower_ = in.get<std::array<double, 2>>();
+  const bool contactsCurrent = in.get<std::uint8_t>() != 0;
   stageSeconds_ = in.get<std::array<double, std::size_t(Stage::Count)>>();
   in.getVector(effectSeconds_);
   effectSeconds_.resize(effects_.size(), 0.0);
@@ -728,12 +733,14 @@ void World<D>::loadState(StateReader& in,
 
   // Derived state: per-particle stiffness, poses at the current time, a fresh
   // broad phase (its output is sorted by id, so a rebuild finds the same
-  // contacts), and the forces of this state, which were saved.
+  // contacts), and the forces of this state, which were saved (stale when
+  // an effect had changed the particles after them: the next step
+  // re-evaluates them, as the saved world's would have).
   stiffness_.resize(particles_.size());
   for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(particles_.shape[i]);
   moveKinematicBodies(time_);
   broad_.invalidate();
-  forcesValid_ = true;
+  forcesValid_ = contactsCurrent;
 }
 
 template <int D>

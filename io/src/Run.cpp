@@ -845,7 +845,12 @@ class Runner {
     p.fraction = std::clamp(p.fraction, 0.0, 1.0);
     p.stepsPerSecond = rate;
     p.wallSeconds = secondsSince(start);
-    p.etaSeconds = p.fraction > 0.0 ? p.wallSeconds * (1.0 - p.fraction) / p.fraction : 0.0;
+    // The steps left at the current step and the current rate: the share of
+    // the run done so far would mislead after a resume (this process did only
+    // part of it) and when the step falls as grains break.
+    const double stepsLeft = byTime_ ? std::max(0.0, endTime_ - w.time()) / w.dt()
+                                     : double(endStep_ > w.steps() ? endStep_ - w.steps() : 0);
+    p.etaSeconds = rate > 0.0 && std::isfinite(stepsLeft) ? stepsLeft / rate : 0.0;
     p.particles = w.particles().size();
     p.contacts = w.contacts().pairContacts().size();
     p.breakages = sw_.breakage ? sw_.breakage->breakages() : 0;

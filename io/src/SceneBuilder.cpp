@@ -151,6 +151,7 @@ class Builder {
     }
     index_ = std::make_unique<PlacementIndex<D>>(cell > 0.0 ? cell : 1.0);
     std::vector<dynamics::FeedDef<D>> feeds;
+    std::vector<int> feedLines;  // each feed's group line, for messages
     for (const ParticleGroupDef<D>& g : scene_.groups) {
       Random rng(g.seed);
       switch (g.placement) {
@@ -169,6 +170,7 @@ class Builder {
           f.count = g.count;
           f.startTime = g.feedStart;
           feeds.push_back(std::move(f));
+          feedLines.push_back(g.line);
           break;
         }
       }
@@ -188,7 +190,8 @@ class Builder {
     if (scene_.world.outflow) {
       world_->addEffect(std::make_unique<dynamics::Outflow<D>>(*scene_.world.outflow, scene_.world.discharge));
     }
-    for (auto& f : feeds) {
+    for (std::size_t k = 0; k < feeds.size(); ++k) {
+      auto& f = feeds[k];
       // The feed's grains count for the automatic time step from the start
       // (a scene may begin with no particle at all).
       for (const auto& shape : f.shapes) {
@@ -198,7 +201,7 @@ class Builder {
         try {
           world_->anticipateParticle(p);
         } catch (const std::invalid_argument& e) {
-          throw worldError(e.what(), 0, "particles");
+          throw worldError(e.what(), feedLines[k], "particles");
         }
       }
       auto feed = std::make_unique<dynamics::Feed<D>>(std::move(f));

@@ -48,7 +48,7 @@ class StateWriter {
   void putTag(const char* tag) { putString(tag); }
   /// @brief Appends a wall-clock value (World's stage times): the only bytes
   /// of a state that differ between two runs that reach the same state. With
-  /// wallClock(false) they are written as zeros, so two such states compare
+  /// setWallClock(false) they are written as zeros, so two such states compare
   /// byte for byte (the reader reads them as usual).
   template <class T>
   void putWallClock(const T& value) {

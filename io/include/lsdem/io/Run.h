@@ -22,7 +22,7 @@ struct RunProgress {
   double fraction = 0.0;          ///< done, in [0, 1]
   double stepsPerSecond = 0.0;    ///< over the last report interval
   double wallSeconds = 0.0;       ///< since the run (or the resumed part) started
-  double etaSeconds = 0.0;        ///< estimate of the wall time left
+  double etaSeconds = 0.0;        ///< estimate of the wall time left: the steps left at the current dt over the current steps per second
   std::size_t particles = 0;
   std::size_t contacts = 0;
   std::size_t breakages = 0;
@@ -41,12 +41,13 @@ struct RunOptions {
   std::string resumeDir;                    ///< non-empty: continue the run whose outputs are in this folder
   bool overwrite = false;                   ///< a new run replaces another run's outputs in its folder (else refused)
   bool force = false;                       ///< resume even with a scene that is not the checkpoint's (else refused)
-  /// Checks that cannot be fooled (`lsdem run --check`): every state value is
-  /// checked for NaN/Inf each step (WorldDef::checkFinite), and a split whose
-  /// fragments hold more mechanical energy than their parent by more than
-  /// `splitEnergyLimit` stops the run (Breakage.h "Energy
-  /// check"; the limit is a fraction of the run's energy scale). Either ends the
-/// run with std::runtime_error (exit 1), outputs kept.
+  /// Checks that cannot be fooled (`lsdem run --check`): every particle's
+  /// position, orientation, velocities, force and torque are checked for
+  /// NaN/Inf each step (WorldDef::checkFinite), and a split whose fragments
+  /// hold more mechanical energy than their parent by more than
+  /// `splitEnergyLimit` of the run's energy scale, or whose energy is not
+  /// finite, stops the run (Breakage.h "Energy check"). Either ends the run
+  /// with std::runtime_error (exit 1), outputs kept.
   bool check = false;
   double splitEnergyLimit = kCheckSplitEnergyLimit;
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by Ctrl-C) to stop after the current step
