@@ -121,7 +121,8 @@ void inspectVertices(const TriangleMesh& mesh, MeshReport& report) {
 
 bool MeshReport::ok() const {
   return !empty && borderEdges == 0 && nonManifoldEdges == 0 && misorientedEdges == 0 && nonManifoldVertices == 0 &&
-         badIndexFaces == 0 && nonFiniteVertices == 0 && degenerateFaces == 0 && !selfIntersecting && !inverted;
+         badIndexFaces == 0 && nonFiniteVertices == 0 && degenerateFaces == 0 && !selfIntersecting && !inverted &&
+         bodies <= 1;
 }
 
 std::string MeshReport::describe() const {
@@ -147,6 +148,9 @@ std::string MeshReport::describe() const {
   }
   if (selfIntersecting) parts.push_back("self-intersects");
   if (inverted) parts.push_back("is inverted (normals point inward)");
+  if (bodies > 1) {
+    parts.push_back("holds " + std::to_string(bodies) + " separate bodies (a grain or tool is one body: put each in a file of its own)");
+  }
   if (parts.empty()) return "is ok";
   std::string out = parts.front();
   for (std::size_t p = 1; p < parts.size(); ++p) out += "; " + parts[p];
@@ -189,13 +193,18 @@ MeshReport inspectMesh(const TriangleMesh& mesh) {
   // degenerate faces), then orientation of a closed mesh: every shell must face
   // away from the solid it bounds (CGAL does_bound_a_volume, which needs a
   // self-intersection-free mesh; otherwise the sign of the volume decides).
-  const cgal::SurfaceMesh surface = cgal::toSurfaceMesh(mesh);
+  cgal::SurfaceMesh surface = cgal::toSurfaceMesh(mesh);
   if (report.degenerateFaces == 0) report.selfIntersecting = PMP::does_self_intersect(surface);
   if (report.borderEdges == 0) {
     const bool boundsVolume = (report.degenerateFaces == 0 && !report.selfIntersecting)
                                   ? PMP::does_bound_a_volume(surface)
                                   : mesh.signedVolume() > 0.0;
     report.inverted = !boundsVolume || !(mesh.signedVolume() > 0.0);
+    // How many solids: two closed bodies in one file would become one grain.
+    if (report.degenerateFaces == 0 && !report.selfIntersecting && !report.inverted) {
+      auto volume = surface.add_property_map<cgal::FaceIndex, std::size_t>("f:volume", 0).first;
+      report.bodies = int(PMP::volume_connected_components(surface, volume));
+    }
   }
   return report;
 }

@@ -190,6 +190,21 @@ TEST(MeshToLevelSet, BrokenMeshesRaiseTheRightMessage) {
   append(twoCubes, boxMesh(Vec<3>(0.3, 0.2, 0.1), Vec<3>(0.5, 0.5, 0.5)));
   EXPECT_EQ(errorOf(twoCubes, "two"), "mesh 'two': self-intersects");
 
+  // Two closed bodies apart in one file would become one grain: refused. A
+  // body with a cavity (a shell nested in it, facing in) is one body.
+  TriangleMesh apart = cube;
+  append(apart, boxMesh(Vec<3>(3.0, 0.0, 0.0), Vec<3>(0.5, 0.5, 0.5)));
+  EXPECT_EQ(inspectMesh(apart).bodies, 2);
+  EXPECT_EQ(errorOf(apart, "apart"),
+            "mesh 'apart': holds 2 separate bodies (a grain or tool is one body: put each in a file of its own)");
+  TriangleMesh hollow = boxMesh(Vec<3>::Zero(), Vec<3>(1.0, 1.0, 1.0));
+  TriangleMesh cavity = boxMesh(Vec<3>::Zero(), Vec<3>(0.4, 0.4, 0.4));
+  for (auto& f : cavity.faces) std::swap(f[1], f[2]);
+  append(hollow, cavity);
+  EXPECT_EQ(inspectMesh(hollow).bodies, 1);
+  EXPECT_TRUE(inspectMesh(hollow).ok()) << inspectMesh(hollow).describe();
+  EXPECT_EQ(inspectMesh(cube).bodies, 1);
+
   // A zero-area face: split edge (a, b) of a face (a, b, c) at its midpoint m,
   // and close the slit with the flat face (a, b, m); still closed and manifold.
   TriangleMesh flat = cube;

@@ -39,6 +39,11 @@ struct MeshReport {
   bool inverted = false;
   /// No faces or no vertices.
   bool empty = false;
+  /// Separate solids the mesh bounds (CGAL volume_connected_components: a
+  /// shell with the cavities nested in it is one solid); 0 when not checked
+  /// (an open, self-intersecting or inverted mesh). More than one is refused:
+  /// a grain or a tool is one body (put each in a file of its own).
+  int bodies = 0;
 
   /// @brief True when nothing is wrong: the mesh bounds a solid with outward normals.
   bool ok() const;
@@ -50,7 +55,8 @@ struct MeshReport {
 /// @brief Checks that a triangle mesh bounds a solid: indices in range,
 /// non-empty, closed (no border edges), manifold (edges and vertices),
 /// consistently oriented, no degenerate faces, no self-intersections (CGAL
-/// Polygon_mesh_processing::does_self_intersect), outward (signed volume > 0).
+/// Polygon_mesh_processing::does_self_intersect), outward (signed volume > 0),
+/// one body (MeshReport::bodies).
 /// @param mesh triangle mesh, any units.
 /// @return The report; never throws on bad geometry.
 /// @note Order of checks: emptiness, then indices (faces with bad indices stop
