@@ -3,6 +3,7 @@
 /// (OutputFolder.h).
 
 #include "OutputFolder.h"
+#include "OutputNames.h"
 
 #include "lsdem/io/InputError.h"
 
@@ -24,16 +25,17 @@ namespace {
 namespace fs = std::filesystem;
 
 // The files a run writes into its folder, besides scene.toml and frames/
-// (docs/outputs.md).
-constexpr std::array<const char*, 13> kOutputFiles = {
-    "summary.json",     "history.csv",     "checkpoint.lsc", "psd.csv",      "shape_stats.csv",
-    "shape_histograms.csv", "removed.csv", "breakage_log.csv", "product_psd.csv",
-    "particles.pvd",    "surfaces.pvd",    "boundaries.pvd", "contacts.pvd"};
+// (OutputNames.h): its files and its series' .pvd files.
+std::vector<std::string> outputFiles() {
+  std::vector<std::string> names(outputs::kFiles.begin(), outputs::kFiles.end());
+  for (const char* series : outputs::kSeries) names.push_back(std::string(series) + ".pvd");
+  return names;
+}
 
 // A frame of a ParaView series: frames/<series>_NNNNNN.vtp (or its temporary file).
 bool isFrameFile(const std::string& name) {
-  for (const char* series : {"particles_", "surfaces_", "boundaries_", "contacts_"}) {
-    if (name.rfind(series, 0) != 0) continue;
+  for (const char* series : outputs::kSeries) {
+    if (name.rfind(std::string(series) + "_", 0) != 0) continue;
     return name.ends_with(".vtp") || name.ends_with(".vtp.tmp");
   }
   return false;
@@ -104,8 +106,8 @@ OutputLock::~OutputLock() {
 std::vector<std::string> runOutputsIn(const fs::path& dir) {
   std::vector<std::string> found;
   std::error_code ec;
-  for (const char* name : kOutputFiles) {
-    if (fs::exists(dir / name, ec)) found.emplace_back(name);
+  for (const std::string& name : outputFiles()) {
+    if (fs::exists(dir / name, ec)) found.push_back(name);
   }
   if (fs::is_directory(dir / "frames", ec)) {
     for (const fs::directory_entry& e : fs::directory_iterator(dir / "frames", ec)) {
@@ -135,9 +137,9 @@ void removeRunOutputs(const fs::path& dir) {
     fs::remove(file, ec);
     if (ec) throw std::runtime_error("cannot remove the previous run's " + file.string() + ": " + ec.message());
   };
-  for (const char* name : kOutputFiles) {
+  for (const std::string& name : outputFiles()) {
     remove(dir / name);
-    remove(dir / (std::string(name) + ".tmp"));
+    remove(dir / (name + ".tmp"));
   }
   std::error_code ec;
   if (!fs::is_directory(dir / "frames", ec)) return;

@@ -16,6 +16,7 @@
 
 #include "Checksum.h"
 #include "OutputFolder.h"
+#include "OutputNames.h"
 
 #include <algorithm>
 #include <charconv>
@@ -45,7 +46,7 @@ using geometry::Vec;
 constexpr char kCheckpointMagic[8] = {'L', 'S', 'D', 'E', 'M', 'C', 'K', 'P'};
 // 2: a CRC-32 of everything before it closes the file.
 constexpr std::uint32_t kCheckpointVersion = 2;
-constexpr const char* kCheckpointFile = "checkpoint.lsc";
+constexpr const char* kCheckpointFile = outputs::kCheckpoint;
 // The most steps a scene may imply (duration / dt, or steps); longer runs go
 // in parts with --steps and --resume (docs/reliability.md).
 constexpr double kMaxSteps = 1e9;
@@ -475,18 +476,18 @@ class Runner {
       header += "," + tool.name + "_power_W";
     }
     if (scene_.specimen) header += ",height_m,stress_Pa,strain,void_ratio";
-    files.emplace_back("history.csv", header);
-    files.emplace_back("psd.csv", "time_s,sieve_size_m,percent_passing");
-    files.emplace_back("shape_stats.csv",
+    files.emplace_back(outputs::kHistory, header);
+    files.emplace_back(outputs::kPsd, "time_s,sieve_size_m,percent_passing");
+    files.emplace_back(outputs::kShapeStats,
                        "time_s,strain,particles,mean_circularity,mean_aspect_ratio,mean_sieve_size_m,shape_particles");
-    files.emplace_back("shape_histograms.csv", "time_s,strain,quantity,bin_low,bin_high,count");
-    files.emplace_back("removed.csv", "id,time_s,mass_kg,volume,sieve_size_m,reason");
+    files.emplace_back(outputs::kShapeHistograms, "time_s,strain,quantity,bin_low,bin_high,count");
+    files.emplace_back(outputs::kRemoved, "id,time_s,mass_kg,volume,sieve_size_m,reason");
     {
       std::ostringstream h;
       writeBreakageLogHeader<D>(h);
       std::string s = h.str();
       if (!s.empty() && s.back() == '\n') s.pop_back();
-      files.emplace_back("breakage_log.csv", s);
+      files.emplace_back(outputs::kBreakageLog, s);
     }
     // A resumed run checks every file before it changes any: one that is
     // missing or damaged leaves them all as they were.
@@ -566,7 +567,7 @@ class Runner {
       row += "," + num(h) + "," + num(stress) + "," + num(h0_ > 0.0 ? (h0_ - h) / h0_ : 0.0) + "," +
              num(solid > 0.0 ? (total - solid) / solid : 0.0);
     }
-    csv_["history.csv"].row(row);
+    csv_[outputs::kHistory].row(row);
     lastHistoryClock_ = clockValue();
   }
 
@@ -621,14 +622,14 @@ class Runner {
     const World& w = *sw_.world;
     for (; removedWritten_ < w.removed().size(); ++removedWritten_) {
       const dynamics::RemovedParticle& r = w.removed()[removedWritten_];
-      csv_["removed.csv"].row(std::to_string(r.id) + "," + num(r.time) + "," + num(r.mass) + "," + num(r.volume) + "," +
+      csv_[outputs::kRemoved].row(std::to_string(r.id) + "," + num(r.time) + "," + num(r.mass) + "," + num(r.volume) + "," +
                               num(r.sieveSize) + "," + r.reason);
     }
     if (sw_.breakage && eventsWritten_ < sw_.breakage->events().size()) {
       const auto& events = sw_.breakage->events();
       std::ostringstream rows;
       writeBreakageLogRows<D>(std::span(events).subspan(eventsWritten_), rows);
-      csv_["breakage_log.csv"].write(rows.str());
+      csv_[outputs::kBreakageLog].write(rows.str());
       eventsWritten_ = events.size();
     }
   }
@@ -668,10 +669,10 @@ class Runner {
       passing += mass;
       rows += t + "," + num(size) + "," + num(100.0 * passing / total) + "\n";
     }
-    csv_["psd.csv"].write(rows);
+    csv_[outputs::kPsd].write(rows);
     const double n = double(std::max<std::size_t>(p.size(), 1));
     const double m = double(std::max<std::size_t>(resolved.size(), 1));
-    csv_["shape_stats.csv"].row(t + "," + strain + "," + std::to_string(p.size()) + "," + num(circ / m) + "," +
+    csv_[outputs::kShapeStats].row(t + "," + strain + "," + std::to_string(p.size()) + "," + num(circ / m) + "," +
                                 num(aspect / m) + "," + num(sieve / n) + "," + std::to_string(resolved.size()));
     // Histograms of circularity (sphericity) and aspect ratio, 10 bins on [0, 1].
     for (const char* quantity : {"circularity", "aspect_ratio"}) {
@@ -686,7 +687,7 @@ class Runner {
         out += t + "," + strain + "," + quantity + "," + num(0.1 * double(b)) + "," + num(0.1 * double(b + 1)) + "," +
                std::to_string(bins[b]) + "\n";
       }
-      csv_["shape_histograms.csv"].write(out);
+      csv_[outputs::kShapeHistograms].write(out);
     }
     lastDistributionClock_ = clockValue();
   }
@@ -710,7 +711,7 @@ class Runner {
       passing += mass;
       text += num(size) + "," + num(100.0 * passing / total) + "," + num(mass) + "\n";
     }
-    writeFileAtomically(out_ / "product_psd.csv", text);
+    writeFileAtomically(out_ / outputs::kProductPsd, text);
   }
 
   void writeFrame() {
@@ -832,7 +833,7 @@ class Runner {
         if (final) writeFragmentDensity(j);
       }
     });
-    writeFileAtomically(out_ / "summary.json", s.str());
+    writeFileAtomically(out_ / outputs::kSummary, s.str());
   }
 
   void report(Clock::time_point start, double rate, bool done) {

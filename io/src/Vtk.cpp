@@ -3,6 +3,8 @@
 #include "lsdem/geometry/Contours.h"
 #include "lsdem/io/InputError.h"
 
+#include "OutputNames.h"
+
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -748,10 +750,11 @@ FrameWriter<D>::FrameWriter(FrameWriterDef<D> def) : def_(std::move(def)) {
                              (ec ? ec.message() : std::string("not a directory")));
   }
   // Series.
-  if (def_.particles) particles_.emplace(def_.directory / "particles.pvd", def_.resume);
-  if (def_.surfaces) surfaces_.emplace(def_.directory / "surfaces.pvd", def_.resume);
-  if (def_.boundaries) boundaries_.emplace(def_.directory / "boundaries.pvd", def_.resume);
-  if (def_.contacts) contacts_.emplace(def_.directory / "contacts.pvd", def_.resume);
+  const auto pvd = [&](const char* series) { return def_.directory / (std::string(series) + ".pvd"); };
+  if (def_.particles) particles_.emplace(pvd(outputs::kParticles), def_.resume);
+  if (def_.surfaces) surfaces_.emplace(pvd(outputs::kSurfaces), def_.resume);
+  if (def_.boundaries) boundaries_.emplace(pvd(outputs::kBoundaries), def_.resume);
+  if (def_.contacts) contacts_.emplace(pvd(outputs::kContacts), def_.resume);
   updateNextFrame();
 }
 
@@ -775,12 +778,12 @@ void FrameWriter<D>::write(const dynamics::World<D>& world, std::span<const doub
     writeFile(def_.directory / relative);
     series->add(time, relative);
   };
-  frame(particles_, "particles", [&](const std::filesystem::path& f) {
+  frame(particles_, outputs::kParticles, [&](const std::filesystem::path& f) {
     writeParticleFrame<D>(f, world, stressMeasure, def_.encoding);
   });
-  frame(surfaces_, "surfaces",
+  frame(surfaces_, outputs::kSurfaces,
         [&](const std::filesystem::path& f) { writeSurfaceFrame<D>(f, world, cache_, def_.encoding); });
-  frame(boundaries_, "boundaries", [&](const std::filesystem::path& f) {
+  frame(boundaries_, outputs::kBoundaries, [&](const std::filesystem::path& f) {
     // The extent: given, or the particles' bounding spheres grown by 10%.
     geometry::Box<D> extent = def_.extent;
     if (!((extent.upper - extent.lower).array() > 0.0).all()) {
@@ -799,7 +802,7 @@ void FrameWriter<D>::write(const dynamics::World<D>& world, std::span<const doub
     }
     writeBoundaryFrame<D>(f, world, cache_, extent, def_.encoding);
   });
-  frame(contacts_, "contacts",
+  frame(contacts_, outputs::kContacts,
         [&](const std::filesystem::path& f) { writeContactFrame<D>(f, world, def_.encoding); });
   ++nextFrame_;
 }
