@@ -16,6 +16,8 @@
 ///   - inspectMesh never throws; meshToLevelSet throws nothing but MeshError,
 ///     and only when inspectMesh found a problem; its grid is finite.
 
+#include "FuzzFolder.h"
+
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/MeshToLevelSet.h"
 
@@ -28,7 +30,6 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <system_error>
 #include <string_view>
 
 namespace {
@@ -39,24 +40,6 @@ namespace fs = std::filesystem;
 [[noreturn]] void violation(const char* what, const std::string& detail = "") {
   std::fprintf(stderr, "fuzz_mesh: invariant violated: %s %s\n", what, detail.c_str());
   std::abort();
-}
-
-// A folder of this process's own, removed at exit (kept after an abort).
-struct Folder {
-  fs::path path;
-  ~Folder() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-};
-
-const fs::path& folder() {
-  static const Folder dir{[] {
-    std::string pattern = (fs::temp_directory_path() / "lsdem-fuzz-mesh-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) violation("cannot make a temporary folder", pattern);
-    return fs::path(pattern);
-  }()};
-  return dir.path;
 }
 
 const char* extensionOf(std::string_view head) {
@@ -111,7 +94,7 @@ void check(const geometry::TriangleMesh& mesh, const std::string& name) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view head(reinterpret_cast<const char*>(data), std::min<std::size_t>(size, 8));
-  const fs::path path = folder() / (std::string("input") + extensionOf(head));
+  const fs::path path = fuzz::scratchFolder("mesh") / (std::string("input") + extensionOf(head));
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data), std::streamsize(size));

@@ -18,6 +18,8 @@
 /// Time and memory are libFuzzer's to bound (-timeout, -rss_limit_mb): a
 /// scene that takes longer than the timeout to read is a hang and reported.
 
+#include "FuzzFolder.h"
+
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/Scene.h"
 
@@ -29,7 +31,6 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <system_error>
 #include <variant>
 
 namespace {
@@ -42,21 +43,10 @@ namespace fs = std::filesystem;
   std::abort();
 }
 
-// A folder of this process's own, removed at exit (kept after an abort).
-struct Folder {
-  fs::path path;
-  ~Folder() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-};
-
-// The target's folder, made once: TMPDIR/lsdem-fuzz-scene-XXXXXX with cube.stl.
+// The target's folder (FuzzFolder.h), with cube.stl written into it once.
 const fs::path& folder() {
-  static const Folder dir{[] {
-    std::string pattern = (fs::temp_directory_path() / "lsdem-fuzz-scene-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) violation("cannot make a temporary folder", pattern);
-    const fs::path d(pattern);
+  static const fs::path& dir = [] () -> const fs::path& {
+    const fs::path& d = fuzz::scratchFolder("scene");
     std::ofstream stl(d / "cube.stl");
     stl << "solid cube\n";
     // The 12 outward triangles of the unit cube [0, 1]^3.
@@ -72,8 +62,8 @@ const fs::path& folder() {
     }
     stl << "endsolid cube\n";
     return d;
-  }()};
-  return dir.path;
+  }();
+  return dir;
 }
 
 template <int D>

@@ -225,7 +225,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
   const std::size_t firstEvent = events_.size();
   // The springs each particle holds, for the energy check (stale records: unknown).
   springs_.clear();
-  if (world.contactsCurrent()) contactSprings(world, springs_, nullptr);
+  if (world.contactsCurrent()) springsPerParticle(world);
 
   // Split every queued parent while the store's indices are unchanged.
   for (const Pending& q : queue_) {
@@ -377,26 +377,29 @@ void Breakage<D>::applyQueue(World<D>& world) {
   checkEnergy(world, firstEvent);
 }
 
+// A particle pair's spring counts for both particles (once when both are one
+// event's fragments); a plane's or tool's for its particle.
 template <int D>
-void Breakage<D>::contactSprings(const World<D>& world, std::vector<double>& perParticle,
-                                 std::vector<BreakageEvent<D>>* events) const {
-  // A particle pair's spring counts for both particles (once when both are
-  // one event's fragments); a boundary's for its particle.
+void Breakage<D>::springsPerParticle(const World<D>& world) {
   const auto& pairs = world.contacts().pairContacts();
   const std::size_t particlePairs = world.contacts().particleContacts().size();
-  if (events == nullptr) {
-    perParticle.assign(world.particles().size(), 0.0);
-    for (std::size_t k = 0; k < pairs.size(); ++k) {
-      perParticle[pairs[k].a] += pairs[k].elasticEnergy;
-      if (k < particlePairs) perParticle[pairs[k].b] += pairs[k].elasticEnergy;
-    }
-    return;
+  springs_.assign(world.particles().size(), 0.0);
+  for (std::size_t k = 0; k < pairs.size(); ++k) {
+    springs_[pairs[k].a] += pairs[k].elasticEnergy;
+    if (k < particlePairs) springs_[pairs[k].b] += pairs[k].elasticEnergy;
   }
+}
+
+template <int D>
+void Breakage<D>::fragmentSprings(const World<D>& world, std::size_t firstEvent) {
+  const auto& pairs = world.contacts().pairContacts();
+  const std::size_t particlePairs = world.contacts().particleContacts().size();
+  for (std::size_t e = firstEvent; e < events_.size(); ++e) events_[e].fragmentSpringEnergy = 0.0;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const std::int64_t ea = eventOf_[pairs[k].a];
     const std::int64_t eb = k < particlePairs ? eventOf_[pairs[k].b] : -1;
-    if (ea >= 0) (*events)[std::size_t(ea)].fragmentSpringEnergy += pairs[k].elasticEnergy;
-    if (eb >= 0 && eb != ea) (*events)[std::size_t(eb)].fragmentSpringEnergy += pairs[k].elasticEnergy;
+    if (ea >= 0) events_[std::size_t(ea)].fragmentSpringEnergy += pairs[k].elasticEnergy;
+    if (eb >= 0 && eb != ea) events_[std::size_t(eb)].fragmentSpringEnergy += pairs[k].elasticEnergy;
   }
 }
 
@@ -404,8 +407,7 @@ template <int D>
 void Breakage<D>::checkEnergy(World<D>& world, std::size_t firstEvent) {
   // The fragments' springs on the new set, evaluated now (the next step would).
   world.refreshContacts();
-  for (std::size_t e = firstEvent; e < events_.size(); ++e) events_[e].fragmentSpringEnergy = 0.0;
-  contactSprings(world, springs_, &events_);
+  fragmentSprings(world, firstEvent);
   for (std::size_t e = firstEvent; e < events_.size(); ++e) {
     const BreakageEvent<D>& ev = events_[e];
     if (std::isnan(ev.parentSpringEnergy)) {

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -93,6 +94,37 @@ void expectSameState(const World<D>& a, const World<D>& b) {
   EXPECT_EQ(a.toolPoses()[0].position, b.toolPoses()[0].position);
 }
 
+// A world's state, its shapes numbered as they come (the table gives them back).
+template <int D>
+struct SavedState {
+  std::vector<char> bytes;
+  std::vector<std::shared_ptr<const geometry::Shape<D>>> table;
+};
+
+// `wallClock` false: the stage times written as zeros (StateWriter::setWallClock).
+template <int D>
+SavedState<D> save(const World<D>& w, bool wallClock = true) {
+  SavedState<D> saved;
+  std::map<const geometry::Shape<D>*, std::uint32_t> index;
+  StateWriter out;
+  out.setWallClock(wallClock);
+  w.saveState(out, [&](const std::shared_ptr<const geometry::Shape<D>>& s) {
+    auto [it, added] = index.emplace(s.get(), std::uint32_t(saved.table.size()));
+    if (added) saved.table.push_back(s);
+    return it->second;
+  });
+  saved.bytes = out.bytes();
+  return saved;
+}
+
+// Restores a saved state into `w` (built from the same setup); all of it is read.
+template <int D>
+void restore(World<D>& w, const SavedState<D>& saved) {
+  StateReader in(saved.bytes.data(), saved.bytes.size());
+  w.loadState(in, [&](std::uint32_t k) { return saved.table.at(k); });
+  EXPECT_TRUE(in.atEnd());
+}
+
 // `frictionLate`: friction acts only from halfway through the resumed part,
 // so the saved state has no shear history and the switch happens after the restore.
 template <int D>
@@ -112,14 +144,7 @@ void checkpointRoundTrip(bool frictionLate = false) {
   // Stopped after `before` steps: state saved with a shape table.
   auto first = setup.build();
   first->run(before);
-  std::map<const geometry::Shape<D>*, std::uint32_t> index;
-  std::vector<std::shared_ptr<const geometry::Shape<D>>> table;
-  StateWriter out;
-  first->saveState(out, [&](const std::shared_ptr<const geometry::Shape<D>>& s) {
-    auto [it, added] = index.emplace(s.get(), std::uint32_t(table.size()));
-    if (added) table.push_back(s);
-    return it->second;
-  });
+  const SavedState<D> saved = save(*first);
   if (frictionLate) {
     ASSERT_EQ(first->contacts().historySize(), 0u) << "frictionless until friction_from";
   } else {
@@ -128,9 +153,7 @@ void checkpointRoundTrip(bool frictionLate = false) {
 
   // Restored into a fresh world and continued.
   auto resumed = setup.build();
-  StateReader in(out.bytes().data(), out.bytes().size());
-  resumed->loadState(in, [&](std::uint32_t k) { return table.at(k); });
-  EXPECT_TRUE(in.atEnd());
+  restore(*resumed, saved);
   expectSameState(*first, *resumed);
   resumed->run(after);
   expectSameState(*straight, *resumed);
@@ -171,50 +194,23 @@ TEST(Checkpoint, StateOfAnotherSceneIsRefused) {
 template <int D>
 void sameStateSameBytes() {
   Heap<D> setup;
-  const auto save = [](const World<D>& w) {
-    StateWriter out;
-    out.setWallClock(false);
-    w.saveState(out, [](const std::shared_ptr<const geometry::Shape<D>>& s) {
-      return std::uint32_t(reinterpret_cast<std::uintptr_t>(s.get()) % 2);  // shape identity is not what is tested
-    });
-    return out.bytes();
-  };
   auto a = setup.build();
   a->run(800);
-  std::vector<std::vector<double>> noise;
+  std::vector<std::vector<double>> noise;  // other allocations between the two runs
   for (int k = 0; k < 50; ++k) noise.emplace_back(std::size_t(100 + k), 1.0 + k);
   auto b = setup.build();
   b->run(800);
-  const std::vector<char> bytesA = save(*a), bytesB = save(*b);
+  const std::vector<char> bytesA = save(*a, false).bytes, bytesB = save(*b, false).bytes;
   ASSERT_GT(a->contacts().nodeContacts().size(), 0u) << "the test needs node contacts in the state";
   ASSERT_EQ(bytesA.size(), bytesB.size());
-  std::size_t firstDiff = bytesA.size();
-  for (std::size_t k = 0; k < bytesA.size() && firstDiff == bytesA.size(); ++k) {
-    if (bytesA[k] != bytesB[k]) firstDiff = k;
-  }
-  EXPECT_EQ(firstDiff, bytesA.size()) << "first differing byte of " << bytesA.size();
+  const auto firstDiff = std::mismatch(bytesA.begin(), bytesA.end(), bytesB.begin()).first - bytesA.begin();
+  EXPECT_EQ(std::size_t(firstDiff), bytesA.size()) << "first differing byte of " << bytesA.size();
 
   // Restored from a's full state (with its clocks) and saved again.
-  StateWriter full;
-  std::vector<std::shared_ptr<const geometry::Shape<D>>> table;
-  std::map<const geometry::Shape<D>*, std::uint32_t> index;
-  a->saveState(full, [&](const std::shared_ptr<const geometry::Shape<D>>& s) {
-    auto [it, added] = index.emplace(s.get(), std::uint32_t(table.size()));
-    if (added) table.push_back(s);
-    return it->second;
-  });
+  const SavedState<D> full = save(*a);
   auto c = setup.build();
-  StateReader in(full.bytes().data(), full.bytes().size());
-  c->loadState(in, [&](std::uint32_t k) { return table.at(k); });
-  StateWriter again;
-  std::map<const geometry::Shape<D>*, std::uint32_t> index2;
-  std::uint32_t next = 0;
-  c->saveState(again, [&](const std::shared_ptr<const geometry::Shape<D>>& s) {
-    auto [it, added] = index2.emplace(s.get(), next);
-    if (added) ++next;
-    return it->second;
-  });
-  EXPECT_TRUE(again.bytes() == full.bytes());
+  restore(*c, full);
+  EXPECT_TRUE(save(*c).bytes == full.bytes);
 }
 
 TEST(Checkpoint, SameStateSameBytes2D) { sameStateSameBytes<2>(); }
@@ -232,17 +228,8 @@ TEST(Checkpoint, StateSavedAfterAFeedAddedAGrainResumesEqual) {
     ++steps;
   } while (first->contactsCurrent() && steps < 20000);
   ASSERT_FALSE(first->contactsCurrent()) << "the feed never dropped a grain";
-  std::map<const geometry::Shape<2>*, std::uint32_t> index;
-  std::vector<std::shared_ptr<const geometry::Shape<2>>> table;
-  StateWriter out;
-  first->saveState(out, [&](const std::shared_ptr<const geometry::Shape<2>>& s) {
-    auto [it, added] = index.emplace(s.get(), std::uint32_t(table.size()));
-    if (added) table.push_back(s);
-    return it->second;
-  });
   auto resumed = setup.build();
-  StateReader in(out.bytes().data(), out.bytes().size());
-  resumed->loadState(in, [&](std::uint32_t k) { return table.at(k); });
+  restore(*resumed, save(*first));
   EXPECT_FALSE(resumed->contactsCurrent());
   auto straight = setup.build();
   straight->run(steps + 300);

@@ -250,11 +250,11 @@ class Breakage final : public dynamics::Effect<D> {
   bool isBelowMinimum(const geometry::Shape<D>& shape) const;
   void queueFailures(dynamics::World<D>& world);
   void applyQueue(dynamics::World<D>& world);
-  /// The springs' energy of the current contacts: per particle into
-  /// `perParticle` (events null), or added to the fragmentSpringEnergy of the
-  /// events the particles were born in (eventOf_).
-  void contactSprings(const dynamics::World<D>& world, std::vector<double>& perParticle,
-                      std::vector<BreakageEvent<D>>* events) const;
+  /// The springs' energy of the current contacts per particle, into springs_.
+  void springsPerParticle(const dynamics::World<D>& world);
+  /// The springs' energy of the current contacts into the fragmentSpringEnergy
+  /// of the events from `firstEvent` on that the particles were born in (eventOf_).
+  void fragmentSprings(const dynamics::World<D>& world, std::size_t firstEvent);
   /// Evaluates the new set's contacts and checks the energy of events from `firstEvent` on.
   void checkEnergy(dynamics::World<D>& world, std::size_t firstEvent);
   /// The bodies within reach of particle i's surface (other particles whose
