@@ -213,6 +213,32 @@ geometry::SignedDistance<D> Breakage<D>::clearanceAround(const World<D>& world, 
 }
 
 template <int D>
+std::vector<typename Breakage<D>::Inherited> Breakage<D>::inheritedRestOverlaps(
+    const std::vector<typename dynamics::ContactSolver<D>::RestOverlap>& rest, std::uint64_t parentId,
+    const Shape<D>& parent, const Fragment<D>& f) {
+  std::vector<Inherited> out;
+  // A parent node's rest overlaps go to the fragment's nodes within half a
+  // parent cell of it (the node itself, where the fragment kept it; the nodes
+  // made afresh around it, where it was re-gridded).
+  const double reach2 = 0.25 * parent.grid().spacing() * parent.grid().spacing();
+  for (const auto& r : rest) {
+    if (r.owner != parentId) {
+      // Another body's node inside the parent: inside one of the fragments now.
+      out.push_back({r.owner, r.node, r.restOverlap, false});
+      continue;
+    }
+    const Vec<D>& x = parent.nodes().positions[r.node];
+    const auto& nodes = f.shape->nodes().positions;
+    for (std::size_t n = 0; n < nodes.size(); ++n) {
+      if ((f.childToParent.apply(nodes[n]) - x).squaredNorm() <= reach2) {
+        out.push_back({r.partner, std::uint32_t(n), r.restOverlap, true});
+      }
+    }
+  }
+  return out;
+}
+
+template <int D>
 void Breakage<D>::applyQueue(World<D>& world) {
   Particles<D>& p = world.particles();
   dynamics::EnergyLedger& ledger = world.energyLedger();
@@ -221,6 +247,8 @@ void Breakage<D>::applyQueue(World<D>& world) {
   std::sort(queue_.begin(), queue_.end(), [](const Pending& a, const Pending& b) { return a.id < b.id; });
   parents_.clear();
   adds_.clear();
+  addCutFace_.clear();
+  addInherited_.clear();
   std::vector<std::size_t> addEvent;
   const std::size_t firstEvent = events_.size();
   // The springs each particle holds, for the energy check (stale records: unknown).
@@ -308,6 +336,9 @@ void Breakage<D>::applyQueue(World<D>& world) {
     // Fragments: the parent's density and motion, eq. 13 strengths; small ones leave as fines.
     const double density = ev.parentMass / shape.volume();
     const double parentDiameter = shape.descriptors().equivalentDiameter;
+    // The parent's springs that started relaxed (ContactSolver, rest
+    // overlaps) pass to its fragments, so breaking does not load them again.
+    const auto rest = world.contacts().restOverlaps(p, i);
     for (const Fragment<D>& f : split.fragments) {
       const FragmentState<D> st = fragmentState(f, p.position[i], rotation, p.velocity[i], p.angularVelocity[i]);
       ParticleDef<D> def;
@@ -350,6 +381,8 @@ void Breakage<D>::applyQueue(World<D>& world) {
         ev.finesVolumes.push_back(f.volume);
       } else {
         adds_.push_back(std::move(def));
+        addCutFace_.push_back(f.cutFaceNodes);
+        addInherited_.push_back(inheritedRestOverlaps(rest, q.id, shape, f));
         addEvent.push_back(events_.size());
         ev.childVolumes.push_back(f.volume);
       }
@@ -372,6 +405,16 @@ void Breakage<D>::applyQueue(World<D>& world) {
     ledger.addedEnergy += p.kineticEnergy(i);
     eventOf_.resize(p.size(), -1);
     eventOf_[i] = std::int64_t(addEvent[k]);
+    // Its contacts start relaxed: new-face nodes, and the parent's rest overlaps.
+    if (!def_.relaxNewContacts) continue;
+    world.markNewborn(p.id[i], addCutFace_[k]);
+    for (const Inherited& r : addInherited_[k]) {
+      if (r.childOwns) {
+        world.inheritRestOverlap(p.id[i], r.key, r.node, r.restOverlap);
+      } else {
+        world.inheritRestOverlap(r.key, p.id[i], r.node, r.restOverlap);
+      }
+    }
   }
   world.particlesChanged();
   checkEnergy(world, firstEvent);

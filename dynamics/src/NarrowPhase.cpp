@@ -16,6 +16,8 @@
 namespace lsdem::dynamics {
 namespace {
 
+using detail::BirthNode;
+using detail::kAnyPartner;
 using detail::HistoryPair;
 using detail::NodeWork;
 using detail::TaskOutput;
@@ -74,19 +76,53 @@ LawConstants boundaryLaw(const LawConstants& law, const ContactConstants* materi
 template <int D>
 struct HistoryView {
   const NodeContact<D>* nodes = nullptr;
-  const Vec<D>* shear = nullptr;
+  const Vec<D>* shear = nullptr;    // null without friction
+  const double* preload = nullptr;  // null when no contact carried a rest overlap
   std::uint32_t count = 0;
 };
 
-// Stiffness factor of a node: the direction weight, times w_i / w_ref when area weighted.
+// The birth records of a pair's two bodies (ContactSolver::markNewborn,
+// inheritRestOverlap), each list ascending by node; empty for a body without
+// any (and for boundaries). keyOfB is b's key as a's partner, idA a's as b's.
+struct NewbornView {
+  std::span<const BirthNode> a, b;
+  std::uint64_t keyOfB = 0, idA = 0;
+  bool empty() const { return a.empty() && b.empty(); }
+  // The rest overlap a node contact without history starts with: 0 without a record.
+  template <int D>
+  double restOverlap(const NodeContact<D>& c) const {
+    const std::span<const BirthNode> list = c.ownerIsB ? b : a;
+    const std::uint64_t partner = c.ownerIsB ? idA : keyOfB;
+    auto it = std::lower_bound(list.begin(), list.end(), c.node,
+                               [](const BirthNode& n, std::uint32_t node) { return n.node < node; });
+    double rest = 0.0;
+    for (; it != list.end() && it->node == c.node; ++it) {
+      if (it->other == partner || it->other == kAnyPartner) rest = std::max(rest, it->restOverlap);
+    }
+    return std::min(rest, c.overlap);
+  }
+};
+
+// Stiffness factor of a node: w_i x weightToFactor when area weighted (the
+// direction weight / w_ref), else the constant weightToFactor (the direction
+// weight x the owner's node stiffness scale).
 template <ForceFormulation Formulation>
-double stiffnessFactor(double directionWeight, double nodeWeight, double weightToFactor) {
+double stiffnessFactor(double nodeWeight, double weightToFactor) {
   if constexpr (Formulation == ForceFormulation::PerNode) {
     (void)nodeWeight;
-    (void)weightToFactor;
-    return directionWeight;
+    return weightToFactor;
   } else {
     return nodeWeight * weightToFactor;
+  }
+}
+
+// The per-shape constant of stiffnessFactor for one direction of a pair.
+template <int D, ForceFormulation Formulation>
+double weightToFactorOf(const Shape<D>& owner, double directionWeight) {
+  if constexpr (Formulation == ForceFormulation::PerNode) {
+    return directionWeight * owner.nodeStiffnessScale();
+  } else {
+    return directionWeight / referenceNodeWeight<D>(owner.contactSpacing());
   }
 }
 
@@ -176,7 +212,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const double slope = other.levelSetSlope();
   // Round-off of the look-up and of the mapped centre, far below any overlap that matters.
   const double margin = 1e-9 * grid.spacing();
-  const double weightToFactor = directionWeight / referenceNodeWeight<D>(owner.contactSpacing());
+  const double weightToFactor = weightToFactorOf<D, Formulation>(owner, directionWeight);
 
   const geometry::NodeTree<D>& tree = owner.nodeTree();
   const std::vector<Vec<D>>& nodes = owner.nodes().positions;
@@ -219,7 +255,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       c.ownerIsB = ownerIsB;
       buf.nodes.push_back(c);
       NodeWork<D> w;
-      w.stiffness = stiffnessFactor<Formulation>(directionWeight, weights[i], weightToFactor);
+      w.stiffness = stiffnessFactor<Formulation>(weights[i], weightToFactor);
       w.area = directionWeight * weights[i];
       w.gradient = length;
       buf.work.push_back(w);
@@ -239,7 +275,7 @@ std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>
                            double offset, ThreadBuffers<D>& buf) {
   // The plane normal in the owner's body frame: distance = offset + nb . x_body.
   const Vec<D> nb = Ro.transpose() * plane.normal;
-  const double weightToFactor = 1.0 / referenceNodeWeight<D>(owner.contactSpacing());
+  const double weightToFactor = weightToFactorOf<D, Formulation>(owner, 1.0);
   const geometry::NodeTree<D>& tree = owner.nodeTree();
   const std::vector<Vec<D>>& nodes = owner.nodes().positions;
   const std::vector<double>& weights = owner.nodes().weights;
@@ -263,7 +299,7 @@ std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>
       c.ownerIsB = 0;
       buf.nodes.push_back(c);
       NodeWork<D> w;
-      w.stiffness = stiffnessFactor<Formulation>(1.0, weights[i], weightToFactor);
+      w.stiffness = stiffnessFactor<Formulation>(weights[i], weightToFactor);
       w.area = weights[i];
       buf.work.push_back(w);
     }
@@ -297,8 +333,27 @@ inline double boundaryWeight(double overlap, double normalSpeed, double dt) {
 template <int D, NormalModel Normal, bool Friction, bool Damping, class VelocityB>
 void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, std::size_t begin, const LawConstants& law,
               double invMassSum, double hertzRadius, const Vec<D>& xa, const Vec<D>& va, const Spin<D>& wa,
-              const Vec<D>& centreB, const VelocityB& velocityB, const HistoryView<D>& history) {
+              const Vec<D>& centreB, const VelocityB& velocityB, const HistoryView<D>& history,
+              const NewbornView& newborn) {
   const std::size_t end = buf.nodes.size();
+  // Each node contact's record in the history (both lists ascend by node key)
+  // and its spring's rest overlap: carried (and drawn in with the node), or
+  // its overlap at birth for a node born this step (NarrowPhase.h).
+  if (history.count > 0 || !newborn.empty()) {
+    std::uint32_t cursor = 0;
+    for (std::size_t j = begin; j < end; ++j) {
+      const NodeContact<D>& c = buf.nodes[j];
+      NodeWork<D>& w = buf.work[j];
+      const std::uint32_t key = nodeKey(c);
+      while (cursor < history.count && nodeKey(history.nodes[cursor]) < key) ++cursor;
+      if (cursor < history.count && nodeKey(history.nodes[cursor]) == key) {
+        w.history = cursor;
+        if (history.preload) w.preload = std::min(history.preload[cursor], c.overlap);
+      } else if (!newborn.empty()) {
+        w.preload = newborn.restOverlap(c);
+      }
+    }
+  }
   // Pair-level normal stiffness K; for Hertz also the force and its spreading weights w_i delta_i.
   double stiffness = 0.0, hertz = 0.0, deepest = 0.0, spreadTotal = 0.0;
   if constexpr (Normal == NormalModel::Linear) {
@@ -307,8 +362,9 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
     stiffness *= law.kn;
   } else {
     for (std::size_t j = begin; j < end; ++j) {
-      deepest = std::max(deepest, buf.nodes[j].overlap);
-      spreadTotal += buf.work[j].area * buf.nodes[j].overlap;
+      const double overlap = buf.nodes[j].overlap - buf.work[j].preload;
+      deepest = std::max(deepest, overlap);
+      spreadTotal += buf.work[j].area * overlap;
     }
     hertz = hertzForce(law.eStar, hertzRadius, deepest);
     stiffness = hertzStiffness(law.eStar, hertzRadius, deepest);
@@ -326,10 +382,10 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
 
   // Node by node: normal, damping and friction forces, summed into the pair.
   double elastic = 0.0, power = 0.0;
-  std::uint32_t cursor = 0;
   for (std::size_t j = begin; j < end; ++j) {
     NodeContact<D>& c = buf.nodes[j];
     NodeWork<D>& w = buf.work[j];
+    const double overlap = c.overlap - w.preload;  // the spring's own compression
     // Elastic normal force and the node's share of the pair's stiffness.
     double fn = 0.0, share = 0.0;
     if constexpr (Normal == NormalModel::Linear) {
@@ -338,11 +394,11 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
       // contacts conserve energy even where the interpolated level set is not
       // exactly a distance (|grad phi| != 1 deep inside or near corners).
       const double k = law.kn * w.stiffness;
-      fn = k * c.overlap * w.gradient;
+      fn = k * overlap * w.gradient;
       share = stiffness > 0.0 ? k / stiffness : 0.0;
-      elastic += 0.5 * k * c.overlap * c.overlap;
+      elastic += 0.5 * k * overlap * overlap;
     } else {
-      share = spreadTotal > 0.0 ? w.area * c.overlap / spreadTotal : 0.0;
+      share = spreadTotal > 0.0 ? w.area * overlap / spreadTotal : 0.0;
       fn = hertz * share;
     }
     Vec<D> force;
@@ -353,7 +409,7 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
       // Dashpot opposing the normal relative velocity, weighted by the part of
       // the step the node is in contact (see boundaryWeight).
       if constexpr (Damping) {
-        const double cn = damping * share * boundaryWeight(c.overlap, vn, law.dt);
+        const double cn = damping * share * boundaryWeight(overlap, vn, law.dt);
         // No tensile contact force: a separating dashpot may cancel the
         // spring's push but never pull (ContactLaw.h); the ledger books the
         // dashpot force actually applied.
@@ -375,9 +431,8 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
         // turned into the current tangent plane with its length kept.
         Vec<D> shear = Vec<D>::Zero();
         double oldEnergy = 0.0, old2 = 0.0;  // Mindlin: the spring's energy at its old stiffness, |s|^2
-        const std::uint32_t key = nodeKey(c);
-        while (cursor < history.count && nodeKey(history.nodes[cursor]) < key) ++cursor;
-        if (cursor < history.count && nodeKey(history.nodes[cursor]) == key) {
+        if (w.history >= 0 && history.shear) {
+          const std::size_t cursor = std::size_t(w.history);
           const Vec<D>& old = history.shear[cursor];
           shear = old - old.dot(c.normal) * c.normal;
           old2 = old.squaredNorm();
@@ -440,6 +495,13 @@ void withFlag(bool flag, F&& f) {
   }
 }
 
+// Birth records by owner id, then node (NewbornView's look-up order).
+void sortBirthRecords(std::vector<BirthNode>& records) {
+  std::stable_sort(records.begin(), records.end(), [](const BirthNode& x, const BirthNode& y) {
+    return x.id < y.id || (x.id == y.id && x.node < y.node);
+  });
+}
+
 bool keyLess(const HistoryPair& h, std::uint64_t idA, std::uint64_t other) {
   return h.idA < idA || (h.idA == idA && h.other < other);
 }
@@ -449,6 +511,45 @@ bool keyLess(const HistoryPair& h, std::uint64_t idA, std::uint64_t other) {
 template <int D>
 ContactSolver<D>::ContactSolver(const ContactLawDef& law) : law_(law) {
   validateContactLaw(law_);
+}
+
+template <int D>
+void ContactSolver<D>::markNewborn(std::uint64_t particleId, std::span<const std::uint32_t> nodes) {
+  for (std::uint32_t node : nodes) {
+    newborn_.push_back(BirthNode{particleId, kAnyPartner, node, 0, std::numeric_limits<double>::infinity()});
+  }
+}
+
+template <int D>
+void ContactSolver<D>::inheritRestOverlap(std::uint64_t particleId, std::uint64_t partner, std::uint32_t node,
+                                          double restOverlap) {
+  if (!(restOverlap > 0.0)) return;
+  newborn_.push_back(BirthNode{particleId, partner, node, 0, restOverlap});
+}
+
+template <int D>
+std::vector<typename ContactSolver<D>::RestOverlap> ContactSolver<D>::restOverlaps(const Particles<D>& particles,
+                                                                                   std::size_t index) const {
+  std::vector<RestOverlap> out;
+  if (preload_.empty()) return out;
+  for (std::size_t k = 0; k < pairs_.size(); ++k) {
+    const PairContact<D>& rec = pairs_[k];
+    const bool particlePair = k < particlePairCount_;
+    if (rec.a != index && !(particlePair && rec.b == index)) continue;
+    std::uint64_t keyOfB = 0;
+    if (particlePair) {
+      keyOfB = particles.id[rec.b];
+    } else {
+      keyOfB = (k < particlePairCount_ + planePairCount_ ? kPlaneTag : kToolTag) | std::uint64_t(rec.b);
+    }
+    const std::uint64_t idA = particles.id[rec.a];
+    for (std::uint32_t q = rec.firstNode; q < rec.firstNode + rec.nodeCount; ++q) {
+      if (!(preload_[q] > 0.0)) continue;
+      const NodeContact<D>& c = nodes_[q];
+      out.push_back(RestOverlap{c.ownerIsB ? keyOfB : idA, c.ownerIsB ? idA : keyOfB, c.node, preload_[q]});
+    }
+  }
+  return out;
 }
 
 template <int D>
@@ -527,6 +628,8 @@ void ContactSolver<D>::compute(const Particles<D>& particles, const std::vector<
       next(std::integral_constant<ForceFormulation, ForceFormulation::PerNode>{});
     }
   };
+  // Birth records in look-up order (added in any order since the last compute()).
+  if (!newborn_.empty()) sortBirthRecords(newborn_);
   withNormal([&](auto normal) {
     withFormulation([&](auto formulation) {
       withFlag(frictionOn(), [&](auto friction) {
@@ -574,22 +677,30 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     buf.cellChecks = 0;
   }
 
-  // The previous step's node contacts of a pair key, for friction.
+  // The previous step's node contacts of a pair key: shear (friction) and
+  // rest overlaps (history_ is empty when there are neither).
+  const bool withPreload = !preload_.empty();
   const auto historyOf = [&](std::uint64_t idA, std::uint64_t other) {
     HistoryView<D> view;
-    if constexpr (Friction) {
-      const auto it = std::lower_bound(history_.begin(), history_.end(), 0,
-                                       [&](const HistoryPair& h, int) { return keyLess(h, idA, other); });
-      if (it != history_.end() && it->idA == idA && it->other == other) {
-        view.nodes = nodes_.data() + it->first;
-        view.shear = shear_.data() + it->first;
-        view.count = it->count;
-      }
-    } else {
-      (void)idA;
-      (void)other;
+    if (history_.empty()) return view;
+    const auto it = std::lower_bound(history_.begin(), history_.end(), 0,
+                                     [&](const HistoryPair& h, int) { return keyLess(h, idA, other); });
+    if (it != history_.end() && it->idA == idA && it->other == other) {
+      view.nodes = nodes_.data() + it->first;
+      if (Friction && !shear_.empty()) view.shear = shear_.data() + it->first;
+      if (withPreload) view.preload = preload_.data() + it->first;
+      view.count = it->count;
     }
     return view;
+  };
+  // The nodes of a particle born this step, ascending.
+  const auto newbornOf = [&](std::uint64_t id) -> std::span<const BirthNode> {
+    if (newborn_.empty()) return {};
+    const auto first = std::lower_bound(newborn_.begin(), newborn_.end(), id,
+                                        [](const BirthNode& n, std::uint64_t key) { return n.id < key; });
+    auto last = first;
+    while (last != newborn_.end() && last->id == id) ++last;
+    return {first, last};
   };
   // Runs task k on the calling thread's buffers and records where its output went.
   const auto runTask = [&](std::size_t k, auto&& body) {
@@ -639,7 +750,8 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       PairDashpot<D> dash;
       applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, law, p.invMass[ia] + p.invMass[ib], radius, xa,
                                              p.velocity[ia], p.angularVelocity[ia], xb, velocityB,
-                                             historyOf(p.id[ia], p.id[ib]));
+                                             historyOf(p.id[ia], p.id[ib]),
+                                             NewbornView{newbornOf(p.id[ia]), newbornOf(p.id[ib]), p.id[ib], p.id[ia]});
       buf.pairs.push_back(rec);
       buf.dashpots.push_back(dash);
     });
@@ -672,7 +784,8 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, planeLaw, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
                                                plane.point, velocityB,
-                                               historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)));
+                                               historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)),
+                                               NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kPlaneTag | std::uint64_t(j), 0});
         buf.pairs.push_back(rec);
         buf.dashpots.push_back(dash);
       }
@@ -712,7 +825,8 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, toolLaw, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
                                                tool.position, velocityB,
-                                               historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)));
+                                               historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)),
+                                               NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kToolTag | std::uint64_t(j), 0});
         buf.pairs.push_back(rec);
         buf.dashpots.push_back(dash);
       }
@@ -741,8 +855,10 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   dashpots_.resize(pairTotal);
   nodes_.resize(nodeTotal);
   shear_.resize(friction ? nodeTotal : 0);
+  preload_.resize(nodeTotal);
+  bool anyPreload = false;
   const std::ptrdiff_t taskCount = std::ptrdiff_t(tasks_.size());
-#pragma omp parallel for schedule(static) if (taskCount > 1024)
+#pragma omp parallel for schedule(static) if (taskCount > 1024) reduction(|| : anyPreload)
   for (std::ptrdiff_t k = 0; k < taskCount; ++k) {
     const TaskOutput& t = tasks_[std::size_t(k)];
     const ThreadBuffers<D>& buf = threads_[t.thread];
@@ -755,6 +871,9 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
     for (std::uint32_t q = 0; q < t.nodeCount; ++q) {
       nodes_[t.outNode + q] = buf.nodes[t.firstNode + q];
       if (friction) shear_[t.outNode + q] = buf.work[t.firstNode + q].shear;
+      const double preload = buf.work[t.firstNode + q].preload;
+      preload_[t.outNode + q] = preload;
+      anyPreload = anyPreload || preload > 0.0;
     }
   }
 
@@ -772,9 +891,13 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
     cellChecks_ += buf.cellChecks;
   }
 
-  // Shear history for the next step: the pair keys, sorted, pointing into nodes_ / shear_.
+  // The marks of nodes born this step are used.
+  newborn_.clear();
+  // History for the next step: the pair keys, sorted, pointing into nodes_,
+  // shear_ and preload_; none without friction and rest overlaps.
+  if (!anyPreload) preload_.clear();
   history_.clear();
-  if (!friction) return;
+  if (!friction && !anyPreload) return;
   for (std::size_t k = 0; k < pairs_.size(); ++k) {
     const PairContact<D>& rec = pairs_[k];
     HistoryPair h;
@@ -833,11 +956,13 @@ const BoundaryLoads<D>& ContactSolver<D>::accumulate(Particles<D>& particles) {
 
 template <int D>
 void ContactSolver<D>::saveState(StateWriter& out) const {
-  out.putTag("contacts 3");  // 2: with the pair dashpots; 3: pair records without padding
+  out.putTag("contacts 4");  // 2: with the pair dashpots; 3: pair records without padding; 4: rest overlaps
   out.putVector(pairs_);
   out.putVector(dashpots_);
   out.putVector(nodes_);
   out.putVector(shear_);
+  out.putVector(preload_);
+  out.putVector(newborn_);
   out.putVector(history_);
   for (std::size_t v : {particlePairCount_, planePairCount_, particleCount_, planeCount_, toolCount_}) {
     out.put(std::uint64_t(v));
@@ -853,11 +978,13 @@ void ContactSolver<D>::saveState(StateWriter& out) const {
 
 template <int D>
 void ContactSolver<D>::loadState(StateReader& in) {
-  in.expectTag("contacts 3");
+  in.expectTag("contacts 4");
   in.getVector(pairs_);
   in.getVector(dashpots_);
   in.getVector(nodes_);
   in.getVector(shear_);
+  in.getVector(preload_);
+  in.getVector(newborn_);
   in.getVector(history_);
   for (std::size_t* v : {&particlePairCount_, &planePairCount_, &particleCount_, &planeCount_, &toolCount_}) {
     *v = std::size_t(in.get<std::uint64_t>());

@@ -124,6 +124,8 @@ StiffestContact<D> stiffestContact(const geometry::Shape<D>& shape, const NodeSt
   const auto& w = shape.nodes().weights;
   if (x.empty()) fail("stiffestContact: the shape has no surface nodes");
   const double depth = options.maxOverlap > 0.0 ? options.maxOverlap : 0.1 * shape.contactSpacing();
+  // The per-node part at this shape's own scale (ShapeOptions::nodeStiffnessScale).
+  const double perNode = law.perNode * shape.nodeStiffnessScale();
 
   // Mass matrix per unit density, as the scaling M^(-1/2) of the eigenproblem.
   VecQ scale;
@@ -150,7 +152,7 @@ StiffestContact<D> stiffestContact(const geometry::Shape<D>& shape, const NodeSt
     std::size_t count = 0;
     for (std::size_t i = 0; i < x.size(); ++i) {
       if (n.dot(x[i]) < support - depth) continue;
-      const double k = law.perNode + law.perWeight * w[i];
+      const double k = perNode + law.perWeight * w[i];
       VecQ g;
       g << n, leverArm<D>(x[i], n);
       K += k * g * g.transpose();

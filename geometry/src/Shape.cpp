@@ -9,6 +9,21 @@
 
 namespace lsdem::geometry {
 
+namespace {
+
+// The contact options every way of making a shape checks.
+void validateContactOptions(const ShapeOptions& options) {
+  if (!(options.contactSpacing >= 0.0) || !std::isfinite(options.contactSpacing)) {
+    throw std::invalid_argument("contact spacing must be finite and >= 0, got " + std::to_string(options.contactSpacing));
+  }
+  if (!(options.nodeStiffnessScale > 0.0) || !std::isfinite(options.nodeStiffnessScale)) {
+    throw std::invalid_argument("node stiffness scale must be finite and > 0, got " +
+                                std::to_string(options.nodeStiffnessScale));
+  }
+}
+
+}  // namespace
+
 template <int D>
 std::shared_ptr<const Shape<D>> Shape<D>::fromGrid(Grid<D> grid, const ShapeOptions& options) {
   if (!(options.nodesPerCell > 0.0) || !std::isfinite(options.nodesPerCell)) {
@@ -44,9 +59,7 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromGridNodesAndMass(Grid<D> grid, Nod
   if (!massGrid.centroid.allFinite() || !massGrid.secondMoment.allFinite()) {
     throw std::invalid_argument("the shape's mass properties are not finite");
   }
-  if (!(options.contactSpacing >= 0.0) || !std::isfinite(options.contactSpacing)) {
-    throw std::invalid_argument("contact spacing must be finite and >= 0, got " + std::to_string(options.contactSpacing));
-  }
+  validateContactOptions(options);
   std::shared_ptr<Shape> shape(new Shape());
   shape->options_ = options;
 
@@ -132,6 +145,7 @@ std::shared_ptr<const Shape<D>> Shape<D>::fromParts(Parts parts) {
       throw std::invalid_argument("shape parts: node " + std::to_string(i) + " has a non-finite position or a bad weight");
     }
   }
+  validateContactOptions(parts.options);
   if (!parts.mass.secondMoment.allFinite() || !parts.bodyToGrid.rotation.allFinite() ||
       !parts.bodyToGrid.translation.allFinite()) {
     throw std::invalid_argument("shape parts: mass properties or body-to-grid map not finite");
@@ -152,6 +166,13 @@ template <int D>
 void Shape<D>::deriveSearchData() {
   nodeTree_ = NodeTree<D>::build(nodes_.positions);
   levelSetSlope_ = grid_.maxGradientNorm();
+}
+
+template <int D>
+double Shape<D>::meanNodeWeight() const {
+  double sum = 0.0;
+  for (double w : nodes_.weights) sum += w;
+  return sum / double(nodes_.size());
 }
 
 template <int D>

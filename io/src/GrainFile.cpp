@@ -36,10 +36,10 @@ using geometry::Shape;
 using geometry::Vec;
 
 /// Format version written by this code (text key `lsdem_grain`, binary header).
-constexpr std::uint32_t kVersion = 1;         // text form (contact_spacing is an optional key)
-// 2 adds options.contactSpacing; 3 a closing CRC-32 of every byte before it.
-// Versions 1 and 2 are still read.
-constexpr std::uint32_t kBinaryVersion = 3;
+constexpr std::uint32_t kVersion = 1;  // text form (contact_spacing, node_stiffness_scale are optional keys)
+// 2 adds options.contactSpacing; 3 a closing CRC-32 of every byte before it;
+// 4 options.nodeStiffnessScale before the CRC. Versions 1 to 3 are still read.
+constexpr std::uint32_t kBinaryVersion = 4;
 /// Binary magic: a non-ASCII first byte (so text and binary are told apart by
 /// one byte), the name, and a newline that catches text-mode line-end mangling.
 constexpr char kMagic[8] = {'\x89', 'L', 'S', 'D', 'E', 'M', 'G', '\n'};
@@ -128,6 +128,7 @@ std::string textGrain(const Shape<D>& shape) {
   o.line("nodes_per_cell", p.options.nodesPerCell);
   o.text(std::string("mass_method ") + massMethodName(p.options.massMethod) + "\n");
   if (p.options.contactSpacing > 0.0) o.line("contact_spacing", p.options.contactSpacing);
+  if (p.options.nodeStiffnessScale != 1.0) o.line("node_stiffness_scale", p.options.nodeStiffnessScale);
   // Body frame, mass properties per unit density, descriptors.
   o.line("body_to_grid_rotation", flat<D>(p.bodyToGrid.rotation));
   o.line("body_to_grid_translation", flat<D>(p.bodyToGrid.translation));
@@ -223,6 +224,7 @@ std::string binaryGrain(const Shape<D>& shape) {
   putRaw<double>(b, p.options.nodesPerCell);
   putRaw<std::uint32_t>(b, p.options.massMethod == MassMethod::Paper ? 0u : 1u);
   putRaw<double>(b, p.options.contactSpacing);
+  putRaw<double>(b, p.options.nodeStiffnessScale);
   // Checksum of everything above.
   putRaw<std::uint32_t>(b, crc32Of(b.data(), b.size()));
   return b;
@@ -383,6 +385,10 @@ std::shared_ptr<const Shape<D>> readBinary(std::istream& in, const std::string& 
     p.options.contactSpacing = b.real("contact_spacing");
     if (!(p.options.contactSpacing >= 0.0)) b.fail("contact_spacing", "must be >= 0");
   }
+  if (version >= 4) {
+    p.options.nodeStiffnessScale = b.real("node_stiffness_scale");
+    if (!(p.options.nodeStiffnessScale > 0.0)) b.fail("node_stiffness_scale", "must be positive");
+  }
   if (version >= 3) {
     const std::uint32_t computed = b.crc();
     if (b.raw<std::uint32_t>("checksum") != computed) {
@@ -446,6 +452,7 @@ template <int D>
 const std::map<std::string, int>& numberKeys() {
   static const std::map<std::string, int> keys = {
       {"origin", D},          {"spacing", 1},          {"nodes_per_cell", 1},     {"contact_spacing", 1},
+      {"node_stiffness_scale", 1},
       {"body_to_grid_rotation", D * D},                {"body_to_grid_translation", D},
       {"volume", 1},          {"centroid", D},         {"second_moment", D * D},
       {"bounding_radius", 1}, {"descriptor_volume", 1}, {"surface_area", 1},
@@ -694,6 +701,12 @@ class TextGrainReader {
     if (numbers_.count("contact_spacing")) {
       options_.contactSpacing = scalar("contact_spacing");
       if (!(options_.contactSpacing > 0.0)) fail(lines_.at("contact_spacing"), "contact_spacing", "must be positive");
+    }
+    if (numbers_.count("node_stiffness_scale")) {
+      options_.nodeStiffnessScale = scalar("node_stiffness_scale");
+      if (!(options_.nodeStiffnessScale > 0.0)) {
+        fail(lines_.at("node_stiffness_scale"), "node_stiffness_scale", "must be positive");
+      }
     }
     // Which form: any full-form key asks for all of them.
     const bool full = std::any_of(fullFormKeys().begin(), fullFormKeys().end(),

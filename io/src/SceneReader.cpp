@@ -563,6 +563,7 @@ class SceneReader {
     if (minNodes < 0 || minNodes > 1000000) r.fail("min_nodes", "must be in [0, 1e6]");
     def.minNodes = int(minNodes);
     def.haltBelowMinimum = r.boolean("halt_below_minimum", false);
+    def.relaxNewContacts = r.boolean("relax_new_contacts", def.relaxNewContacts);
     def.minBreakableVolume = r.number("min_breakable_volume", 0.0);
     if (def.minBreakableVolume < 0.0) r.fail("min_breakable_volume", "must be >= 0");
     // Re-gridding of small fragments (Split.h, docs/breakage.md).
@@ -583,9 +584,6 @@ class SceneReader {
     if (regridNodes == "parent_spacing") {
       def.split.regridKeepsNodeSpacing = true;
     } else if (regridNodes == "per_new_cell") {
-      if (scene_.world.contact.formulation == dynamics::ForceFormulation::PerNode) {
-        r.fail("regrid_nodes", "\"per_new_cell\" needs contact.formulation = \"area_weighted\" (per-node springs would stiffen re-gridded fragments)");
-      }
       def.split.regridKeepsNodeSpacing = false;
     } else {
       r.fail("regrid_nodes", "must be \"parent_spacing\" or \"per_new_cell\", got \"" + regridNodes + "\"");

@@ -104,7 +104,7 @@ void checkBallSplit(const SplitOptions& options, const BallTolerances& tol) {
   ASSERT_TRUE(split.isSplit);
   ASSERT_EQ(split.fragments.size(), 2u);
   EXPECT_EQ(split.droppedCount, 0);
-  EXPECT_LT(std::abs(split.rawRelativeError), 1e-3);
+  EXPECT_LT(std::abs(split.rawRelativeError), 3e-3);  // 2.2e-3 in 3D: the narrow band's edge (docs/breakage.md)
   EXPECT_LT(split.inertiaRelativeError, 0.01);
   EXPECT_LT(split.centroidShift.norm(), 0.01 * h);
   double sum = 0.0;
@@ -174,11 +174,13 @@ double capOffset(double fraction) {
   return 0.5 * (lo + hi);
 }
 
-// A cap of 2 % of the ball at 20 cells across (1.7 cells thick): its mass is
-// its share of the parent's, within 3 % (2D) / 5 % (3D, measured +4.0 %: the
-// smoothing band of the parent's surface, 3 cells wide, is wider than the cap
-// where it meets the cut) of the analytic cap; its own grid's estimate would
-// be +20-120 % for such thin pieces. Re-gridded, it holds at least the node floor.
+// A cap of 2 % of the ball at 20 cells across (1.0 cells thick in 2D, 1.7 in
+// 3D): its mass is its share of the parent's, within 3 % of the analytic cap
+// (measured -1.1 % in 2D, -1.8 % in 3D: the multilinear interpolant's own cap
+// is 1.2 % short in 2D); its own grid's estimate would be +20-120 % for such
+// thin pieces. Before the shares used a narrow band and split the sub-cells
+// the cut crosses (partitionMass), the 3D cap was +4.0 %.
+// Re-gridded, it holds at least the node floor.
 template <int D>
 void checkSmallCap(const SplitOptions& options, double tolerance) {
   const double a = capOffset<D>(0.02);
@@ -224,8 +226,8 @@ TEST(Split, SmallSegmentMassIsItsShare2D) {
   checkSmallCap<2>(regrid(), 0.03);
 }
 TEST(Split, SmallCapMassIsItsShare3D) {
-  checkSmallCap<3>(noRegrid(), 0.05);
-  checkSmallCap<3>(regrid(), 0.05);
+  checkSmallCap<3>(noRegrid(), 0.03);
+  checkSmallCap<3>(regrid(), 0.03);
 }
 
 // "parent_spacing": a re-gridded fragment keeps its parent's node spacing in
@@ -567,3 +569,50 @@ TEST(Split, FragmentBoundingSpheresHoldTheirMaterial) {
   EXPECT_GE(checked, 12u);
   EXPECT_LE(worst, 0.0);
 }
+
+// A fragment re-gridded with nodes closer together than its parent's keeps
+// the parent's per-node contact stiffness per unit surface: its
+// nodeStiffnessScale is the ratio of the mean node weights, so the sum of
+// the node stiffnesses along a face of the parent it keeps is the parent's
+// (per-node law; before, a thin slab off a box, re-gridded 4x finer, was 4x
+// stiffer along that face, and splits made energy). A fragment on the
+// parent's grid keeps the parent's factor. The factor evens out the mean
+// node weight over the whole fragment, so a face whose nodes stand for more
+// or less than the mean differs by that spread: measured 2D +0.3 %, 3D +9.4 %
+// (the slab's remeshed faces against the box's).
+template <int D>
+void checkStiffnessPerSurface(double tolerance) {
+  const double h = 0.05;
+  Vec<D> half = Vec<D>::Constant(0.5);
+  half[0] = 1.0;
+  const auto parent = Shape<D>::fromGrid(lsdem::geometry::boxGrid<D>(half, 0.0, h));
+  // The grid frame's +y face, in the parent's body frame; a slab 1.6 cells thick off it.
+  const Vec<D> n = parent->bodyToGrid().rotation.transpose() * Vec<D>::UnitY();
+  SplitOptions options = regrid();
+  const SplitResult<D> split = splitShape<D>(*parent, flat<D>(bodyPlane<D>(*parent, Vec<D>::UnitY(), 0.5 - 1.6 * h)), options);
+  ASSERT_EQ(split.fragments.size(), 2u);
+  const Fragment<D>& slab = split.fragments[1];
+  const Fragment<D>& rest = split.fragments[0];
+  ASSERT_TRUE(slab.regridded);
+  ASSERT_FALSE(rest.regridded);
+  EXPECT_EQ(rest.shape->nodeStiffnessScale(), 1.0);
+  const double ratio = slab.shape->meanNodeWeight() / parent->meanNodeWeight();
+  EXPECT_LT(ratio, 0.5);  // nodes per area several times the parent's
+  EXPECT_NEAR(slab.shape->nodeStiffnessScale(), ratio, 1e-12 * ratio);
+  // Per-node stiffness summed over the face (nodes within a quarter cell of it), parent frame.
+  const auto faceStiffness = [&](const Shape<D>& shape, const lsdem::geometry::Rigid<D>& toParent) {
+    double top = -1e300;
+    for (const Vec<D>& x : shape.nodes().positions) top = std::max(top, n.dot(toParent.apply(x)));
+    double sum = 0.0;
+    for (const Vec<D>& x : shape.nodes().positions) {
+      if (n.dot(toParent.apply(x)) > top - 0.25 * h) sum += shape.nodeStiffnessScale();
+    }
+    return sum;
+  };
+  const double before = faceStiffness(*parent, lsdem::geometry::Rigid<D>{});
+  const double after = faceStiffness(*slab.shape, slab.childToParent);
+  EXPECT_NEAR(after, before, tolerance * before) << "face stiffness in node units, parent " << before;
+}
+
+TEST(Split, RegriddedFragmentKeepsStiffnessPerSurface2D) { checkStiffnessPerSurface<2>(0.05); }
+TEST(Split, RegriddedFragmentKeepsStiffnessPerSurface3D) { checkStiffnessPerSurface<3>(0.12); }

@@ -474,3 +474,84 @@ TEST(NarrowPhase, HistorySurvivesReindexing) {
   p.remove(1);
   EXPECT_THROW(solver.accumulate(p), std::invalid_argument);
 }
+
+// Springs born relaxed (ContactSolver::markNewborn): a disc whose nodes are
+// marked as new carries no force at the overlap it is found with; pressed
+// deeper it carries kn x the extra overlap per node; drawn out, the rest
+// overlap follows it (a later press starts from where it was drawn out to);
+// a node without a mark, and a compute() after the marked one, are unaffected.
+TEST(NarrowPhase, SpringsBornRelaxedActOnTheExtraOverlapOnly) {
+  Particles<2> p;
+  ParticleDef<2> def;
+  def.shape = test::sphereShape<2>(0.5, 10);
+  def.position = Vec<2>(0.0, 0.48);  // 0.02 into the floor
+  p.add(def);
+  const std::vector<Plane<2>> floor{Plane<2>{Vec<2>::Zero(), Vec<2>::UnitY(), Vec<2>::Zero()}};
+  ContactLawDef law;
+  law.hasDamping = false;
+  law.hasFriction = false;
+  const double dt = 1e-5;
+  // Reference: the same contact without marks.
+  ContactSolver<2> plain(law);
+  plain.compute(p, {}, floor, {}, dt);
+  ASSERT_EQ(plain.planeContacts().size(), 1u);
+  const std::uint32_t touching = plain.planeContacts()[0].nodeCount;
+  ASSERT_GE(touching, 2u);
+  EXPECT_GT(plain.elasticEnergy(), 0.0);
+  EXPECT_TRUE(plain.nodePreload().empty());
+
+  ContactSolver<2> solver(law);
+  std::vector<std::uint32_t> all(def.shape->nodes().size());
+  for (std::uint32_t n = 0; n < all.size(); ++n) all[n] = n;
+  solver.markNewborn(p.id[0], all);
+  solver.compute(p, {}, floor, {}, dt);
+  ASSERT_EQ(solver.planeContacts().size(), 1u);
+  EXPECT_EQ(solver.planeContacts()[0].nodeCount, touching);
+  EXPECT_EQ(solver.planeContacts()[0].force.norm(), 0.0);
+  EXPECT_EQ(solver.elasticEnergy(), 0.0);
+  ASSERT_EQ(solver.nodePreload().size(), touching);
+  for (std::uint32_t q = 0; q < touching; ++q) EXPECT_EQ(solver.nodePreload()[q], solver.nodeContacts()[q].overlap);
+  // What the disc's fragments would take over: its nodes' rest overlaps against the floor.
+  const auto rest = solver.restOverlaps(p, 0);
+  ASSERT_EQ(rest.size(), touching);
+  EXPECT_EQ(rest[0].owner, p.id[0]);
+  EXPECT_EQ(rest[0].node, solver.nodeContacts()[0].node);
+
+  // Pressed 0.01 deeper: kn x 0.01 per node that was touching (the marks are gone).
+  p.position[0][1] -= 0.01;
+  solver.compute(p, {}, floor, {}, dt);
+  plain.compute(p, {}, floor, {}, dt);
+  double expected = 0.0;
+  for (std::size_t q = 0; q < solver.nodeContacts().size(); ++q) {
+    const double extra = solver.nodeContacts()[q].overlap - solver.nodePreload()[q];
+    EXPECT_GE(extra, 0.0);
+    EXPECT_LE(extra, 0.01 + 1e-12);
+    expected += law.kn * extra;
+  }
+  EXPECT_NEAR(solver.planeContacts()[0].force[1], expected, 1e-9 * expected);
+  EXPECT_NEAR(expected, law.kn * 0.01 * touching, 0.01 * law.kn * 0.01 * touching);
+  EXPECT_LT(solver.planeContacts()[0].force[1], 0.5 * plain.planeContacts()[0].force[1]);
+
+  // Drawn out to 0.005 deep: no force, the rest overlaps follow the nodes.
+  p.position[0][1] = 0.495;
+  solver.compute(p, {}, floor, {}, dt);
+  EXPECT_EQ(solver.planeContacts()[0].force.norm(), 0.0);
+  // Pressed back by 0.004: kn x 0.004 per node still touching, not the 0.02 it was born with.
+  p.position[0][1] = 0.491;
+  solver.compute(p, {}, floor, {}, dt);
+  const std::uint32_t now = solver.planeContacts()[0].nodeCount;
+  EXPECT_LE(solver.planeContacts()[0].force[1], law.kn * 0.004 * now * (1.0 + 1e-9));
+
+  // A rest overlap taken over by another id (a fragment), against the floor's key only.
+  ContactSolver<2> heir(law);
+  Particles<2> q = p;
+  q.id[0] = 7;
+  q.position[0][1] = 0.48;
+  for (const auto& r : rest) heir.inheritRestOverlap(7, r.partner, r.node, r.restOverlap);
+  heir.compute(q, {}, floor, {}, dt);
+  EXPECT_EQ(heir.elasticEnergy(), 0.0);
+  ContactSolver<2> stranger(law);  // the floor's key does not match another partner
+  for (const auto& r : rest) stranger.inheritRestOverlap(7, r.partner + 1, r.node, r.restOverlap);
+  stranger.compute(q, {}, floor, {}, dt);
+  EXPECT_GT(stranger.elasticEnergy(), 0.0);
+}

@@ -6,6 +6,7 @@
 #include "support/Files.h"
 #include "lsdem/io/GrainFile.h"
 
+#include "lsdem/geometry/Primitives.h"
 #include "lsdem/geometry/ShapeDef.h"
 #include "lsdem/io/InputError.h"
 #include "support/Shapes.h"
@@ -94,6 +95,8 @@ void expectSameShape(const Shape<D>& a, const Shape<D>& b) {
   expectSame(pa.descriptors.intermediateAxis, pb.descriptors.intermediateAxis, "intermediate axis");
   expectSame(pa.boundingRadius, pb.boundingRadius, "bounding radius");
   expectSame(pa.options.nodesPerCell, pb.options.nodesPerCell, "nodes per cell");
+  expectSame(pa.options.contactSpacing, pb.options.contactSpacing, "contact spacing");
+  expectSame(pa.options.nodeStiffnessScale, pb.options.nodeStiffnessScale, "node stiffness scale");
   EXPECT_EQ(pa.options.massMethod, pb.options.massMethod);
   // A look-up with gradient at body-frame points inside, on and outside the grain.
   for (double s : {0.0, 0.3, 0.77, 1.2}) {
@@ -172,6 +175,28 @@ TEST(GrainFile, TextAndBinaryRoundTripsAreExact3D) {
       expectSameShape<3>(*shape, *roundTrip<3>(*shape, f));
     }
   }
+}
+
+// A re-gridded fragment's contact options (contact spacing, per-node
+// stiffness scale) survive both forms; a text grain can set them by hand.
+TEST(GrainFile, ContactOptionsRoundTrip) {
+  geometry::ShapeOptions options;
+  options.contactSpacing = 0.07;
+  options.nodeStiffnessScale = 0.37;
+  const auto shape = geometry::Shape<2>::fromGrid(geometry::sphereGrid<2>(0.5, 0.05), options);
+  for (io::GrainFormat f : {io::GrainFormat::Text, io::GrainFormat::Binary}) {
+    const auto back = roundTrip<2>(*shape, f);
+    EXPECT_EQ(back->nodeStiffnessScale(), 0.37);
+    EXPECT_EQ(back->contactSpacing(), 0.07);
+  }
+  const auto minimal = [](const std::string& extra) {
+    std::istringstream in(minimalCircle(0.3, 16, 0.05, extra));
+    return io::readGrain<2>(in, "bad.lsg");
+  };
+  EXPECT_EQ(minimal("")->nodeStiffnessScale(), 1.0);
+  EXPECT_EQ(minimal("node_stiffness_scale 0.5\n")->nodeStiffnessScale(), 0.5);
+  expectError(readError<2>(minimalCircle(0.3, 16, 0.05, "node_stiffness_scale -1\n")), 23, "node_stiffness_scale",
+              "must be positive");
 }
 
 TEST(GrainFile, TextFormHasTheDocumentedKeysAndBinaryTheMagic) {
@@ -395,7 +420,8 @@ TEST(GrainFile, BadBinaryInputNamesFileAndKey) {
   // Truncated in the values and at the last field.
   expectError(readError<3>(bin.substr(0, 100)), 0, "values", "truncated");
   expectError(readError<3>(bin.substr(0, bin.size() - 1)), 0, "checksum", "truncated");
-  expectError(readError<3>(bin.substr(0, bin.size() - 5)), 0, "contact_spacing", "truncated");
+  expectError(readError<3>(bin.substr(0, bin.size() - 5)), 0, "node_stiffness_scale", "truncated");
+  expectError(readError<3>(bin.substr(0, bin.size() - 13)), 0, "contact_spacing", "truncated");
   // A NaN value in the grid (first value at byte 16 + 12 + 24 + 8 + 8 = 68).
   std::string nan = bin;
   const float q = std::nanf("");

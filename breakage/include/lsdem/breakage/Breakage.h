@@ -121,6 +121,12 @@ struct BreakageDef {
   /// minVolume well below it, pieces between the two are kept whole and only
   /// chips below minVolume leave as fines.
   double minBreakableVolume = 0.0;
+  /// Contacts a split creates start relaxed (dynamics::ContactSolver::
+  /// markNewborn): a fragment's new-face nodes born inside another body carry
+  /// no force at the overlap they are born with, and the rest overlaps of the
+  /// parent's contacts pass to its fragments. false: they push at once (a
+  /// split then adds their spring energy; docs/breakage.md, "Energy check").
+  bool relaxNewContacts = true;
   bool buckling = false;         ///< eq. 21 buckling mode (off by default)
   /// Buckling trigger: circumscribed sphere (circle) volume / grain volume > this (> 1).
   double bucklingRatio = 10.0;
@@ -280,6 +286,19 @@ class Breakage final : public dynamics::Effect<D> {
   std::vector<Pending> queue_;
   std::vector<std::size_t> parents_;
   std::vector<dynamics::ParticleDef<D>> adds_;
+  std::vector<std::vector<std::uint32_t>> addCutFace_;  // aligned with adds_: Fragment::cutFaceNodes
+  // A rest overlap a fragment takes over: of its node (childOwns; key = the
+  // partner), or of another body's node inside it (key = that body's id).
+  struct Inherited {
+    std::uint64_t key = 0;
+    std::uint32_t node = 0;
+    double restOverlap = 0.0;
+    bool childOwns = true;
+  };
+  std::vector<std::vector<Inherited>> addInherited_;  // aligned with adds_
+  static std::vector<Inherited> inheritedRestOverlaps(
+      const std::vector<typename dynamics::ContactSolver<D>::RestOverlap>& rest, std::uint64_t parentId,
+      const geometry::Shape<D>& parent, const Fragment<D>& f);
   // Log and totals.
   std::vector<BreakageEvent<D>> events_;
   double rawVolumeError_ = 0.0;

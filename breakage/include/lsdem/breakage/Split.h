@@ -17,12 +17,15 @@
 /// (the smoothed Heaviside H_eps(-phi) of the parent's grid, both estimators'
 /// sums), not its own grid's estimate: every parent grid node whose cell the
 /// cut cannot cross gives its sample to the piece that owns it; a node whose
-/// cell the cut may cross gives 4^D sub-cell samples of the multilinear
-/// interpolant, each to the side of the cut it lies on (a plane exactly), so
-/// a piece a cell or two thick is not inflated by the smoothing band of its
-/// own cut face. The shares add up to the parent's volume to the quadrature
-/// difference between sub-cell and node samples along the cut (reported as
-/// SplitResult::rawRelativeError, ~1e-4), which one common factor removes:
+/// cell the cut may cross, or that is near both the cut and the surface,
+/// gives 4^D sub-cell samples of the multilinear interpolant with a band 4
+/// times narrower, each to the side of the cut it lies on (a plane exactly;
+/// a sample within half a sub-cell of it is shared in proportion), so a
+/// piece a cell or two thick is inflated neither by the smoothing band of
+/// its own cut face nor by that of the surface it meets the cut beside. The
+/// shares add up to the parent's volume to the quadrature difference between
+/// the sub-cell and node samples and between the two bands (reported as
+/// SplitResult::rawRelativeError, ~1e-4 to 3e-3), which one common factor removes:
 ///     volume_k = share_k * parentVolume / sum_j share_j,
 /// and the same factor scales the share's second moments. The child shape is
 /// made with these mass properties (Shape::fromGridNodesAndMass), so
@@ -56,9 +59,12 @@
 /// density per new cell, at least minFragmentNodes of them, then moved in to
 /// within 1e-4 parent cells of the parent's surface where the new grid's
 /// interpolation left them outside it. The mass
-/// stays the share above. The child's contact spacing (ShapeOptions::
-/// contactSpacing) stays the parent's, so its contact stiffness per unit area
-/// is that of the parent (area-weighted law).
+/// stays the share above. The child's contact stiffness per unit area is that
+/// of the parent under either law: its contact spacing (ShapeOptions::
+/// contactSpacing) stays the parent's (area-weighted law), and its
+/// ShapeOptions::nodeStiffnessScale is the parent's times its mean node weight
+/// over the parent's (per-node law: a fragment with nodes twice as dense has
+/// springs half as stiff).
 ///
 /// Centroids. The fragments stay exactly where the parent's material was
 /// (c_k: child centroid in the parent body frame, from its own grid). Their
@@ -98,6 +104,7 @@
 
 #include <memory>
 #include <optional>
+#include <cstdint>
 #include <vector>
 
 namespace lsdem::breakage {
@@ -134,6 +141,13 @@ struct Fragment {
   double volume = 0.0;     ///< the child's share of the parent's volume (file comment), world units^D
   int side = 0;            ///< -1: the phi_f < 0 side (eq. 15); +1: the phi_f > 0 side (eq. 14)
   bool regridded = false;  ///< the child got a finer grid of its own (SplitOptions::regridCells)
+  /// The child's nodes on its new face: on the fracture surface (within a
+  /// quarter of its own cell) and more than a twentieth of a parent cell
+  /// inside the parent's surface, ascending. They were not a surface of the
+  /// parent: where one is born inside another body, its spring starts
+  /// relaxed (dynamics::ContactSolver::markNewborn), so a split stores no
+  /// energy in contacts that did not exist before it.
+  std::vector<std::uint32_t> cutFaceNodes;
 
   /// @brief volume / the child shape's volume: the factor applied to the
   /// child's mass and inertia per unit density; 1 (the shape carries its share).

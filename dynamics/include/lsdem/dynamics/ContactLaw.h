@@ -15,8 +15,12 @@
 ///
 /// Normal models
 /// - Linear + PerNode (the paper, Tables 1-2): every node contact carries
-///   F_i = kn delta_i along its normal; `kn` is the stiffness of one node, N/m.
-///   The stiffness of a contact patch grows with the node density.
+///   F_i = kn s delta_i along its normal; `kn` is the stiffness of one node, N/m.
+///   The stiffness of a contact patch grows with the node density. s is the
+///   node owner's Shape::nodeStiffnessScale(): 1 for every grain a scene
+///   makes; a fragment re-gridded with its nodes closer together than its
+///   parent's gets the ratio of their mean node weights, so breaking does not
+///   stiffen the material.
 /// - Linear + AreaWeighted: every node contact carries
 ///   F_i = kn delta_i w_i / w_ref, with w_i the node's length (2D) or area (3D)
 ///   share (Shape::nodes().weights) and w_ref = referenceNodeWeight<D>(h) for

@@ -96,6 +96,8 @@ struct NodeWork {
   double area = 0.0;               ///< direction weight x node weight w_i (m in 2D, m^2 in 3D)
   double gradient = 1.0;           ///< |grad phi| of the other body's level set at the node (1 for planes)
   Vec<D> shear = Vec<D>::Zero();   ///< shear displacement after this step, world frame, m
+  double preload = 0.0;            ///< the spring's rest overlap (ContactSolver::markNewborn), m
+  std::int64_t history = -1;       ///< its record in the pair's history, or -1
 };
 
 /// Output buffers of one thread (internal); aligned so threads do not share cache lines.
@@ -130,6 +132,18 @@ struct HistoryPair {
 };
 static_assert(sizeof(HistoryPair) == 24);  // no padding: written raw to checkpoints (State.h)
 
+/// A rest overlap a node contact found without history starts with
+/// (internal; ContactSolver::markNewborn, inheritRestOverlap).
+struct BirthNode {
+  std::uint64_t id = 0;        ///< the node owner's global id
+  std::uint64_t other = 0;     ///< the partner's history key (HistoryPair::other or a particle id); kAnyPartner: any
+  std::uint32_t node = 0;      ///< node index in the owner's shape
+  std::uint32_t reserved = 0;  ///< zero: no padding in checkpoints
+  double restOverlap = 0.0;    ///< m; infinity: the overlap it is found with
+};
+static_assert(sizeof(BirthNode) == 32);
+inline constexpr std::uint64_t kAnyPartner = ~std::uint64_t(0);
+
 }  // namespace detail
 
 /// @brief Finds the node contacts of particle pairs, particles and planes, and
@@ -143,6 +157,15 @@ static_assert(sizeof(HistoryPair) == 24);  // no padding: written raw to checkpo
 /// Shear history is keyed by (global id of a, global id of b | plane index |
 /// tool index, owner side, node index), so it survives particles being removed
 /// or reordered; a node contact that is absent in one step loses its history.
+///
+/// Springs born relaxed (markNewborn). A node on a fragment's new face can be
+/// born inside another body (the cut runs through a contact). Its node
+/// contact then starts with a rest overlap delta_0 = its overlap at birth, and
+/// its spring acts on delta - delta_0 only; delta_0 follows the node out
+/// (delta_0 = min(delta_0, delta) each step) and is gone when the contact
+/// ends. So a split puts no energy into springs that did not exist before it
+/// (docs/breakage.md, "Energy check"). The history is kept whenever a contact
+/// carries a rest overlap, with or without friction.
 /// Planes and tools are keyed by their index in the lists passed to compute(),
 /// which must therefore keep their order between steps.
 template <int D>
@@ -235,6 +258,37 @@ class ContactSolver {
   /// when the law has no friction.
   const std::vector<Vec<D>>& nodeShear() const { return shear_; }
 
+  /// @brief Rest overlap of each node contact after the last compute() (m),
+  /// aligned with nodeContacts(): 0 but for springs born relaxed.
+  const std::vector<double>& nodePreload() const { return preload_; }
+
+  /// @brief Marks nodes of particle `particleId` as born this step (a
+  /// fragment's new face, breakage::Fragment::cutFaceNodes): in the next
+  /// compute(), a node contact of one of them that has no history starts
+  /// relaxed, with its overlap as its rest overlap (see the class comment).
+  /// The marks are used by that compute() and then dropped.
+  /// @param nodes node indices in the particle's shape.
+  void markNewborn(std::uint64_t particleId, std::span<const std::uint32_t> nodes);
+
+  /// @brief A rest overlap a fragment takes over from its parent: in the
+  /// next compute(), node `node` of particle `particleId`, found without
+  /// history in contact with `partner` (a particle id, or a key from
+  /// restOverlaps()), starts with rest overlap min(`restOverlap`, its overlap).
+  /// Used by that compute() and then dropped, like markNewborn.
+  void inheritRestOverlap(std::uint64_t particleId, std::uint64_t partner, std::uint32_t node, double restOverlap);
+
+  /// A node contact of the last compute() with a rest overlap.
+  struct RestOverlap {
+    std::uint64_t owner = 0;    ///< global id of the node's owner
+    std::uint64_t partner = 0;  ///< the other body: a particle id, or an opaque plane / tool key
+    std::uint32_t node = 0;     ///< node index in the owner's shape
+    double restOverlap = 0.0;   ///< m
+  };
+  /// @brief The node contacts with a rest overlap in the pairs of particle
+  /// `index` (its nodes in other bodies and theirs in it), as of the last
+  /// compute(): what its fragments take over (breakage) when it breaks.
+  std::vector<RestOverlap> restOverlaps(const Particles<D>& particles, std::size_t index) const;
+
   /// @brief Elastic energy stored in all contact springs after the last compute(), J.
   double elasticEnergy() const { return elasticEnergy_; }
   /// @brief Power dissipated by contact damping and sliding friction in the last compute(), W.
@@ -246,7 +300,7 @@ class ContactSolver {
   /// level-set look-up each against a level set, one dot product against a plane).
   std::uint64_t cellChecks() const { return cellChecks_; }
   /// @brief Node contacts carrying shear history into the next compute().
-  std::size_t historySize() const { return history_.empty() ? 0 : shear_.size(); }
+  std::size_t historySize() const { return history_.empty() ? 0 : nodes_.size(); }
   /// @brief Forgets every shear history (e.g. after a restart without it).
   void clearHistory() { history_.clear(); }
 
@@ -271,6 +325,8 @@ class ContactSolver {
   std::vector<PairDashpot<D>> dashpots_;  // aligned with pairs_; not part of the saved state
   std::vector<NodeContact<D>> nodes_;
   std::vector<Vec<D>> shear_;
+  std::vector<double> preload_;  // aligned with nodes_
+  std::vector<detail::BirthNode> newborn_;  // sorted by (id, node); for the next compute()
   std::vector<detail::HistoryPair> history_;  // sorted by (idA, other)
   std::size_t particlePairCount_ = 0, planePairCount_ = 0;
   std::size_t particleCount_ = 0, planeCount_ = 0, toolCount_ = 0;

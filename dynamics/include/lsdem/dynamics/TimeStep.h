@@ -62,8 +62,9 @@ namespace lsdem::dynamics {
 
 /// The contact law as the time-step estimate sees it, in plain numbers (so
 /// this header needs no contact-solver header): the normal stiffness of one
-/// node contact is k_i = perNode + perWeight w_i, with w_i the node's length
-/// (2D) or area (3D) weight, and its tangential stiffness is
+/// node contact is k_i = perNode s + perWeight w_i, with s the shape's
+/// nodeStiffnessScale (ShapeOptions; 1 except for re-gridded fragments) and
+/// w_i the node's length (2D) or area (3D) weight, and its tangential stiffness is
 /// tangentialRatio k_i in each tangent direction.
 /// - Linear, PerNode law (the paper): perNode = kn, perWeight = 0.
 /// - Linear, AreaWeighted law: perNode = 0, perWeight = kn / w_ref, with

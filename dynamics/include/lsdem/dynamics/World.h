@@ -208,6 +208,15 @@ class World {
   /// @brief Tells the world particles were replaced in bulk (breakage): the
   /// broad phase rebuilds and the time step is re-checked.
   void particlesChanged();
+  /// @brief Marks nodes of particle `id` as born this step (a fragment's new
+  /// face): their contacts found at the next evaluation start relaxed
+  /// (ContactSolver::markNewborn).
+  void markNewborn(std::uint64_t id, std::span<const std::uint32_t> nodes) { contacts_.markNewborn(id, nodes); }
+  /// @brief A rest overlap particle `id` takes over from its parent
+  /// (ContactSolver::inheritRestOverlap).
+  void inheritRestOverlap(std::uint64_t id, std::uint64_t partner, std::uint32_t node, double restOverlap) {
+    contacts_.inheritRestOverlap(id, partner, node, restOverlap);
+  }
 
   // ---- running ----
   /// @brief Advances one step of dt().

@@ -124,7 +124,9 @@ class MassSums {
   /// (world units, relative to the caller's fixed reference point), standing
   /// for `cells` cells of volume. A NaN phi is remembered (sawNaN()).
   void add(double phi, const Vec<D>& r, double cells = 1.0);
-  /// @brief Adds another set of sums (same epsilon), term by term.
+  /// @brief Adds another set of sums term by term. Its epsilon may differ:
+  /// the weights are applied as samples are added, so sums of a narrow band
+  /// near some feature and a wide one elsewhere add up (Split.cpp).
   void add(const MassSums& other);
   /// @brief True when a sample had a NaN level-set value.
   bool sawNaN() const { return sawNaN_; }

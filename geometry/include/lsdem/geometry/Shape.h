@@ -36,6 +36,14 @@ struct ShapeOptions {
   /// grid spacing. A fragment re-gridded finer than its parent keeps the
   /// parent's, so its contact stiffness per unit area does not change.
   double contactSpacing = 0.0;
+  /// Factor on the per-node contact stiffness (ContactLaw.h, PerNode law;
+  /// the area-weighted and Hertz laws ignore it), > 0. 1 for a grain made
+  /// from a mesh or a grid. A fragment re-gridded with nodes closer together
+  /// than its parent's gets parent's factor x (its mean node weight / the
+  /// parent's), so its stiffness per unit surface stays its parent's: without
+  /// it, a fragment with twice the nodes per area would be twice as stiff and
+  /// its splits would make energy (docs/breakage.md, "Energy check").
+  double nodeStiffnessScale = 1.0;
 };
 
 template <int D>
@@ -106,6 +114,10 @@ class Shape {
   double boundingRadius() const { return boundingRadius_; }
   /// Spacing of the contact law's reference node weight (ShapeOptions::contactSpacing), world units.
   double contactSpacing() const { return options_.contactSpacing > 0.0 ? options_.contactSpacing : grid_.spacing(); }
+  /// Factor on the per-node contact stiffness (ShapeOptions::nodeStiffnessScale).
+  double nodeStiffnessScale() const { return options_.nodeStiffnessScale; }
+  /// Mean node weight: surface length (2D) or area (3D) per node, world units^(D-1).
+  double meanNodeWeight() const;
   /// Bounding-sphere tree over the surface nodes (NodeTree.h), body frame:
   /// the narrow phase's bulk rejection.
   const NodeTree<D>& nodeTree() const { return nodeTree_; }
