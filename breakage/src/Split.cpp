@@ -812,9 +812,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
             // Its nodes stand for less (or more) surface each than the
             // parent's: the per-node stiffness follows, so the stiffness per
             // unit surface stays the parent's.
-            double weightSum = 0.0;
-            for (double w : piece.nodes.weights) weightSum += w;
-            piece.nodeStiffnessScale *= weightSum / double(piece.nodes.size()) / parent.meanNodeWeight();
+            piece.nodeStiffnessScale *= piece.nodes.totalWeight() / double(piece.nodes.size()) / parent.meanNodeWeight();
           }
         }
       }

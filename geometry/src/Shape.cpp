@@ -170,9 +170,7 @@ void Shape<D>::deriveSearchData() {
 
 template <int D>
 double Shape<D>::meanNodeWeight() const {
-  double sum = 0.0;
-  for (double w : nodes_.weights) sum += w;
-  return sum / double(nodes_.size());
+  return nodes_.totalWeight() / double(nodes_.size());
 }
 
 template <int D>
