@@ -574,7 +574,7 @@ TEST(Split, FragmentBoundingSpheresHoldTheirMaterial) {
 // the parent's per-node contact stiffness per unit surface: its
 // nodeStiffnessScale is the ratio of the mean node weights, so the sum of
 // the node stiffnesses along a face of the parent it keeps is the parent's
-// (per-node law; before, a thin slab off a box, re-gridded 4x finer, was 4x
+// (per-node law; before, a thin slab off a box, re-gridded finer, was over 2x
 // stiffer along that face, and splits made energy). A fragment on the
 // parent's grid keeps the parent's factor. The factor evens out the mean
 // node weight over the whole fragment, so a face whose nodes stand for more
