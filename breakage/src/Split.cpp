@@ -812,7 +812,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
             // Its nodes stand for less (or more) surface each than the
             // parent's: the per-node stiffness follows, so the stiffness per
             // unit surface stays the parent's.
-            piece.nodeStiffnessScale *= piece.nodes.totalWeight() / double(piece.nodes.size()) / parent.meanNodeWeight();
+            piece.nodeStiffnessScale *= piece.nodes.meanWeight() / parent.meanNodeWeight();
           }
         }
       }

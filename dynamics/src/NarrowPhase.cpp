@@ -528,6 +528,13 @@ void ContactSolver<D>::inheritRestOverlap(std::uint64_t particleId, std::uint64_
 }
 
 template <int D>
+std::uint64_t ContactSolver<D>::partnerKey(const Particles<D>& particles, std::size_t k) const {
+  const std::uint32_t b = pairs_[k].b;
+  if (k < particlePairCount_) return particles.id[b];
+  return (k < particlePairCount_ + planePairCount_ ? kPlaneTag : kToolTag) | std::uint64_t(b);
+}
+
+template <int D>
 std::vector<typename ContactSolver<D>::RestOverlap> ContactSolver<D>::restOverlaps(const Particles<D>& particles,
                                                                                    std::size_t index) const {
   std::vector<RestOverlap> out;
@@ -536,12 +543,7 @@ std::vector<typename ContactSolver<D>::RestOverlap> ContactSolver<D>::restOverla
     const PairContact<D>& rec = pairs_[k];
     const bool particlePair = k < particlePairCount_;
     if (rec.a != index && !(particlePair && rec.b == index)) continue;
-    std::uint64_t keyOfB = 0;
-    if (particlePair) {
-      keyOfB = particles.id[rec.b];
-    } else {
-      keyOfB = (k < particlePairCount_ + planePairCount_ ? kPlaneTag : kToolTag) | std::uint64_t(rec.b);
-    }
+    const std::uint64_t keyOfB = partnerKey(particles, k);
     const std::uint64_t idA = particles.id[rec.a];
     for (std::uint32_t q = rec.firstNode; q < rec.firstNode + rec.nodeCount; ++q) {
       if (!(preload_[q] > 0.0)) continue;
@@ -902,13 +904,7 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
     const PairContact<D>& rec = pairs_[k];
     HistoryPair h;
     h.idA = particles.id[rec.a];
-    if (k < particlePairCount_) {
-      h.other = particles.id[rec.b];
-    } else if (k < particlePairCount_ + planePairCount_) {
-      h.other = kPlaneTag | rec.b;
-    } else {
-      h.other = kToolTag | rec.b;
-    }
+    h.other = partnerKey(particles, k);
     h.first = rec.firstNode;
     h.count = rec.nodeCount;
     history_.push_back(h);

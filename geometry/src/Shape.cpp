@@ -169,11 +169,6 @@ void Shape<D>::deriveSearchData() {
 }
 
 template <int D>
-double Shape<D>::meanNodeWeight() const {
-  return nodes_.totalWeight() / double(nodes_.size());
-}
-
-template <int D>
 typename Shape<D>::Parts Shape<D>::parts() const {
   return Parts{grid_, bodyToGrid_, nodes_, mass_, descriptors_, boundingRadius_, options_};
 }

@@ -315,6 +315,8 @@ class ContactSolver {
   void run(const Particles<D>& particles, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
            const std::vector<ToolPose<D>>& tools, double dt, double shearDt);
   void gather(const Particles<D>& particles, std::size_t particlePairTasks, std::size_t planeTasks);
+  // The history key of record k's b (HistoryPair::other): a particle's id, or a tagged plane / tool index.
+  std::uint64_t partnerKey(const Particles<D>& particles, std::size_t k) const;
 
   ContactLawDef law_;
   bool frictionActive_ = true;

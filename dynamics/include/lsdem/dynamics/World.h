@@ -225,8 +225,8 @@ class World {
   /// now, if they changed since the last evaluation (contactsCurrent() false);
   /// step() does it first anyway, so calling it between steps changes no
   /// result (to round-off in the shear springs, when the particles change
-  /// again before the step and they are re-evaluated twice). The springs' energy the change took away is booked as
-  /// EnergyLedger::splitRelease. Breakage calls it after a batch of splits
+  /// again before the step and they are re-evaluated twice). The springs'
+  /// energy the change took away is booked as EnergyLedger::splitRelease. Breakage calls it after a batch of splits
   /// to measure the fragments' springs.
   void refreshContacts();
   /// @brief Advances n steps.

@@ -22,6 +22,8 @@ struct NodeSet {
   bool empty() const { return positions.empty(); }
   /// @brief Sum of the weights: the perimeter (2D) or surface area (3D).
   double totalWeight() const { return std::accumulate(weights.begin(), weights.end(), 0.0); }
+  /// Mean weight: length (2D) or area (3D) a node stands for.
+  double meanWeight() const { return totalWeight() / double(weights.size()); }
 };
 
 }  // namespace lsdem::geometry

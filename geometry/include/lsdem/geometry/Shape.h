@@ -117,7 +117,7 @@ class Shape {
   /// Factor on the per-node contact stiffness (ShapeOptions::nodeStiffnessScale).
   double nodeStiffnessScale() const { return options_.nodeStiffnessScale; }
   /// Mean node weight: surface length (2D) or area (3D) per node, world units^(D-1).
-  double meanNodeWeight() const;
+  double meanNodeWeight() const { return nodes_.meanWeight(); }
   /// Bounding-sphere tree over the surface nodes (NodeTree.h), body frame:
   /// the narrow phase's bulk rejection.
   const NodeTree<D>& nodeTree() const { return nodeTree_; }
