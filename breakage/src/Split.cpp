@@ -607,6 +607,33 @@ void pullInsideParent(NodeSet<D>& nodes, const Grid<D>& fineGrid, const Grid<D>&
   }
 }
 
+/// The parent's nodes (and a flat cut's) given to a piece, on the piece's
+/// own surface: each projected onto the zero set of `pieceGrid` (the
+/// multilinear interpolant rounds the max() kink of eq. 14-15 at the new rim
+/// by up to ~h/4, a re-gridded piece's finer grid less, and the surface may
+/// have been moved out, matchEnclosedVolume). A node the projection could not
+/// bring to the surface (a parent node several cells from the piece it was
+/// given to, left up to a cell outside it and outside the parent; or one
+/// beside a sliver whose grid values stay just above zero, left 0.008 cells
+/// out: both found by fuzz_split) is not a surface node of this piece:
+/// dropped; a converged projection is within 1e-4 cells. Nodes that landed
+/// on one point are one node. `h` is the parent's spacing.
+template <int D>
+NodeSet<D> nodesOnPiece(NodeSet<D> nodes, const Grid<D>& pieceGrid, double h, double nodesPerCell) {
+  for (Vec<D>& x : nodes.positions) x = geometry::projectOntoZero(pieceGrid, x, 1e-4, 10);
+  std::size_t keptCount = 0;
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    if (!(std::abs(pieceGrid.value(nodes.positions[n])) <= 1e-3 * h)) continue;
+    nodes.positions[keptCount] = nodes.positions[n];
+    nodes.weights[keptCount] = nodes.weights[n];
+    ++keptCount;
+  }
+  nodes.positions.resize(keptCount);
+  nodes.weights.resize(keptCount);
+  mergeCoincidentNodes(nodes, 0.25 * h / nodesPerCell);
+  return nodes;
+}
+
 /// Surface nodes of a grid at `nodesPerCell`, raised until there are at least
 /// `minNodes` (a fragment is never a handful of nodes); empty when the grid has no surface.
 template <int D>
@@ -800,7 +827,19 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
           Grid<D> refined = regridPiece(grid, psi, side, k, where, fine, options.paddingCells);
           const SurfaceShift<D> shift = matchSurface(refined);
           const double density = options.regridKeepsNodeSpacing ? nodesPerCell * refined.spacing() / h : nodesPerCell;
-          NodeSet<D> nodes = nodesWithFloor(refined, density, options.minFragmentNodes);
+          // At the parent's node spacing, the parent's own nodes (and the
+          // cut's) where there are enough of them: a node made afresh between
+          // two of the parent's, where a neighbour overlaps the surface more
+          // than at either, started with a spring the parent never had (a
+          // 2D fragment re-gridded against a platen held 5x its parent's
+          // spring energy the moment it was born).
+          NodeSet<D> nodes;
+          bool ownNodes = false;
+          if (options.regridKeepsNodeSpacing && planeGrid) {
+            nodes = nodesOnPiece(std::move(side.nodes[k]), refined, h, nodesPerCell);
+            ownNodes = nodes.size() >= std::size_t(options.minFragmentNodes);
+          }
+          if (!ownNodes) nodes = nodesWithFloor(refined, density, options.minFragmentNodes);
           pullInsideParent(nodes, refined, grid, psi, side, k, shift);
           if (!nodes.empty()) {
             piece.grid = std::move(refined);
@@ -809,10 +848,10 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
             // The node spacing in metres passes on to this piece's own
             // fragments (with "per_new_cell" the density per cell does).
             piece.nodesPerCell = density;
-            // Its nodes stand for less (or more) surface each than the
-            // parent's: the per-node stiffness follows, so the stiffness per
-            // unit surface stays the parent's.
-            piece.nodeStiffnessScale *= piece.nodes.meanWeight() / parent.meanNodeWeight();
+            // Nodes made afresh stand for less (or more) surface each than
+            // the parent's: the per-node stiffness follows, so the stiffness
+            // per unit surface stays the parent's.
+            if (!ownNodes) piece.nodeStiffnessScale *= piece.nodes.meanWeight() / parent.meanNodeWeight();
           }
         }
       }
@@ -820,28 +859,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
         // A copy: a later piece of this side may be re-gridded beside it.
         piece.grid = side.pieces[k];
         matchSurface(piece.grid);
-        NodeSet<D> nodes = std::move(side.nodes[k]);
-        // Back onto the piece's own phi = 0: the multilinear interpolant rounds the
-        // max() kink of eq. 14-15 at the new rim by up to ~h/4, and the
-        // surface may have been moved out (matchEnclosedVolume).
-        for (Vec<D>& x : nodes.positions) x = geometry::projectOntoZero(piece.grid, x, 1e-4, 10);
-        // A node the projection could not bring to the piece's surface (a
-        // parent node several cells from the piece it was given to, left up to a
-        // cell outside it and outside the parent; or one beside a sliver whose
-        // grid values stay just above zero, left 0.008 cells out: both found by
-        // fuzz_split) is not a surface node of this piece: dropped. A converged
-        // projection is within 1e-4 cells.
-        std::size_t keptCount = 0;
-        for (std::size_t n = 0; n < nodes.size(); ++n) {
-          if (!(std::abs(piece.grid.value(nodes.positions[n])) <= 1e-3 * h)) continue;
-          nodes.positions[keptCount] = nodes.positions[n];
-          nodes.weights[keptCount] = nodes.weights[n];
-          ++keptCount;
-        }
-        nodes.positions.resize(keptCount);
-        nodes.weights.resize(keptCount);
-        // Nodes that landed on one point are one node.
-        mergeCoincidentNodes(nodes, 0.25 * h / nodesPerCell);
+        NodeSet<D> nodes = nodesOnPiece(std::move(side.nodes[k]), piece.grid, h, nodesPerCell);
         if (nodes.empty()) nodes = nodesWithFloor(piece.grid, nodesPerCell, 1);
         piece.nodes = std::move(nodes);
       }

@@ -176,10 +176,14 @@ struct SplitOptions {
   /// density is raised until it does), >= 1.
   int minFragmentNodes = 24;
   /// A re-gridded fragment's nodes keep the parent's node spacing in metres
-  /// (nodesPerCell x new spacing / parent spacing per new cell) instead of
-  /// nodesPerCell per new cell. With the per-node contact law every node is a
-  /// full spring, so this keeps a fragment's contact stiffness per unit area
-  /// (and the time step) its parent's; the scene reader sets it for that law.
+  /// instead of nodesPerCell per new cell: after a flat cut they are the
+  /// parent's own nodes on the piece and the cut's (projected onto the new
+  /// grid's zero set), so the fragment touches its neighbours where the
+  /// parent did; made afresh at nodesPerCell x new spacing / parent spacing
+  /// per new cell when fewer than minFragmentNodes remain or the cut is
+  /// curved. With the per-node contact law every node is a full spring, so
+  /// this keeps a fragment's contact stiffness per unit area (and the time
+  /// step) its parent's; the scene reader sets it by default.
   bool regridKeepsNodeSpacing = false;
   /// Pieces whose share of the volume is at most this are not re-gridded,
   /// world units^D, >= 0 (the breakage effect sets its fines size: such
