@@ -75,6 +75,7 @@ LawConstants boundaryLaw(const LawConstants& law, const ContactConstants* materi
 // A pair's node contacts of the previous step (its shear history), by node key.
 template <int D>
 struct HistoryView {
+  const std::uint32_t* keys = nullptr;  // their node keys (nodeKey), ascending
   const NodeContact<D>* nodes = nullptr;
   const Vec<D>* shear = nullptr;    // null without friction
   const double* preload = nullptr;  // null when no contact carried a rest overlap
@@ -195,23 +196,26 @@ template <int D, ForceFormulation Formulation>
 std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
                               std::uint8_t ownerIsB, ThreadBuffers<D>& buf) {
-  // One composed map per direction: owner body -> world -> other body -> other grid.
+  // One composed map per direction: owner body -> world -> other body ->
+  // other grid -> cells of the other grid (grid coordinates, so a look-up
+  // needs no conversion: Grid::valueAtCells).
   const Rigid<D>& toGrid = other.bodyToGrid();
-  const Mat<D> RtT = Rt.transpose();
-  const Mat<D> map = toGrid.rotation * RtT * Ro;
-  const Vec<D> shift = toGrid.rotation * (RtT * (xo - xt)) + toGrid.translation;
-  // Grid-frame gradient -> world normal pointing from b towards a.
-  const Mat<D> gradToWorld = normalSign * (Rt * toGrid.rotation.transpose());
-  // Cheap rejections: the other body's bounding sphere (centred on its centroid,
-  // the grid-frame image of the body origin) and its grid box.
   const Grid<D>& grid = other.grid();
-  const Box<D> box = grid.bounds();
-  const Vec<D> centre = toGrid.translation;
-  const double reach = other.boundingRadius();
+  const double h = grid.spacing();
+  const Mat<D> RtT = Rt.transpose();
+  const Mat<D> map = (toGrid.rotation * RtT * Ro) / h;
+  const Vec<D> shift = (toGrid.rotation * (RtT * (xo - xt)) + toGrid.translation - grid.origin()) / h;
+  // Gradient per cell -> world normal pointing from b towards a.
+  const Mat<D> gradToWorld = normalSign * (Rt * toGrid.rotation.transpose());
+  // Cheap rejections, in cells: the other body's bounding sphere (centred on
+  // its centroid, the grid-frame image of the body origin) and its node box.
+  const Vec<D> upper = (grid.dims() - 1).template cast<double>().matrix();
+  const Vec<D> centre = (toGrid.translation - grid.origin()) / h;
+  const double reach = other.boundingRadius() / h;
   const double reach2 = reach * reach;
   const double slope = other.levelSetSlope();
   // Round-off of the look-up and of the mapped centre, far below any overlap that matters.
-  const double margin = 1e-9 * grid.spacing();
+  const double margin = 1e-9 * h;
   const double weightToFactor = weightToFactorOf<D, Formulation>(owner, directionWeight);
 
   const geometry::NodeTree<D>& tree = owner.nodeTree();
@@ -221,14 +225,14 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   std::uint64_t tested = 0;
   const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
     const Vec<D> g = map * cell.centre + shift;
-    const double r = cell.radius;
+    const double r = cell.radius / h;
     if ((g - centre).squaredNorm() > (reach + r) * (reach + r)) return true;
-    if (((g.array() < box.lower.array() - r) || (g.array() > box.upper.array() + r)).any()) return true;
+    if (((g.array() < -r) || (g.array() > upper.array() + r)).any()) return true;
     // The slope bound holds along segments in the grid box, and only nodes in
     // the box are tested: a centre outside the box is replaced by its closest
     // point of the box, no farther from any node in the box.
-    const Vec<D> inside = g.cwiseMax(box.lower).cwiseMin(box.upper);
-    return grid.value(inside) > slope * r + margin;
+    const Vec<D> inside = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
+    return grid.valueAtCells(inside) > slope * cell.radius + margin;
   };
   const auto leaf = [&](std::uint32_t begin, std::uint32_t end) {
     tested += end - begin;
@@ -237,12 +241,12 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       const Vec<D>& x = nodes[i];
       const Vec<D> g = map * x + shift;
       if ((g - centre).squaredNorm() > reach2) continue;
-      if (!box.contains(g)) continue;
-      // The value first; the gradient only for the few nodes inside (value()
-      // and valueAndGradient() agree bit for bit).
-      if (!(grid.value(g) < 0.0)) continue;
+      if (((g.array() < 0.0) || (g.array() > upper.array())).any()) continue;
+      // The value first; the gradient only for the few nodes inside
+      // (valueAtCells() and valueAndGradientAtCells() agree bit for bit).
+      if (!(grid.valueAtCells(g) < 0.0)) continue;
       Vec<D> grad;
-      const double phi = grid.valueAndGradient(g, grad);
+      const double phi = grid.valueAndGradientAtCells(g, grad);
       // A node at a point of zero gradient (a medial point) has no normal: skipped.
       Vec<D> normal = gradToWorld * grad;
       const double length = normal.norm();
@@ -257,7 +261,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       NodeWork<D> w;
       w.stiffness = stiffnessFactor<Formulation>(weights[i], weightToFactor);
       w.area = directionWeight * weights[i];
-      w.gradient = length;
+      w.gradient = length / h;
       buf.work.push_back(w);
     }
   };
@@ -345,8 +349,8 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
       const NodeContact<D>& c = buf.nodes[j];
       NodeWork<D>& w = buf.work[j];
       const std::uint32_t key = nodeKey(c);
-      while (cursor < history.count && nodeKey(history.nodes[cursor]) < key) ++cursor;
-      if (cursor < history.count && nodeKey(history.nodes[cursor]) == key) {
+      while (cursor < history.count && history.keys[cursor] < key) ++cursor;
+      if (cursor < history.count && history.keys[cursor] == key) {
         w.history = cursor;
         if (history.preload) w.preload = std::min(history.preload[cursor], c.overlap);
       } else if (!newborn.empty()) {
@@ -688,6 +692,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     const auto it = std::lower_bound(history_.begin(), history_.end(), 0,
                                      [&](const HistoryPair& h, int) { return keyLess(h, idA, other); });
     if (it != history_.end() && it->idA == idA && it->other == other) {
+      view.keys = historyKeys_.data() + it->first;
       view.nodes = nodes_.data() + it->first;
       if (Friction && !shear_.empty()) view.shear = shear_.data() + it->first;
       if (withPreload) view.preload = preload_.data() + it->first;
@@ -858,6 +863,7 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   nodes_.resize(nodeTotal);
   shear_.resize(friction ? nodeTotal : 0);
   preload_.resize(nodeTotal);
+  historyKeys_.resize(nodeTotal);
   bool anyPreload = false;
   const std::ptrdiff_t taskCount = std::ptrdiff_t(tasks_.size());
 #pragma omp parallel for schedule(static) if (taskCount > 1024) reduction(|| : anyPreload)
@@ -872,6 +878,7 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
     }
     for (std::uint32_t q = 0; q < t.nodeCount; ++q) {
       nodes_[t.outNode + q] = buf.nodes[t.firstNode + q];
+      historyKeys_[t.outNode + q] = nodeKey(buf.nodes[t.firstNode + q]);
       if (friction) shear_[t.outNode + q] = buf.work[t.firstNode + q].shear;
       const double preload = buf.work[t.firstNode + q].preload;
       preload_[t.outNode + q] = preload;
@@ -899,7 +906,10 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   // shear_ and preload_; none without friction and rest overlaps.
   if (!anyPreload) preload_.clear();
   history_.clear();
-  if (!friction && !anyPreload) return;
+  if (!friction && !anyPreload) {
+    historyKeys_.clear();
+    return;
+  }
   for (std::size_t k = 0; k < pairs_.size(); ++k) {
     const PairContact<D>& rec = pairs_[k];
     HistoryPair h;
@@ -911,6 +921,12 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   }
   const auto less = [](const HistoryPair& x, const HistoryPair& y) { return keyLess(x, y.idA, y.other); };
   if (!std::is_sorted(history_.begin(), history_.end(), less)) std::sort(history_.begin(), history_.end(), less);
+}
+
+template <int D>
+void ContactSolver<D>::buildHistoryKeys() {
+  historyKeys_.resize(history_.empty() ? 0 : nodes_.size());
+  for (std::size_t q = 0; q < historyKeys_.size(); ++q) historyKeys_[q] = nodeKey(nodes_[q]);
 }
 
 template <int D>
@@ -1000,6 +1016,7 @@ void ContactSolver<D>::loadState(StateReader& in) {
       throw std::runtime_error("checkpoint state: a contact record points past the node contacts");
     }
   }
+  buildHistoryKeys();
 }
 
 template class ContactSolver<2>;

@@ -330,6 +330,11 @@ class ContactSolver {
   std::vector<double> preload_;  // aligned with nodes_
   std::vector<detail::BirthNode> newborn_;  // sorted by (id, node); for the next compute()
   std::vector<detail::HistoryPair> history_;  // sorted by (idA, other)
+  // Node keys of nodes_ (owner bit and node index), aligned with it while
+  // history_ is kept: the history merge reads these, not the 88-byte records
+  // (filled as gather() copies the records; rebuilt from them on loadState()).
+  std::vector<std::uint32_t> historyKeys_;
+  void buildHistoryKeys();
   std::size_t particlePairCount_ = 0, planePairCount_ = 0;
   std::size_t particleCount_ = 0, planeCount_ = 0, toolCount_ = 0;
   double elasticEnergy_ = 0.0, dissipatedPower_ = 0.0;
