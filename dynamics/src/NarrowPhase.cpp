@@ -462,16 +462,19 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
         }
         Vec<D> ft = -kt * shear;
         const double cap = law.mu * std::max(fn, 0.0);
-        const double ftNorm = ft.norm();
-        if (ftNorm > cap) {
+        // Compared squared: the square root only for a sliding node.
+        double ft2 = ft.squaredNorm();
+        if (ft2 > cap * cap) {
           // Sliding: the force sits on the cap, the spring is shortened to match,
           // and the slip (|ft| - cap) / kt dissipates cap x slip.
+          const double ftNorm = std::sqrt(ft2);
           power += cap * (ftNorm - cap) / (kt * law.dt);
           const double scale = cap / ftNorm;
           ft *= scale;
           shear *= scale;
+          ft2 = ft.squaredNorm();
         }
-        if (kt > 0.0) elastic += ft.squaredNorm() / (2.0 * kt);
+        if (kt > 0.0) elastic += ft2 / (2.0 * kt);
         w.shear = shear;
         force += ft;
       }
