@@ -192,10 +192,21 @@ std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, 
 // are never tested. So none of the cell's nodes can touch. The test is
 // exact (no contact is lost); nodes of surviving leaves go through the same
 // per-node test as without the tree, so the contacts are the same.
+// The walk's ids and the certificate the last compute() left for them (null: none).
+template <int D>
+struct CertificateKey {
+  std::uint64_t owner = 0, other = 0;
+  const detail::Certificate<D>* previous = nullptr;
+};
+
+// Slack of a certificate, cells: far above the round-off of the composed
+// maps and the margins below, far below any motion that matters.
+constexpr double kCertificateSlack = 1e-6;
+
 template <int D, ForceFormulation Formulation>
 std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
-                              std::uint8_t ownerIsB, ThreadBuffers<D>& buf) {
+                              std::uint8_t ownerIsB, ThreadBuffers<D>& buf, const CertificateKey<D>* key) {
   // One composed map per direction: owner body -> world -> other body ->
   // other grid -> cells of the other grid (grid coordinates, so a look-up
   // needs no conversion: Grid::valueAtCells).
@@ -219,20 +230,56 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const double weightToFactor = weightToFactorOf<D, Formulation>(owner, directionWeight);
 
   const geometry::NodeTree<D>& tree = owner.nodeTree();
+  if (tree.cells.empty()) return 0;
   const std::vector<Vec<D>>& nodes = owner.nodes().positions;
   const std::vector<double>& weights = owner.nodes().weights;
   const std::size_t first = buf.nodes.size();
+
+  // Separation certificate (file comment): the walk is spared while no
+  // point of the owner has moved, relative to the other's grid, by the
+  // clearance the last walk measured. |x| <= |c_root| + r_root bounds the
+  // nodes' distance from the owner's origin, so a node moved at most
+  // ||map - map_0||_F rho + |shift - shift_0| cells.
+  const bool certify = key != nullptr && slope > 0.0;
+  if (certify && key->previous && key->previous->ownerShape == &owner && key->previous->otherShape == &other) {
+    const detail::Certificate<D>& c = *key->previous;
+    const double rho = tree.cells[0].centre.norm() + tree.cells[0].radius;
+    const double moved = (map - c.map).norm() * rho + (shift - c.shift).norm();
+    if (moved + kCertificateSlack < c.clearance) {
+      buf.certificates.push_back(c);
+      ++buf.certifiedWalks;
+      return 0;
+    }
+  }
+  // The walk's clearance, cells: how far any point of the owner may move
+  // before a test that rejected it could pass (the smallest margin of every
+  // rejection; 0 for a node inside without a normal).
+  double clear = std::numeric_limits<double>::infinity();
+  const double perSlopeCell = certify ? 1.0 / (slope * h) : 0.0;
   std::uint64_t tested = 0;
   const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
     const Vec<D> g = map * cell.centre + shift;
     const double r = cell.radius / h;
-    if ((g - centre).squaredNorm() > (reach + r) * (reach + r)) return true;
-    if (((g.array() < -r) || (g.array() > upper.array() + r)).any()) return true;
+    const double apart2 = (g - centre).squaredNorm();
+    if (apart2 > (reach + r) * (reach + r)) {
+      if (certify) clear = std::min(clear, std::sqrt(apart2) - reach - r);
+      return true;
+    }
+    const double outside = std::max((-g.array()).maxCoeff(), (g.array() - upper.array()).maxCoeff()) - r;
+    if (outside > 0.0) {
+      if (certify) clear = std::min(clear, outside);
+      return true;
+    }
     // The slope bound holds along segments in the grid box, and only nodes in
     // the box are tested: a centre outside the box is replaced by its closest
     // point of the box, no farther from any node in the box.
     const Vec<D> inside = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
-    return grid.valueAtCells(inside) > slope * cell.radius + margin;
+    const double above = grid.valueAtCells(inside) - (slope * cell.radius + margin);
+    if (above > 0.0) {
+      if (certify) clear = std::min(clear, above * perSlopeCell);
+      return true;
+    }
+    return false;
   };
   const auto leaf = [&](std::uint32_t begin, std::uint32_t end) {
     tested += end - begin;
@@ -240,17 +287,32 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       const std::uint32_t i = tree.order[k];
       const Vec<D>& x = nodes[i];
       const Vec<D> g = map * x + shift;
-      if ((g - centre).squaredNorm() > reach2) continue;
-      if (((g.array() < 0.0) || (g.array() > upper.array())).any()) continue;
+      const double apart2 = (g - centre).squaredNorm();
+      if (apart2 > reach2) {
+        if (certify) clear = std::min(clear, std::sqrt(apart2) - reach);
+        continue;
+      }
+      const double outside = std::max((-g.array()).maxCoeff(), (g.array() - upper.array()).maxCoeff());
+      if (outside > 0.0) {
+        if (certify) clear = std::min(clear, outside);
+        continue;
+      }
       // The value first; the gradient only for the few nodes inside
       // (valueAtCells() and valueAndGradientAtCells() agree bit for bit).
-      if (!(grid.valueAtCells(g) < 0.0)) continue;
+      const double value = grid.valueAtCells(g);
+      if (!(value < 0.0)) {
+        if (certify) clear = std::min(clear, (value - margin) * perSlopeCell);
+        continue;
+      }
       Vec<D> grad;
       const double phi = grid.valueAndGradientAtCells(g, grad);
       // A node at a point of zero gradient (a medial point) has no normal: skipped.
       Vec<D> normal = gradToWorld * grad;
       const double length = normal.norm();
-      if (!(length > 0.0)) continue;
+      if (!(length > 0.0)) {
+        clear = 0.0;
+        continue;
+      }
       NodeContact<D> c;
       c.point = Ro * x + xo;
       c.normal = normal / length;
@@ -266,6 +328,9 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     }
   };
   buf.cellChecks += walkTree<D>(tree, reject, leaf);
+  if (certify && buf.nodes.size() == first && clear > kCertificateSlack) {
+    buf.certificates.push_back({key->owner, key->other, &owner, &other, map, shift, clear});
+  }
   sortByNode(buf, first);
   return tested;
 }
@@ -684,7 +749,19 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     buf.work.clear();
     buf.nodeChecks = 0;
     buf.cellChecks = 0;
+    buf.certifiedWalks = 0;
+    buf.certificates.clear();
   }
+  // The last compute()'s certificate of a walk (null: none).
+  const auto certificateKey = [&](std::uint64_t owner, std::uint64_t other) {
+    CertificateKey<D> key{owner, other, nullptr};
+    const auto it = std::lower_bound(certificates_.begin(), certificates_.end(), key,
+                                     [](const detail::Certificate<D>& c, const CertificateKey<D>& k) {
+                                       return c.owner < k.owner || (c.owner == k.owner && c.other < k.other);
+                                     });
+    if (it != certificates_.end() && it->owner == owner && it->other == other) key.previous = &*it;
+    return key;
+  };
 
   // The previous step's node contacts of a pair key: shear (friction) and
   // rest overlaps (history_ is empty when there are neither).
@@ -741,8 +818,11 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       // Nodes of a in b, then nodes of b in a.
       const Mat<D> Ra = p.rotation(ia), Rb = p.rotation(ib);
       const std::size_t begin = buf.nodes.size();
-      buf.nodeChecks += collectLevelSet<D, Formulation>(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf);
-      buf.nodeChecks += collectLevelSet<D, Formulation>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf);
+      const CertificateKey<D> ab = certificateKey(p.id[ia], p.id[ib]), ba = certificateKey(p.id[ib], p.id[ia]);
+      const CertificateKey<D>* abKey = certificatesOn_ ? &ab : nullptr;
+      const CertificateKey<D>* baKey = certificatesOn_ ? &ba : nullptr;
+      buf.nodeChecks += collectLevelSet<D, Formulation>(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf, abKey);
+      buf.nodeChecks += collectLevelSet<D, Formulation>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf, baKey);
       if (buf.nodes.size() == begin) return;
       // The law on the pair's node contacts.
       PairContact<D> rec;
@@ -818,7 +898,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         const std::size_t begin = buf.nodes.size();
         buf.nodeChecks += collectLevelSet<D, Formulation>(s, p.rotation(std::size_t(i)), x, ts,
                                                           Rotation<D>::matrix(tool.orientation), tool.position, 1.0,
-                                                          1.0, 0, buf);
+                                                          1.0, 0, buf, nullptr);
         if (buf.nodes.size() == begin) continue;
         PairContact<D> rec;
         rec.a = std::uint32_t(i);
@@ -898,10 +978,19 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   }
   nodeChecks_ = 0;
   cellChecks_ = 0;
+  certifiedWalks_ = 0;
+  certificates_.clear();
   for (const ThreadBuffers<D>& buf : threads_) {
     nodeChecks_ += buf.nodeChecks;
     cellChecks_ += buf.cellChecks;
+    certifiedWalks_ += buf.certifiedWalks;
+    certificates_.insert(certificates_.end(), buf.certificates.begin(), buf.certificates.end());
   }
+  // Keys are unique: the order is the same for any thread count.
+  std::sort(certificates_.begin(), certificates_.end(),
+            [](const detail::Certificate<D>& x, const detail::Certificate<D>& y) {
+              return x.owner < y.owner || (x.owner == y.owner && x.other < y.other);
+            });
 
   // The marks of nodes born this step are used.
   newborn_.clear();
