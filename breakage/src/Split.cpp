@@ -791,6 +791,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
     geometry::MassProperties<D> mass;
     int side = 0;
     bool regridded = false;
+    bool freshNodes = false;  ///< its nodes made afresh, not the parent's
     double nodesPerCell = 0.0;  ///< of the piece's own grid: what its own splits put on their cut faces
     double nodeStiffnessScale = 1.0;  ///< ShapeOptions::nodeStiffnessScale
   };
@@ -845,6 +846,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
             piece.grid = std::move(refined);
             piece.nodes = std::move(nodes);
             piece.regridded = true;
+            piece.freshNodes = !ownNodes;
             // The node spacing in metres passes on to this piece's own
             // fragments (with "per_new_cell" the density per cell does).
             piece.nodesPerCell = density;
@@ -860,7 +862,10 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
         piece.grid = side.pieces[k];
         matchSurface(piece.grid);
         NodeSet<D> nodes = nodesOnPiece(std::move(side.nodes[k]), piece.grid, h, nodesPerCell);
-        if (nodes.empty()) nodes = nodesWithFloor(piece.grid, nodesPerCell, 1);
+        if (nodes.empty()) {
+          nodes = nodesWithFloor(piece.grid, nodesPerCell, 1);
+          piece.freshNodes = true;
+        }
         piece.nodes = std::move(nodes);
       }
       if (piece.nodes.empty() || !(piece.mass.volume > 0.0)) {
@@ -902,20 +907,24 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
     fragment.volume = piece.mass.volume;
     fragment.side = piece.side;
     fragment.regridded = piece.regridded;
-    // Its nodes on the new face (parent grid frame, before the shape takes them).
-    const double pieceSpacing = piece.grid.spacing();
-    for (std::size_t n = 0; n < piece.nodes.size(); ++n) {
-      const Vec<D>& x = piece.nodes.positions[n];
-      if (std::abs(psi(x)) < 0.25 * pieceSpacing && grid.value(x) < -0.05 * h) {
-        fragment.cutFaceNodes.push_back(std::uint32_t(n));
-      }
-    }
     geometry::ShapeOptions pieceOptions = childOptions;
     pieceOptions.nodesPerCell = piece.nodesPerCell;
     pieceOptions.nodeStiffnessScale = piece.nodeStiffnessScale;
     fragment.shape =
         Shape<D>::fromGridNodesAndMass(std::move(piece.grid), std::move(piece.nodes), piece.mass, pieceOptions);
     fragment.childToParent = gridToParentBody * fragment.shape->bodyToGrid();
+    // Its nodes that were not the parent's: on the new face, or all when made
+    // afresh. Indices of the shape's nodes, which it keeps in its node tree's
+    // order, not the order they were made in (the piece's grid frame is the
+    // parent's).
+    const double pieceSpacing = fragment.shape->grid().spacing();
+    const auto& shapeNodes = fragment.shape->nodes().positions;
+    for (std::size_t n = 0; n < shapeNodes.size(); ++n) {
+      const Vec<D> x = fragment.shape->bodyToGrid().apply(shapeNodes[n]);
+      if (piece.freshNodes || (std::abs(psi(x)) < 0.25 * pieceSpacing && grid.value(x) < -0.05 * h)) {
+        fragment.cutFaceNodes.push_back(std::uint32_t(n));
+      }
+    }
     result.fragments.push_back(std::move(fragment));
   }
 

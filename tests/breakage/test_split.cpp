@@ -659,5 +659,36 @@ void checkRegriddedSpringsAgainstAWall() {
 TEST(Split, RegriddedAtParentSpacingKeepsTheParentsSprings2D) { checkRegriddedSpringsAgainstAWall<2>(); }
 TEST(Split, RegriddedAtParentSpacingKeepsTheParentsSprings3D) { checkRegriddedSpringsAgainstAWall<3>(); }
 
+// The nodes a split marks as new (Fragment::cutFaceNodes, whose springs
+// start relaxed): a fragment that keeps its parent's nodes marks only those
+// on its cut face; one whose nodes were made afresh (fewer than
+// min_fragment_nodes of the parent's on it) marks them all, since none of
+// them was a node of the parent.
+TEST(Split, NodesMadeAfreshAreAllMarkedNew) {
+  const double radius = 1.0;
+  const auto parent = ball<2>(radius);
+  const double h = parent->grid().spacing();
+  FractureSurface<2> cut;
+  cut.plane = HalfSpace<2>{Vec<2>::UnitY(), -radius + 2.5 * h};
+  SplitOptions options = regrid();
+  options.regridKeepsNodeSpacing = true;
+  const SplitResult<2> kept = splitShape<2>(*parent, cut, options);
+  ASSERT_EQ(kept.fragments.size(), 2u);
+  const Fragment<2>& cap = kept.fragments[0];
+  ASSERT_TRUE(cap.regridded);
+  ASSERT_GT(cap.cutFaceNodes.size(), 0u);
+  EXPECT_LT(cap.cutFaceNodes.size(), cap.shape->nodes().size());
+  for (std::uint32_t n : cap.cutFaceNodes) {
+    const Vec<2> x = cap.childToParent.apply(cap.shape->nodes().positions[n]);
+    EXPECT_NEAR(x[1], -radius + 2.5 * h, 0.25 * h) << n;  // on the cut face
+  }
+  options.minFragmentNodes = 1000;  // more than the parent has on the cap: made afresh
+  const SplitResult<2> fresh = splitShape<2>(*parent, cut, options);
+  ASSERT_EQ(fresh.fragments.size(), 2u);
+  const Fragment<2>& freshCap = fresh.fragments[0];
+  ASSERT_TRUE(freshCap.regridded);
+  EXPECT_EQ(freshCap.cutFaceNodes.size(), freshCap.shape->nodes().size());
+}
+
 TEST(Split, RegriddedFragmentKeepsStiffnessPerSurface2D) { checkStiffnessPerSurface<2>(0.05); }
 TEST(Split, RegriddedFragmentKeepsStiffnessPerSurface3D) { checkStiffnessPerSurface<3>(0.12); }

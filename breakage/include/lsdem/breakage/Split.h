@@ -141,12 +141,14 @@ struct Fragment {
   double volume = 0.0;     ///< the child's share of the parent's volume (file comment), world units^D
   int side = 0;            ///< -1: the phi_f < 0 side (eq. 15); +1: the phi_f > 0 side (eq. 14)
   bool regridded = false;  ///< the child got a finer grid of its own (SplitOptions::regridCells)
-  /// The child's nodes on its new face: on the fracture surface (within a
-  /// quarter of its own cell) and more than a twentieth of a parent cell
-  /// inside the parent's surface, ascending. They were not a surface of the
-  /// parent: where one is born inside another body, its spring starts
-  /// relaxed (dynamics::ContactSolver::markNewborn), so a split stores no
-  /// energy in contacts that did not exist before it.
+  /// The child's nodes that were not nodes of the parent, ascending: those
+  /// on its new face (on the fracture surface, within a quarter of its own
+  /// cell, and more than a twentieth of a parent cell inside the parent's
+  /// surface), or all of them when its nodes were made afresh (a re-gridded
+  /// fragment with fewer than SplitOptions::minFragmentNodes of the parent's,
+  /// or a curved cut). Where one is born inside another body, its spring
+  /// starts relaxed (dynamics::ContactSolver::markNewborn), so a split stores
+  /// no energy in contacts that did not exist before it.
   std::vector<std::uint32_t> cutFaceNodes;
 
   /// @brief volume / the child shape's volume: the factor applied to the
