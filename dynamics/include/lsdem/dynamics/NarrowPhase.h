@@ -100,8 +100,7 @@ struct NodeWork {
   std::int64_t history = -1;       ///< its record in the pair's history, or -1
 };
 
-/// A separation certificate (internal; ContactSolver, "Separation
-/// certificates"): the walk of `owner`'s nodes against `other`'s level set
+/// A separation certificate (internal; ContactSolver::setSeparationCertificates): the walk of `owner`'s nodes against `other`'s level set
 /// found no contact when the composed map (owner body -> other's grid cells)
 /// was (map, shift), and no node of the owner can reach the other body, nor
 /// its grid box or bounding sphere, before some point of the owner moves
@@ -221,8 +220,9 @@ class ContactSolver {
 
   /// @brief Separation certificates on or off (on by default): a node walk
   /// that found no contact is not repeated while neither body has moved
-  /// relative to the other by the clearance the walk measured (the file
-  /// comment of NarrowPhase.cpp gives the bound). Exact: the contacts and
+  /// relative to the other by the clearance the walk measured (the bound:
+  /// collectLevelSet in NarrowPhase.cpp; README "Separation certificates").
+  /// Exact: the contacts and
   /// forces are the same either way, only nodeChecks() and cellChecks() drop.
   void setSeparationCertificates(bool on) {
     certificatesOn_ = on;
