@@ -176,6 +176,17 @@ std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, 
   return tested;
 }
 
+// The walk's ids and the certificate the last compute() left for them (null: none).
+template <int D>
+struct CertificateKey {
+  std::uint64_t owner = 0, other = 0;
+  const detail::Certificate<D>* previous = nullptr;
+};
+
+// Slack of a certificate, cells: far above the round-off of the composed
+// maps and the margins below, far below any motion that matters.
+constexpr double kCertificateSlack = 1e-6;
+
 // eq. 3-4 for one direction: appends to `buf` the nodes of `owner` (pose Ro, xo)
 // inside the level set of `other` (pose Rt, xt), with normals of sign
 // `normalSign` x grad phi_other (so they point from b towards a), in node
@@ -192,17 +203,18 @@ std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, 
 // are never tested. So none of the cell's nodes can touch. The test is
 // exact (no contact is lost); nodes of surviving leaves go through the same
 // per-node test as without the tree, so the contacts are the same.
-// The walk's ids and the certificate the last compute() left for them (null: none).
-template <int D>
-struct CertificateKey {
-  std::uint64_t owner = 0, other = 0;
-  const detail::Certificate<D>* previous = nullptr;
-};
-
-// Slack of a certificate, cells: far above the round-off of the composed
-// maps and the margins below, far below any motion that matters.
-constexpr double kCertificateSlack = 1e-6;
-
+//
+// Separation certificate (`key` non-null): a walk that finds no contact
+// records the map and the smallest margin of its rejections, in cells: a
+// cell or node outside the bounding sphere or the box, its distance beyond
+// it (a lower bound for the box: the largest excess along an axis); a cell
+// rejected by the slope bound, (phi(c') - L r) / L, since a node y' moved by
+// d from the cell is within d + r of c' and phi(y') >= phi(c') - L (d + r);
+// a single node with phi >= 0, phi / L (both ends of its segment in the box,
+// which is convex). No node can then be found inside before some node has
+// moved by the margin relative to the other's grid, so the next walk is
+// spared while the composed map has moved less (README "Separation
+// certificates").
 template <int D, ForceFormulation Formulation>
 std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
@@ -235,7 +247,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const std::vector<double>& weights = owner.nodes().weights;
   const std::size_t first = buf.nodes.size();
 
-  // Separation certificate (file comment): the walk is spared while no
+  // Separation certificate (above): the walk is spared while no
   // point of the owner has moved, relative to the other's grid, by the
   // clearance the last walk measured. |x| <= |c_root| + r_root bounds the
   // nodes' distance from the owner's origin, so a node moved at most
