@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -682,6 +684,16 @@ TEST(Split, NodesMadeAfreshAreAllMarkedNew) {
     const Vec<2> x = cap.childToParent.apply(cap.shape->nodes().positions[n]);
     EXPECT_NEAR(x[1], -radius + 2.5 * h, 0.25 * h) << n;  // on the cut face
   }
+  // Every node on the plane is new, the ones at the rim too (a neighbour
+  // pressing into the parent's surface can hold them deep).
+  std::size_t onPlane = 0;
+  for (std::uint32_t n = 0; n < cap.shape->nodes().size(); ++n) {
+    const Vec<2> x = cap.childToParent.apply(cap.shape->nodes().positions[n]);
+    if (std::abs(x[1] - (-radius + 2.5 * h)) > 1e-6 * h) continue;
+    ++onPlane;
+    EXPECT_TRUE(std::binary_search(cap.cutFaceNodes.begin(), cap.cutFaceNodes.end(), n)) << n;
+  }
+  EXPECT_GT(onPlane, 0u);
   options.minFragmentNodes = 1000;  // more than the parent has on the cap: made afresh
   const SplitResult<2> fresh = splitShape<2>(*parent, cut, options);
   ASSERT_EQ(fresh.fragments.size(), 2u);
