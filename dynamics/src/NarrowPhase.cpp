@@ -269,6 +269,10 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   double clear = std::numeric_limits<double>::infinity();
   const double perSlopeCell = certify ? 1.0 / (slope * h) : 0.0;
   std::uint64_t tested = 0;
+  // How far g lies beyond the node box along its worst axis (<= 0 inside).
+  const auto beyondBox = [upper](const Vec<D>& g) {
+    return std::max((-g.array()).maxCoeff(), (g.array() - upper.array()).maxCoeff());
+  };
   const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
     const Vec<D> g = map * cell.centre + shift;
     const double r = cell.radius / h;
@@ -277,7 +281,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       if (certify) clear = std::min(clear, std::sqrt(apart2) - reach - r);
       return true;
     }
-    const double outside = std::max((-g.array()).maxCoeff(), (g.array() - upper.array()).maxCoeff()) - r;
+    const double outside = beyondBox(g) - r;
     if (outside > 0.0) {
       if (certify) clear = std::min(clear, outside);
       return true;
@@ -304,7 +308,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         if (certify) clear = std::min(clear, std::sqrt(apart2) - reach);
         continue;
       }
-      const double outside = std::max((-g.array()).maxCoeff(), (g.array() - upper.array()).maxCoeff());
+      const double outside = beyondBox(g);
       if (outside > 0.0) {
         if (certify) clear = std::min(clear, outside);
         continue;
@@ -590,6 +594,12 @@ bool keyLess(const HistoryPair& h, std::uint64_t idA, std::uint64_t other) {
   return h.idA < idA || (h.idA == idA && h.other < other);
 }
 
+// The order of certificates_: by (owner, other), as keyLess orders history_.
+template <int D>
+bool certificateLess(const detail::Certificate<D>& c, std::uint64_t owner, std::uint64_t other) {
+  return c.owner < owner || (c.owner == owner && c.other < other);
+}
+
 }  // namespace
 
 template <int D>
@@ -769,7 +779,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     CertificateKey<D> key{owner, other, nullptr};
     const auto it = std::lower_bound(certificates_.begin(), certificates_.end(), key,
                                      [](const detail::Certificate<D>& c, const CertificateKey<D>& k) {
-                                       return c.owner < k.owner || (c.owner == k.owner && c.other < k.other);
+                                       return certificateLess(c, k.owner, k.other);
                                      });
     if (it != certificates_.end() && it->owner == owner && it->other == other) key.previous = &*it;
     return key;
@@ -1001,7 +1011,7 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   // Keys are unique: the order is the same for any thread count.
   std::sort(certificates_.begin(), certificates_.end(),
             [](const detail::Certificate<D>& x, const detail::Certificate<D>& y) {
-              return x.owner < y.owner || (x.owner == y.owner && x.other < y.other);
+              return certificateLess(x, y.owner, y.other);
             });
 
   // The marks of nodes born this step are used.
