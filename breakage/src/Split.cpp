@@ -200,9 +200,10 @@ std::vector<Grid<D>> sidePieces(const Grid<D>& side, int padding) {
 // per-node law each copy is a full contact spring, so k copies make that point
 // k times as stiff and put k times the elastic energy into a contact the
 // moment the fragment is born. Deterministic: nodes are taken in order and
-// only looked up in the cells around them.
+// only looked up in the cells around them. `starts`, when given, is one
+// point per node and is kept beside the nodes: a merged node keeps its first one's.
 template <int D>
-void mergeCoincidentNodes(NodeSet<D>& nodes, double tolerance) {
+void mergeCoincidentNodes(NodeSet<D>& nodes, double tolerance, std::vector<Vec<D>>* starts = nullptr) {
   // Kept nodes by cell of side 2 x tolerance: a kept node within the
   // tolerance of x lies in x's cell or, per axis, in the neighbour on the side
   // of the cell x is nearer to (2^D cells). Cells are packed into one integer
@@ -262,10 +263,12 @@ void mergeCoincidentNodes(NodeSet<D>& nodes, double tolerance) {
       keys[slot] = pack(home);
       next.push_back(heads[slot]);
       heads[slot] = std::uint32_t(kept.size());
+      if (starts) (*starts)[kept.size()] = (*starts)[i];  // kept.size() <= i
       kept.positions.push_back(x);
       kept.weights.push_back(nodes.weights[i]);
     }
   }
+  if (starts) starts->resize(kept.size());
   nodes = std::move(kept);
 }
 
@@ -281,6 +284,11 @@ std::size_t slotOf(const std::array<Side<D>, 2>& sides, std::size_t side, std::s
 /// samples at phi_f = 0 and hand it to one side.
 template <int D>
 constexpr int kCutSubsamples = 4;
+
+/// How far (parent cells) a parent node's projection onto its piece's
+/// surface may travel beyond its distance from that surface before the node
+/// counts as moved to a new point (nodesOnPiece).
+constexpr double kSlideCells = 0.1;
 
 /// The parent's mass integrand (eq. 24-30, the sums massProperties() forms)
 /// partitioned among the pieces, in the parent's grid frame about `reference`
@@ -618,20 +626,49 @@ void pullInsideParent(NodeSet<D>& nodes, const Grid<D>& fineGrid, const Grid<D>&
 /// out: both found by fuzz_split) is not a surface node of this piece:
 /// dropped; a converged projection is within 1e-4 cells. Nodes that landed
 /// on one point are one node. `h` is the parent's spacing.
+///
+/// `starts` gets, per node kept, the point it was projected from (the
+/// parent's node, or the cut's), for movedNodes().
 template <int D>
-NodeSet<D> nodesOnPiece(NodeSet<D> nodes, const Grid<D>& pieceGrid, double h, double nodesPerCell) {
-  for (Vec<D>& x : nodes.positions) x = geometry::projectOntoZero(pieceGrid, x, 1e-4, 10);
+NodeSet<D> nodesOnPiece(NodeSet<D> nodes, const Grid<D>& pieceGrid, double h, double nodesPerCell,
+                        std::vector<Vec<D>>& starts) {
+  starts.clear();
   std::size_t keptCount = 0;
   for (std::size_t n = 0; n < nodes.size(); ++n) {
-    if (!(std::abs(pieceGrid.value(nodes.positions[n])) <= 1e-3 * h)) continue;
-    nodes.positions[keptCount] = nodes.positions[n];
+    const Vec<D> x = geometry::projectOntoZero(pieceGrid, nodes.positions[n], 1e-4, 10);
+    if (!(std::abs(pieceGrid.value(x)) <= 1e-3 * h)) continue;
+    starts.push_back(nodes.positions[n]);
+    nodes.positions[keptCount] = x;
     nodes.weights[keptCount] = nodes.weights[n];
     ++keptCount;
   }
   nodes.positions.resize(keptCount);
   nodes.weights.resize(keptCount);
-  mergeCoincidentNodes(nodes, 0.25 * h / nodesPerCell);
+  mergeCoincidentNodes(nodes, 0.25 * h / nodesPerCell, &starts);
   return nodes;
+}
+
+/// Where a piece's nodes that are new to it lie (its grid frame), by first
+/// coordinate: those carried from their start (nodesOnPiece) farther than
+/// their start's distance from the piece's surface plus kSlideCells of the
+/// parent's cells. Moving a node onto the piece's surface takes about that
+/// distance; where the interpolant's gradient is weak (near a rim) the
+/// projection's capped Newton steps can slide a node most of a cell along
+/// the surface, and there a neighbour may overlap the surface where no node
+/// of the parent felt it (a 3D fragment was born holding 100x its parent's
+/// spring energy, 18 % of the run's energy scale, from one node slid 0.8
+/// cells into a grain's overlap). Such a node is new to the fragment, as a
+/// cut face's are (Fragment::cutFaceNodes).
+template <int D>
+std::vector<Vec<D>> movedNodes(const NodeSet<D>& nodes, const std::vector<Vec<D>>& starts, const Grid<D>& pieceGrid,
+                               double h) {
+  std::vector<Vec<D>> out;
+  for (std::size_t n = 0; n < starts.size(); ++n) {
+    const double travel = (nodes.positions[n] - starts[n]).norm();
+    if (travel > std::abs(pieceGrid.value(starts[n])) + kSlideCells * h) out.push_back(nodes.positions[n]);
+  }
+  std::sort(out.begin(), out.end(), [](const Vec<D>& a, const Vec<D>& b) { return a[0] < b[0]; });
+  return out;
 }
 
 /// Surface nodes of a grid at `nodesPerCell`, raised until there are at least
@@ -792,6 +829,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
     int side = 0;
     bool regridded = false;
     bool freshNodes = false;  ///< its nodes made afresh, not the parent's
+    std::vector<Vec<D>> starts;  ///< per node, where it was projected from (empty when made afresh)
     double nodesPerCell = 0.0;  ///< of the piece's own grid: what its own splits put on their cut faces
     double nodeStiffnessScale = 1.0;  ///< ShapeOptions::nodeStiffnessScale
   };
@@ -837,7 +875,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
           NodeSet<D> nodes;
           bool ownNodes = false;
           if (options.regridKeepsNodeSpacing && planeGrid) {
-            nodes = nodesOnPiece(std::move(side.nodes[k]), refined, h, nodesPerCell);
+            nodes = nodesOnPiece(std::move(side.nodes[k]), refined, h, nodesPerCell, piece.starts);
             ownNodes = nodes.size() >= std::size_t(options.minFragmentNodes);
           }
           if (!ownNodes) nodes = nodesWithFloor(refined, density, options.minFragmentNodes);
@@ -861,7 +899,7 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
         // A copy: a later piece of this side may be re-gridded beside it.
         piece.grid = side.pieces[k];
         matchSurface(piece.grid);
-        NodeSet<D> nodes = nodesOnPiece(std::move(side.nodes[k]), piece.grid, h, nodesPerCell);
+        NodeSet<D> nodes = nodesOnPiece(std::move(side.nodes[k]), piece.grid, h, nodesPerCell, piece.starts);
         if (nodes.empty()) {
           nodes = nodesWithFloor(piece.grid, nodesPerCell, 1);
           piece.freshNodes = true;
@@ -910,18 +948,30 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
     geometry::ShapeOptions pieceOptions = childOptions;
     pieceOptions.nodesPerCell = piece.nodesPerCell;
     pieceOptions.nodeStiffnessScale = piece.nodeStiffnessScale;
+    // The nodes moved to new points, found by position: the shape reorders its nodes.
+    const std::vector<Vec<D>> movedAt =
+        piece.freshNodes ? std::vector<Vec<D>>{} : movedNodes(piece.nodes, piece.starts, piece.grid, h);
     fragment.shape =
         Shape<D>::fromGridNodesAndMass(std::move(piece.grid), std::move(piece.nodes), piece.mass, pieceOptions);
     fragment.childToParent = gridToParentBody * fragment.shape->bodyToGrid();
-    // Its nodes that were not the parent's: on the new face, or all when made
-    // afresh. Indices of the shape's nodes, which it keeps in its node tree's
-    // order, not the order they were made in (the piece's grid frame is the
-    // parent's).
+    // Its nodes that were not the parent's: on the new face, moved to a new
+    // point, or all when made afresh. Indices of the shape's nodes, which it
+    // keeps in its node tree's order, not the order they were made in (the
+    // piece's grid frame is the parent's).
     const double pieceSpacing = fragment.shape->grid().spacing();
+    const double sameNode = 1e-9 * h;  // the body-frame round trip's round-off is far below
+    const auto wasMoved = [&](const Vec<D>& x) {
+      auto it = std::lower_bound(movedAt.begin(), movedAt.end(), x[0] - sameNode,
+                                 [](const Vec<D>& a, double v) { return a[0] < v; });
+      for (; it != movedAt.end() && (*it)[0] <= x[0] + sameNode; ++it) {
+        if ((*it - x).norm() <= sameNode) return true;
+      }
+      return false;
+    };
     const auto& shapeNodes = fragment.shape->nodes().positions;
     for (std::size_t n = 0; n < shapeNodes.size(); ++n) {
       const Vec<D> x = fragment.shape->bodyToGrid().apply(shapeNodes[n]);
-      if (piece.freshNodes || (std::abs(psi(x)) < 0.25 * pieceSpacing && grid.value(x) < -0.05 * h)) {
+      if (piece.freshNodes || (std::abs(psi(x)) < 0.25 * pieceSpacing && grid.value(x) < -0.05 * h) || wasMoved(x)) {
         fragment.cutFaceNodes.push_back(std::uint32_t(n));
       }
     }

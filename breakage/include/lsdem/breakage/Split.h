@@ -144,7 +144,9 @@ struct Fragment {
   /// The child's nodes that were not nodes of the parent, ascending: those
   /// on its new face (on the fracture surface, within a quarter of its own
   /// cell, and more than a twentieth of a parent cell inside the parent's
-  /// surface), or all of them when its nodes were made afresh (a re-gridded
+  /// surface), those a projection onto its surface carried along it to a
+  /// point the parent had no node at, or all of them when its nodes were
+  /// made afresh (a re-gridded
   /// fragment with fewer than SplitOptions::minFragmentNodes of the parent's,
   /// or a curved cut). Where one is born inside another body, its spring
   /// starts relaxed (dynamics::ContactSolver::markNewborn), so a split stores
