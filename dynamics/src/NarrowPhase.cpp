@@ -176,11 +176,13 @@ std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, 
   return tested;
 }
 
-// The walk's ids and the certificate the last compute() left for them (null: none).
+// The walk's ids, the certificate the last compute() left for them (null:
+// none) and the slot this compute() leaves its own in (cleared by the caller).
 template <int D>
 struct CertificateKey {
   std::uint64_t owner = 0, other = 0;
   const detail::Certificate<D>* previous = nullptr;
+  detail::Certificate<D>* out = nullptr;
 };
 
 // Slack of a certificate, cells: far above the round-off of the composed
@@ -258,7 +260,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     const double rho = tree.cells[0].centre.norm() + tree.cells[0].radius;
     const double moved = (map - c.map).norm() * rho + (shift - c.shift).norm();
     if (moved + kCertificateSlack < c.clearance) {
-      buf.certificates.push_back(c);
+      *key->out = c;
       ++buf.certifiedWalks;
       return 0;
     }
@@ -345,7 +347,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   };
   buf.cellChecks += walkTree<D>(tree, reject, leaf);
   if (certify && buf.nodes.size() == first && clear > kCertificateSlack) {
-    buf.certificates.push_back({key->owner, key->other, &owner, &other, map, shift, clear});
+    *key->out = {key->owner, key->other, &owner, &other, map, shift, clear};
   }
   sortByNode(buf, first);
   return tested;
@@ -594,7 +596,7 @@ bool keyLess(const HistoryPair& h, std::uint64_t idA, std::uint64_t other) {
   return h.idA < idA || (h.idA == idA && h.other < other);
 }
 
-// The order of certificates_: by (owner, other), as keyLess orders history_.
+// The order of certificateOrder_: by (owner, other), as keyLess orders history_.
 template <int D>
 bool certificateLess(const detail::Certificate<D>& c, std::uint64_t owner, std::uint64_t other) {
   return c.owner < owner || (c.owner == owner && c.other < other);
@@ -772,16 +774,47 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     buf.nodeChecks = 0;
     buf.cellChecks = 0;
     buf.certifiedWalks = 0;
-    buf.certificates.clear();
   }
-  // The last compute()'s certificate of a walk (null: none).
-  const auto certificateKey = [&](std::uint64_t owner, std::uint64_t other) {
-    CertificateKey<D> key{owner, other, nullptr};
-    const auto it = std::lower_bound(certificates_.begin(), certificates_.end(), key,
-                                     [](const detail::Certificate<D>& c, const CertificateKey<D>& k) {
-                                       return certificateLess(c, k.owner, k.other);
-                                     });
-    if (it != certificates_.end() && it->owner == owner && it->other == other) key.previous = &*it;
+  // Every particle's rotation matrix, once (a pair task reads two).
+  rotations_.resize(n);
+  const std::ptrdiff_t particleCount = std::ptrdiff_t(n);
+#pragma omp parallel for schedule(static) if (particleCount > 4096)
+  for (std::ptrdiff_t i = 0; i < particleCount; ++i) rotations_[std::size_t(i)] = p.rotation(std::size_t(i));
+  // Certificates: last step's become the previous; a slot per pair and
+  // direction for this step's. Where the pairs are not last step's (a
+  // rebuilt Verlet list, particles added or removed), the previous ones are
+  // found by their ids instead of their slot.
+  const bool certify = certificatesOn_;
+  if (certify) {
+    std::swap(certificates_, previousCertificates_);
+    certificates_.resize(2 * pairTasks);
+    certificateOrder_.clear();
+    if (certificatePairs_ != pairs) {
+      for (std::uint32_t q = 0; q < previousCertificates_.size(); ++q) {
+        if (previousCertificates_[q].clearance > 0.0) certificateOrder_.push_back(q);
+      }
+      std::sort(certificateOrder_.begin(), certificateOrder_.end(), [&](std::uint32_t x, std::uint32_t y) {
+        return certificateLess(previousCertificates_[x], previousCertificates_[y].owner, previousCertificates_[y].other);
+      });
+      certificatePairs_ = pairs;
+    }
+  }
+  // The walk (owner in other) of task k's slot `slot`: its last certificate, its slot for this step's.
+  const auto certificateKey = [&](std::size_t slot, std::uint64_t owner, std::uint64_t other) {
+    CertificateKey<D> key{owner, other, nullptr, &certificates_[slot]};
+    key.out->clearance = 0.0;
+    const auto matches = [&](const detail::Certificate<D>& c) {
+      return c.clearance > 0.0 && c.owner == owner && c.other == other;
+    };
+    if (slot < previousCertificates_.size() && matches(previousCertificates_[slot])) {
+      key.previous = &previousCertificates_[slot];
+    } else if (!certificateOrder_.empty()) {
+      const auto it = std::lower_bound(certificateOrder_.begin(), certificateOrder_.end(), 0,
+                                       [&](std::uint32_t q, int) {
+                                         return certificateLess(previousCertificates_[q], owner, other);
+                                       });
+      if (it != certificateOrder_.end() && matches(previousCertificates_[*it])) key.previous = &previousCertificates_[*it];
+    }
     return key;
   };
 
@@ -834,15 +867,20 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       const Shape<D>& sb = *p.shape[ib];
       const Vec<D>& xa = p.position[ia];
       const Vec<D>& xb = p.position[ib];
+      CertificateKey<D> ab, ba;
+      if (certify) {
+        ab = certificateKey(2 * std::size_t(k), p.id[ia], p.id[ib]);
+        ba = certificateKey(2 * std::size_t(k) + 1, p.id[ib], p.id[ia]);
+      }
       // Bounding spheres apart: no node can touch.
       const double reach = sa.boundingRadius() + sb.boundingRadius();
       if ((xb - xa).squaredNorm() > reach * reach) return;
       // Nodes of a in b, then nodes of b in a.
-      const Mat<D> Ra = p.rotation(ia), Rb = p.rotation(ib);
+      const Mat<D>& Ra = rotations_[ia];
+      const Mat<D>& Rb = rotations_[ib];
       const std::size_t begin = buf.nodes.size();
-      const CertificateKey<D> ab = certificateKey(p.id[ia], p.id[ib]), ba = certificateKey(p.id[ib], p.id[ia]);
-      const CertificateKey<D>* abKey = certificatesOn_ ? &ab : nullptr;
-      const CertificateKey<D>* baKey = certificatesOn_ ? &ba : nullptr;
+      const CertificateKey<D>* abKey = certify ? &ab : nullptr;
+      const CertificateKey<D>* baKey = certify ? &ba : nullptr;
       buf.nodeChecks += collectLevelSet<D, Formulation>(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf, abKey);
       buf.nodeChecks += collectLevelSet<D, Formulation>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf, baKey);
       if (buf.nodes.size() == begin) return;
@@ -882,7 +920,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         const double offset = plane.signedDistance(x);
         if (offset > s.boundingRadius()) continue;
         const std::size_t begin = buf.nodes.size();
-        buf.nodeChecks += collectPlane<D, Formulation>(s, p.rotation(std::size_t(i)), x, plane, offset, buf);
+        buf.nodeChecks += collectPlane<D, Formulation>(s, rotations_[std::size_t(i)], x, plane, offset, buf);
         if (buf.nodes.size() == begin) continue;
         PairContact<D> rec;
         rec.a = std::uint32_t(i);
@@ -918,7 +956,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         const double reach = s.boundingRadius() + ts.boundingRadius();
         if ((tool.position - x).squaredNorm() > reach * reach) continue;
         const std::size_t begin = buf.nodes.size();
-        buf.nodeChecks += collectLevelSet<D, Formulation>(s, p.rotation(std::size_t(i)), x, ts,
+        buf.nodeChecks += collectLevelSet<D, Formulation>(s, rotations_[std::size_t(i)], x, ts,
                                                           Rotation<D>::matrix(tool.orientation), tool.position, 1.0,
                                                           1.0, 0, buf, nullptr);
         if (buf.nodes.size() == begin) continue;
@@ -1001,18 +1039,11 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   nodeChecks_ = 0;
   cellChecks_ = 0;
   certifiedWalks_ = 0;
-  certificates_.clear();
   for (const ThreadBuffers<D>& buf : threads_) {
     nodeChecks_ += buf.nodeChecks;
     cellChecks_ += buf.cellChecks;
     certifiedWalks_ += buf.certifiedWalks;
-    certificates_.insert(certificates_.end(), buf.certificates.begin(), buf.certificates.end());
   }
-  // Keys are unique: the order is the same for any thread count.
-  std::sort(certificates_.begin(), certificates_.end(),
-            [](const detail::Certificate<D>& x, const detail::Certificate<D>& y) {
-              return certificateLess(x, y.owner, y.other);
-            });
 
   // The marks of nodes born this step are used.
   newborn_.clear();

@@ -104,7 +104,7 @@ struct NodeWork {
 /// found no contact when the composed map (owner body -> other's grid cells)
 /// was (map, shift), and no node of the owner can reach the other body, nor
 /// its grid box or bounding sphere, before some point of the owner moves
-/// `clearance` cells relative to that grid.
+/// `clearance` cells relative to that grid. A clearance of 0: no certificate.
 template <int D>
 struct Certificate {
   std::uint64_t owner = 0, other = 0;  ///< global ids, in the walk's direction
@@ -125,7 +125,6 @@ struct alignas(64) ThreadBuffers {
   std::uint64_t nodeChecks = 0;
   std::uint64_t cellChecks = 0;  ///< node-tree cells tested (bulk rejection)
   std::uint64_t certifiedWalks = 0;  ///< walks a separation certificate spared
-  std::vector<Certificate<D>> certificates;  ///< made or kept this step
   // Scratch of sortByNode.
   std::vector<std::uint32_t> order;
   std::vector<NodeContact<D>> nodeScratch;
@@ -226,7 +225,10 @@ class ContactSolver {
   /// forces are the same either way, only nodeChecks() and cellChecks() drop.
   void setSeparationCertificates(bool on) {
     certificatesOn_ = on;
-    if (!on) certificates_.clear();
+    if (!on) {
+      certificates_.clear();
+      previousCertificates_.clear();
+    }
   }
   /// @brief Node walks (one per pair and direction) the certificates spared in the last compute().
   std::uint64_t certifiedWalks() const { return certifiedWalks_; }
@@ -365,17 +367,23 @@ class ContactSolver {
   // (filled as gather() copies the records; rebuilt from them on loadState()).
   std::vector<std::uint32_t> historyKeys_;
   void buildHistoryKeys();
-  // Separation certificates of the last compute(), sorted by (owner, other):
-  // a cache, not saved with the state (a restored run makes them afresh, with
-  // the same contacts).
+  // Separation certificates: a cache, not saved with the state (a restored
+  // run makes them afresh, with the same contacts). Two slots per candidate
+  // pair, in the pairs' order (2k: a's nodes in b, 2k + 1: b's in a), so a
+  // walk finds its last certificate at its own slot while the Verlet list is
+  // unchanged; after the list changed, through certificateOrder_ (the
+  // previous step's certificates by (owner, other)).
   bool certificatesOn_ = true;
-  std::vector<detail::Certificate<D>> certificates_;
+  std::vector<detail::Certificate<D>> certificates_, previousCertificates_;
+  std::vector<std::array<std::uint32_t, 2>> certificatePairs_;  // the pairs certificates_ was made for
+  std::vector<std::uint32_t> certificateOrder_;
   std::uint64_t certifiedWalks_ = 0;
   std::size_t particlePairCount_ = 0, planePairCount_ = 0;
   std::size_t particleCount_ = 0, planeCount_ = 0, toolCount_ = 0;
   double elasticEnergy_ = 0.0, dissipatedPower_ = 0.0;
   std::uint64_t nodeChecks_ = 0, cellChecks_ = 0;
   // Scratch reused between steps.
+  std::vector<Mat<D>> rotations_;  // each particle's, this compute()
   std::vector<detail::ThreadBuffers<D>> threads_;
   std::vector<detail::TaskOutput> tasks_;
   BoundaryLoads<D> loads_;
