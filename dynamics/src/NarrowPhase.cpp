@@ -182,7 +182,9 @@ template <int D>
 struct CertificateKey {
   std::uint64_t owner = 0, other = 0;
   const detail::Certificate<D>* previous = nullptr;
+  const std::array<std::uint32_t, 2>* previousLeaves = nullptr;  // its leaves
   detail::Certificate<D>* out = nullptr;
+  std::uint32_t thread = 0;  // the calling thread's index
 };
 
 // Slack of a certificate, cells: far above the round-off of the composed
@@ -255,20 +257,29 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // nodes' distance from the owner's origin, so a node moved at most
   // ||map - map_0||_F rho + |shift - shift_0| cells.
   const bool certify = key != nullptr && slope > 0.0;
+  const detail::Certificate<D>* previous = nullptr;
+  double moved = 0.0;
   if (certify && key->previous && key->previous->ownerShape == &owner && key->previous->otherShape == &other) {
-    const detail::Certificate<D>& c = *key->previous;
+    previous = key->previous;
     const double rho = tree.cells[0].centre.norm() + tree.cells[0].radius;
-    const double moved = (map - c.map).norm() * rho + (shift - c.shift).norm();
-    if (moved + kCertificateSlack < c.clearance) {
-      *key->out = c;
+    moved = (map - previous->map).norm() * rho + (shift - previous->shift).norm();
+    if (moved + kCertificateSlack < previous->clearance) {
+      // Spared; its leaves move to this step's list with it.
+      *key->out = *previous;
+      key->out->leafThread = key->thread;
+      key->out->leafFirst = std::uint32_t(buf.leaves.size());
+      buf.leaves.insert(buf.leaves.end(), key->previousLeaves, key->previousLeaves + previous->leafCount);
       ++buf.certifiedWalks;
       return 0;
     }
+    if (!(moved + kCertificateSlack < previous->restClearance)) previous = nullptr;
   }
-  // The walk's clearance, cells: how far any point of the owner may move
-  // before a test that rejected it could pass (the smallest margin of every
-  // rejection; 0 for a node inside without a normal).
-  double clear = std::numeric_limits<double>::infinity();
+  // The walk's clearances, cells: how far any point of the owner may move
+  // before a test that rejected it could pass (the smallest margin of the
+  // rejections of tree cells, and of single nodes; 0 for a node inside
+  // without a normal).
+  double clearCells = std::numeric_limits<double>::infinity();
+  double clearNodes = std::numeric_limits<double>::infinity();
   const double perSlopeCell = certify ? 1.0 / (slope * h) : 0.0;
   std::uint64_t tested = 0;
   // How far g lies beyond the node box along its worst axis (<= 0 inside).
@@ -280,12 +291,12 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     const double r = cell.radius / h;
     const double apart2 = (g - centre).squaredNorm();
     if (apart2 > (reach + r) * (reach + r)) {
-      if (certify) clear = std::min(clear, std::sqrt(apart2) - reach - r);
+      if (certify) clearCells = std::min(clearCells, std::sqrt(apart2) - reach - r);
       return true;
     }
     const double outside = beyondBox(g) - r;
     if (outside > 0.0) {
-      if (certify) clear = std::min(clear, outside);
+      if (certify) clearCells = std::min(clearCells, outside);
       return true;
     }
     // The slope bound holds along segments in the grid box, and only nodes in
@@ -294,7 +305,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     const Vec<D> inside = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
     const double above = grid.valueAtCells(inside) - (slope * cell.radius + margin);
     if (above > 0.0) {
-      if (certify) clear = std::min(clear, above * perSlopeCell);
+      if (certify) clearCells = std::min(clearCells, above * perSlopeCell);
       return true;
     }
     return false;
@@ -307,19 +318,19 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       const Vec<D> g = map * x + shift;
       const double apart2 = (g - centre).squaredNorm();
       if (apart2 > reach2) {
-        if (certify) clear = std::min(clear, std::sqrt(apart2) - reach);
+        if (certify) clearNodes = std::min(clearNodes, std::sqrt(apart2) - reach);
         continue;
       }
       const double outside = beyondBox(g);
       if (outside > 0.0) {
-        if (certify) clear = std::min(clear, outside);
+        if (certify) clearNodes = std::min(clearNodes, outside);
         continue;
       }
       // The value first; the gradient only for the few nodes inside
       // (valueAtCells() and valueAndGradientAtCells() agree bit for bit).
       const double value = grid.valueAtCells(g);
       if (!(value < 0.0)) {
-        if (certify) clear = std::min(clear, (value - margin) * perSlopeCell);
+        if (certify) clearNodes = std::min(clearNodes, (value - margin) * perSlopeCell);
         continue;
       }
       Vec<D> grad;
@@ -328,7 +339,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       Vec<D> normal = gradToWorld * grad;
       const double length = normal.norm();
       if (!(length > 0.0)) {
-        clear = 0.0;
+        clearNodes = 0.0;
         continue;
       }
       NodeContact<D> c;
@@ -345,9 +356,41 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       buf.work.push_back(w);
     }
   };
-  buf.cellChecks += walkTree<D>(tree, reject, leaf);
-  if (certify && buf.nodes.size() == first && clear > kCertificateSlack) {
-    *key->out = {key->owner, key->other, &owner, &other, map, shift, clear};
+  if (!certify) {
+    buf.cellChecks += walkTree<D>(tree, reject, leaf);
+    sortByNode(buf, first);
+    return tested;
+  }
+  const std::uint32_t leafFirst = std::uint32_t(buf.leaves.size());
+  detail::Certificate<D> made;
+  if (previous) {
+    // Only the leaves the certificate kept; the rest stays certified (the
+    // same reference map, so its clearance holds), and the nodes tested now
+    // are certified for as far as they may move beyond what the map has.
+    for (std::uint32_t q = 0; q < previous->leafCount; ++q) {
+      const std::array<std::uint32_t, 2>& range = key->previousLeaves[q];
+      buf.leaves.push_back(range);
+      leaf(range[0], range[1]);
+    }
+    made = *previous;
+    made.clearance = std::min(previous->restClearance, clearNodes - moved);
+    ++buf.leafWalks;
+  } else {
+    // The whole tree, keeping the leaves that survive.
+    buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t begin, std::uint32_t end) {
+      buf.leaves.push_back({begin, end});
+      leaf(begin, end);
+    });
+    made = {key->owner, key->other, &owner, &other, map, shift, std::min(clearCells, clearNodes), clearCells};
+  }
+  if (buf.nodes.size() > first) made.clearance = 0.0;
+  made.leafThread = key->thread;
+  made.leafFirst = leafFirst;
+  made.leafCount = std::uint32_t(buf.leaves.size()) - leafFirst;
+  if (made.restClearance > kCertificateSlack) {
+    *key->out = made;
+  } else {
+    buf.leaves.resize(leafFirst);
   }
   sortByNode(buf, first);
   return tested;
@@ -774,6 +817,9 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     buf.nodeChecks = 0;
     buf.cellChecks = 0;
     buf.certifiedWalks = 0;
+    buf.leafWalks = 0;
+    std::swap(buf.leaves, buf.previousLeaves);
+    buf.leaves.clear();
   }
   // Every particle's rotation matrix, once (a pair task reads two).
   rotations_.resize(n);
@@ -791,7 +837,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     certificateOrder_.clear();
     if (certificatePairs_ != pairs) {
       for (std::uint32_t q = 0; q < previousCertificates_.size(); ++q) {
-        if (previousCertificates_[q].clearance > 0.0) certificateOrder_.push_back(q);
+        if (previousCertificates_[q].restClearance > 0.0) certificateOrder_.push_back(q);
       }
       std::sort(certificateOrder_.begin(), certificateOrder_.end(), [&](std::uint32_t x, std::uint32_t y) {
         return certificateLess(previousCertificates_[x], previousCertificates_[y].owner, previousCertificates_[y].other);
@@ -801,10 +847,16 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   }
   // The walk (owner in other) of task k's slot `slot`: its last certificate, its slot for this step's.
   const auto certificateKey = [&](std::size_t slot, std::uint64_t owner, std::uint64_t other) {
-    CertificateKey<D> key{owner, other, nullptr, &certificates_[slot]};
-    key.out->clearance = 0.0;
+    CertificateKey<D> key{owner, other, nullptr, nullptr, &certificates_[slot], std::uint32_t(threadIndex())};
+    key.out->restClearance = 0.0;
+    // A certificate whose leaves are still there (the thread count may have changed).
     const auto matches = [&](const detail::Certificate<D>& c) {
-      return c.clearance > 0.0 && c.owner == owner && c.other == other;
+      if (!(c.restClearance > 0.0) || c.owner != owner || c.other != other) return false;
+      if (c.leafThread >= threads_.size()) return false;
+      const auto& leaves = threads_[c.leafThread].previousLeaves;
+      if (std::size_t(c.leafFirst) + c.leafCount > leaves.size()) return false;
+      key.previousLeaves = leaves.data() + c.leafFirst;
+      return true;
     };
     if (slot < previousCertificates_.size() && matches(previousCertificates_[slot])) {
       key.previous = &previousCertificates_[slot];
@@ -1039,10 +1091,12 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   nodeChecks_ = 0;
   cellChecks_ = 0;
   certifiedWalks_ = 0;
+  leafWalks_ = 0;
   for (const ThreadBuffers<D>& buf : threads_) {
     nodeChecks_ += buf.nodeChecks;
     cellChecks_ += buf.cellChecks;
     certifiedWalks_ += buf.certifiedWalks;
+    leafWalks_ += buf.leafWalks;
   }
 
   // The marks of nodes born this step are used.

@@ -100,11 +100,17 @@ struct NodeWork {
   std::int64_t history = -1;       ///< its record in the pair's history, or -1
 };
 
-/// A separation certificate (internal; ContactSolver::setSeparationCertificates): the walk of `owner`'s nodes against `other`'s level set
-/// found no contact when the composed map (owner body -> other's grid cells)
-/// was (map, shift), and no node of the owner can reach the other body, nor
-/// its grid box or bounding sphere, before some point of the owner moves
-/// `clearance` cells relative to that grid. A clearance of 0: no certificate.
+/// A separation certificate (internal; ContactSolver::setSeparationCertificates):
+/// when the composed map of the walk of `owner`'s nodes against `other`'s
+/// level set (owner body -> other's grid cells) was (map, shift), every node
+/// outside the walk's surviving leaves was rejected with a margin: none of
+/// them can reach the other body, nor its grid box or bounding sphere,
+/// before some point of the owner moves `restClearance` cells relative to
+/// that grid; while it has moved less, testing the nodes of those leaves
+/// (`leafCount` ranges from `leafFirst` of thread `leafThread`'s leaf list)
+/// finds every contact. When the walk found no contact, no node at all can
+/// reach it before a move of `clearance` cells (0: it found one) and the
+/// walk is spared. A restClearance of 0: no certificate.
 template <int D>
 struct Certificate {
   std::uint64_t owner = 0, other = 0;  ///< global ids, in the walk's direction
@@ -112,7 +118,9 @@ struct Certificate {
   const void* otherShape = nullptr;
   Mat<D> map = Mat<D>::Zero();
   Vec<D> shift = Vec<D>::Zero();
-  double clearance = 0.0;  ///< cells of the other's grid
+  double clearance = 0.0;      ///< cells of the other's grid
+  double restClearance = 0.0;  ///< cells of the other's grid
+  std::uint32_t leafThread = 0, leafFirst = 0, leafCount = 0;
 };
 
 /// Output buffers of one thread (internal); aligned so threads do not share cache lines.
@@ -125,6 +133,10 @@ struct alignas(64) ThreadBuffers {
   std::uint64_t nodeChecks = 0;
   std::uint64_t cellChecks = 0;  ///< node-tree cells tested (bulk rejection)
   std::uint64_t certifiedWalks = 0;  ///< walks a separation certificate spared
+  std::uint64_t leafWalks = 0;       ///< walks that tested only the leaves a certificate kept
+  /// Tree-order node ranges of the leaves the certificates made this step
+  /// keep (and of the last step's, read by any thread this step).
+  std::vector<std::array<std::uint32_t, 2>> leaves, previousLeaves;
   // Scratch of sortByNode.
   std::vector<std::uint32_t> order;
   std::vector<NodeContact<D>> nodeScratch;
@@ -232,6 +244,9 @@ class ContactSolver {
   }
   /// @brief Node walks (one per pair and direction) the certificates spared in the last compute().
   std::uint64_t certifiedWalks() const { return certifiedWalks_; }
+  /// @brief Node walks that tested only the tree leaves a certificate kept
+  /// (the rest of the tree certified clear) in the last compute().
+  std::uint64_t leafWalks() const { return leafWalks_; }
 
   /// @brief Computes the node contacts and forces of the candidate pairs, of
   /// every particle against every plane and against every tool, at the current
@@ -377,7 +392,7 @@ class ContactSolver {
   std::vector<detail::Certificate<D>> certificates_, previousCertificates_;
   std::vector<std::array<std::uint32_t, 2>> certificatePairs_;  // the pairs certificates_ was made for
   std::vector<std::uint32_t> certificateOrder_;
-  std::uint64_t certifiedWalks_ = 0;
+  std::uint64_t certifiedWalks_ = 0, leafWalks_ = 0;
   std::size_t particlePairCount_ = 0, planePairCount_ = 0;
   std::size_t particleCount_ = 0, planeCount_ = 0, toolCount_ = 0;
   double elasticEnergy_ = 0.0, dissipatedPower_ = 0.0;
