@@ -60,7 +60,9 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
       .field("contacts", contacts.pairContacts().size())
       .field("node_contacts", contacts.nodeContacts().size())
       .field("node_checks_last_step", static_cast<long long>(contacts.nodeChecks()))
-      .field("cell_checks_last_step", static_cast<long long>(contacts.cellChecks()));
+      .field("cell_checks_last_step", static_cast<long long>(contacts.cellChecks()))
+      .field("certified_walks_last_step", static_cast<long long>(contacts.certifiedWalks()))
+      .field("leaf_walks_last_step", static_cast<long long>(contacts.leafWalks()));
 
   // Mass: what is in the world and what left it.
   w.key("mass").beginObject()

@@ -32,6 +32,11 @@ TEST(RunSummary, ListsDeclaredEffectsStagesAndBudget) {
   EXPECT_NE(json.find("\"particles\": 1,"), std::string::npos);
   const std::string contacts = "\"contacts\": " + std::to_string(world.contacts().pairContacts().size()) + ",";
   EXPECT_NE(json.find(contacts), std::string::npos);
+  const std::string certified =
+      "\"certified_walks_last_step\": " + std::to_string(world.contacts().certifiedWalks()) + ",";
+  const std::string leafOnly = "\"leaf_walks_last_step\": " + std::to_string(world.contacts().leafWalks());
+  EXPECT_NE(json.find(certified), std::string::npos) << json;
+  EXPECT_NE(json.find(leafOnly), std::string::npos) << json;
   EXPECT_NE(json.find("\"name\": \"gravity\""), std::string::npos);
   EXPECT_EQ(json.find("damping\""), std::string::npos);  // not declared, not listed
   for (const char* stage : {"integrate", "broad_phase", "narrow_phase", "accumulate", "effects", "after_step"}) {
