@@ -833,7 +833,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   const bool certify = certificatesOn_;
   if (certify) {
     std::swap(certificates_, previousCertificates_);
-    certificates_.resize(2 * pairTasks);
+    certificates_.resize(2 * pairTasks + toolTasks * tools.size());
     certificateOrder_.clear();
     if (certificatePairs_ != pairs) {
       for (std::uint32_t q = 0; q < previousCertificates_.size(); ++q) {
@@ -1004,13 +1004,17 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       for (std::size_t j = 0; j < tools.size(); ++j) {
         const ToolPose<D>& tool = tools[j];
         const Shape<D>& ts = *tool.shape;
+        // Its certificate's slot: after the pairs', by particle, then tool.
+        CertificateKey<D> key;
+        if (certify) key = certificateKey(2 * pairTasks + std::size_t(i) * tools.size() + j, p.id[std::size_t(i)],
+                                          kToolTag | std::uint64_t(j));
         // Bounding spheres apart: no node can touch.
         const double reach = s.boundingRadius() + ts.boundingRadius();
         if ((tool.position - x).squaredNorm() > reach * reach) continue;
         const std::size_t begin = buf.nodes.size();
         buf.nodeChecks += collectLevelSet<D, Formulation>(s, rotations_[std::size_t(i)], x, ts,
                                                           Rotation<D>::matrix(tool.orientation), tool.position, 1.0,
-                                                          1.0, 0, buf, nullptr);
+                                                          1.0, 0, buf, certify ? &key : nullptr);
         if (buf.nodes.size() == begin) continue;
         PairContact<D> rec;
         rec.a = std::uint32_t(i);

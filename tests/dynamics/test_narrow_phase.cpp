@@ -373,7 +373,8 @@ TEST(NarrowPhase, ForcesAndMomentsBalance3D) { checkBalance<3>(); }
 // Separation certificates are exact: eight grains on a ring drawn towards
 // its centre by 0.5 % a pass while turning (about a tenth of a cell a pass),
 // from apart to pressed together, then pressed on by a hundredth of that a
-// pass. The node contacts with certificates equal those without, bit for
+// pass, around a tool (a grain held at the centre, turning) that they close
+// onto. The node contacts with certificates equal those without, bit for
 // bit, at every pass; the certificates spare walks (a wrong clearance would
 // miss the contacts that appear as the ring closes) and, for the pairs in
 // contact, the tree walks (only the leaves a certificate kept are tested).
@@ -394,6 +395,10 @@ void checkCertificatesExact() {
   }
   ContactSolver<D> with(ContactLawDef{}), without(ContactLawDef{});
   without.setSeparationCertificates(false);
+  const auto hub = grain<D>(4);
+  ToolPose<D> tool;
+  tool.shape = hub.get();
+  std::vector<ToolPose<D>> tools{tool};
   std::uint64_t spared = 0;
   std::size_t passesTouching = 0;
   const auto pairs = allPairs(p);
@@ -409,8 +414,14 @@ void checkCertificatesExact() {
             (p.orientation[i] * Eigen::Quaterniond(Eigen::AngleAxisd(0.01 * step, Vec<3>::UnitZ()))).normalized();
       }
     }
-    with.compute(p, pairs, {}, {}, 1e-6);
-    without.compute(p, pairs, {}, {}, 1e-6);
+    if constexpr (D == 2) {
+      tools[0].orientation -= 0.003 * step;
+    } else {
+      tools[0].orientation =
+          (tools[0].orientation * Eigen::Quaterniond(Eigen::AngleAxisd(-0.003 * step, Vec<3>::UnitX()))).normalized();
+    }
+    with.compute(p, pairs, {}, tools, 1e-6);
+    without.compute(p, pairs, {}, tools, 1e-6);
     spared += with.certifiedWalks();
     leafOnly += with.leafWalks();
     EXPECT_EQ(without.leafWalks(), 0u);
@@ -428,6 +439,7 @@ void checkCertificatesExact() {
   EXPECT_GT(spared, 100u);
   EXPECT_GT(leafOnly, 100u);
   EXPECT_GT(passesTouching, 60u);
+  EXPECT_GT(with.toolContacts().size(), 0u);  // the ring closed onto the tool
   EXPECT_LT(passesTouching, 190u);  // apart at first: the contacts appear while certificates are in use
   ::testing::Test::RecordProperty("spared_walks", std::to_string(spared));
   ::testing::Test::RecordProperty("leaf_walks", std::to_string(leafOnly));

@@ -384,10 +384,12 @@ class ContactSolver {
   void buildHistoryKeys();
   // Separation certificates: a cache, not saved with the state (a restored
   // run makes them afresh, with the same contacts). Two slots per candidate
-  // pair, in the pairs' order (2k: a's nodes in b, 2k + 1: b's in a), so a
-  // walk finds its last certificate at its own slot while the Verlet list is
-  // unchanged; after the list changed, through certificateOrder_ (the
-  // previous step's certificates by (owner, other)).
+  // pair, in the pairs' order (2k: a's nodes in b, 2k + 1: b's in a), then
+  // one per particle and tool, so a walk finds its last certificate at its
+  // own slot while the Verlet list is unchanged; after the list changed,
+  // through certificateOrder_ (the previous step's certificates by (owner,
+  // other)). Walks against planes have none (a plane test is one dot
+  // product per tree cell).
   bool certificatesOn_ = true;
   std::vector<detail::Certificate<D>> certificates_, previousCertificates_;
   std::vector<std::array<std::uint32_t, 2>> certificatePairs_;  // the pairs certificates_ was made for
