@@ -151,8 +151,8 @@ void sortByNode(ThreadBuffers<D>& buf, std::size_t first) {
 }
 
 // Depth-first walk over the cells of a node tree: `reject(cell)` true skips
-// the cell and everything below it; `leaf(begin, end)` gets the tree-order
-// range of each leaf that survives. Returns the cells tested.
+// the cell and everything below it; `leaf(index)` gets the index of each
+// leaf that survives. Returns the cells tested.
 template <int D, class Reject, class Leaf>
 std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, const Leaf& leaf) {
   if (tree.cells.empty()) return 0;
@@ -163,11 +163,12 @@ std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, 
   stack[top++] = 0;
   std::uint64_t tested = 0;
   while (top > 0) {
-    const typename geometry::NodeTree<D>::Cell& cell = tree.cells[stack[--top]];
+    const std::uint32_t index = stack[--top];
+    const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
     ++tested;
     if (reject(cell)) continue;
     if (cell.child == 0) {
-      leaf(cell.begin, cell.end);
+      leaf(index);
     } else {
       stack[top++] = cell.child + 1;
       stack[top++] = cell.child;
@@ -182,7 +183,7 @@ template <int D>
 struct CertificateKey {
   std::uint64_t owner = 0, other = 0;
   const detail::Certificate<D>* previous = nullptr;
-  const std::array<std::uint32_t, 2>* previousLeaves = nullptr;  // its leaves
+  const std::uint32_t* previousLeaves = nullptr;  // its leaves (tree cell indices)
   detail::Certificate<D>* out = nullptr;
   std::uint32_t thread = 0;  // the calling thread's index
 };
@@ -357,29 +358,34 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     }
   };
   if (!certify) {
-    buf.cellChecks += walkTree<D>(tree, reject, leaf);
+    buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
+      leaf(tree.cells[index].begin, tree.cells[index].end);
+    });
     sortByNode(buf, first);
     return tested;
   }
   const std::uint32_t leafFirst = std::uint32_t(buf.leaves.size());
   detail::Certificate<D> made;
   if (previous) {
-    // Only the leaves the certificate kept; the rest stays certified (the
-    // same reference map, so its clearance holds), and the nodes tested now
-    // are certified for as far as they may move beyond what the map has.
+    // Only the leaves the certificate kept, each still behind its own cell
+    // test; the rest stays certified (the same reference map, so its
+    // clearance holds), and what is tested now is certified for as far as
+    // it may move beyond what the map has.
     for (std::uint32_t q = 0; q < previous->leafCount; ++q) {
-      const std::array<std::uint32_t, 2>& range = key->previousLeaves[q];
-      buf.leaves.push_back(range);
-      leaf(range[0], range[1]);
+      const std::uint32_t index = key->previousLeaves[q];
+      buf.leaves.push_back(index);
+      const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
+      ++buf.cellChecks;
+      if (!reject(cell)) leaf(cell.begin, cell.end);
     }
     made = *previous;
-    made.clearance = std::min(previous->restClearance, clearNodes - moved);
+    made.clearance = std::min(previous->restClearance, std::min(clearCells, clearNodes) - moved);
     ++buf.leafWalks;
   } else {
     // The whole tree, keeping the leaves that survive.
-    buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t begin, std::uint32_t end) {
-      buf.leaves.push_back({begin, end});
-      leaf(begin, end);
+    buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
+      buf.leaves.push_back(index);
+      leaf(tree.cells[index].begin, tree.cells[index].end);
     });
     made = {key->owner, key->other, &owner, &other, map, shift, std::min(clearCells, clearNodes), clearCells};
   }
@@ -434,7 +440,9 @@ std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>
       buf.work.push_back(w);
     }
   };
-  buf.cellChecks += walkTree<D>(tree, reject, leaf);
+  buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
+    leaf(tree.cells[index].begin, tree.cells[index].end);
+  });
   sortByNode(buf, first);
   return tested;
 }

@@ -107,7 +107,8 @@ struct NodeWork {
 /// them can reach the other body, nor its grid box or bounding sphere,
 /// before some point of the owner moves `restClearance` cells relative to
 /// that grid; while it has moved less, testing the nodes of those leaves
-/// (`leafCount` ranges from `leafFirst` of thread `leafThread`'s leaf list)
+/// (`leafCount` tree cells from `leafFirst` of thread `leafThread`'s leaf
+/// list, each still behind its own cell test)
 /// finds every contact. When the walk found no contact, no node at all can
 /// reach it before a move of `clearance` cells (0: it found one) and the
 /// walk is spared. A restClearance of 0: no certificate.
@@ -134,9 +135,9 @@ struct alignas(64) ThreadBuffers {
   std::uint64_t cellChecks = 0;  ///< node-tree cells tested (bulk rejection)
   std::uint64_t certifiedWalks = 0;  ///< walks a separation certificate spared
   std::uint64_t leafWalks = 0;       ///< walks that tested only the leaves a certificate kept
-  /// Tree-order node ranges of the leaves the certificates made this step
+  /// Node-tree cell indices of the leaves the certificates made this step
   /// keep (and of the last step's, read by any thread this step).
-  std::vector<std::array<std::uint32_t, 2>> leaves, previousLeaves;
+  std::vector<std::uint32_t> leaves, previousLeaves;
   // Scratch of sortByNode.
   std::vector<std::uint32_t> order;
   std::vector<NodeContact<D>> nodeScratch;
