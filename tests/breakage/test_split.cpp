@@ -28,6 +28,16 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
+// Uniform numbers in [0, 1) from a 64-bit linear congruential sequence: the
+// same on every platform and standard library (random cuts of the lineage tests).
+struct Uniform {
+  std::uint64_t state;
+  double operator()() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) * 0x1.0p-53;
+  }
+};
+
 // A plane given in the shape's grid frame (n.x_g = offset), moved to its body frame.
 template <int D>
 HalfSpace<D> bodyPlane(const Shape<D>& shape, const Vec<D>& normalGrid, double offsetGrid) {
@@ -546,11 +556,7 @@ TEST(Split, SameResultForAnyThreadCount) {
 // and interior grid nodes only fell short there, and a neighbour's node could
 // sit 0.1 cell inside a fragment before the narrow phase looked.
 TEST(Split, FragmentBoundingSpheresHoldTheirMaterial) {
-  std::uint64_t state = 99;
-  const auto uniform = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return double(state >> 11) * 0x1.0p-53;
-  };
+  Uniform uniform{99};
   std::vector<std::shared_ptr<const Shape<3>>> generation{lsdem::test::sphereShape<3>(0.01, 8)};
   double worst = -1.0;
   std::size_t checked = 0;
@@ -714,11 +720,7 @@ TEST(Split, NodesMadeAfreshAreAllMarkedNew) {
 // at the parent's node spacing as the shipped scenes are.
 template <int D>
 void checkKeptNodesAreTheParents(std::uint64_t grains, std::size_t minChecked, std::size_t minMoved) {
-  std::uint64_t state = 5;
-  const auto uniform = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return double(state >> 11) * 0x1.0p-53;
-  };
+  Uniform uniform{5};
   lsdem::geometry::RandomGrainDef def;
   def.equivalentDiameter = 1.0;
   def.elongation = 1.3;
