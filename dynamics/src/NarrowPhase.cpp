@@ -184,6 +184,7 @@ struct CertificateKey {
   std::uint64_t owner = 0, other = 0;
   const detail::Certificate<D>* previous = nullptr;
   const std::uint32_t* previousLeaves = nullptr;  // its leaves (tree cell indices)
+  const float* previousMargins = nullptr;         // their nodes' margins (kLeafSlots per leaf)
   detail::Certificate<D>* out = nullptr;
   std::uint32_t thread = 0;  // the calling thread's index
 };
@@ -270,6 +271,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       key->out->leafThread = key->thread;
       key->out->leafFirst = std::uint32_t(buf.leaves.size());
       buf.leaves.insert(buf.leaves.end(), key->previousLeaves, key->previousLeaves + previous->leafCount);
+      buf.margins.insert(buf.margins.end(), key->previousMargins,
+                         key->previousMargins + std::size_t(previous->leafCount) * detail::kLeafSlots);
       ++buf.certifiedWalks;
       return 0;
     }
@@ -311,81 +314,107 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     }
     return false;
   };
-  const auto leaf = [&](std::uint32_t begin, std::uint32_t end) {
-    tested += end - begin;
-    for (std::uint32_t k = begin; k < end; ++k) {
-      const std::uint32_t i = tree.order[k];
-      const Vec<D>& x = nodes[i];
-      const Vec<D> g = map * x + shift;
-      const double apart2 = (g - centre).squaredNorm();
-      if (apart2 > reach2) {
-        if (certify) clearNodes = std::min(clearNodes, std::sqrt(apart2) - reach);
-        continue;
-      }
-      const double outside = beyondBox(g);
-      if (outside > 0.0) {
-        if (certify) clearNodes = std::min(clearNodes, outside);
-        continue;
-      }
-      // The value first; the gradient only for the few nodes inside
-      // (valueAtCells() and valueAndGradientAtCells() agree bit for bit).
-      const double value = grid.valueAtCells(g);
-      if (!(value < 0.0)) {
-        if (certify) clearNodes = std::min(clearNodes, (value - margin) * perSlopeCell);
-        continue;
-      }
-      Vec<D> grad;
-      const double phi = grid.valueAndGradientAtCells(g, grad);
-      // A node at a point of zero gradient (a medial point) has no normal: skipped.
-      Vec<D> normal = gradToWorld * grad;
-      const double length = normal.norm();
-      if (!(length > 0.0)) {
-        clearNodes = 0.0;
-        continue;
-      }
-      NodeContact<D> c;
-      c.point = Ro * x + xo;
-      c.normal = normal / length;
-      c.overlap = -phi;
-      c.node = i;
-      c.ownerIsB = ownerIsB;
-      buf.nodes.push_back(c);
-      NodeWork<D> w;
-      w.stiffness = stiffnessFactor<Formulation>(weights[i], weightToFactor);
-      w.area = directionWeight * weights[i];
-      w.gradient = length / h;
-      buf.work.push_back(w);
-    }
+  // One node (tree position k): appends its contact, or returns its margin
+  // in cells (how far it may move before the test that rejected it could
+  // pass; with certificates only, else 0); 0 for a contact and for a node
+  // inside without a normal.
+  const auto testNode = [&](std::uint32_t k) -> double {
+    const std::uint32_t i = tree.order[k];
+    const Vec<D>& x = nodes[i];
+    const Vec<D> g = map * x + shift;
+    const double apart2 = (g - centre).squaredNorm();
+    if (apart2 > reach2) return certify ? std::sqrt(apart2) - reach : 0.0;
+    const double outside = beyondBox(g);
+    if (outside > 0.0) return certify ? outside : 0.0;
+    // The value; the gradient, from the same corners, only for the few nodes inside.
+    Vec<D> grad;
+    const double phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
+    if (!(phi < 0.0)) return certify ? (phi - margin) * perSlopeCell : 0.0;
+    // A node at a point of zero gradient (a medial point) has no normal: skipped.
+    Vec<D> normal = gradToWorld * grad;
+    const double length = normal.norm();
+    if (!(length > 0.0)) return 0.0;
+    NodeContact<D> c;
+    c.point = Ro * x + xo;
+    c.normal = normal / length;
+    c.overlap = -phi;
+    c.node = i;
+    c.ownerIsB = ownerIsB;
+    buf.nodes.push_back(c);
+    NodeWork<D> w;
+    w.stiffness = stiffnessFactor<Formulation>(weights[i], weightToFactor);
+    w.area = directionWeight * weights[i];
+    w.gradient = length / h;
+    buf.work.push_back(w);
+    return 0.0;
   };
   if (!certify) {
     buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
-      leaf(tree.cells[index].begin, tree.cells[index].end);
+      const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
+      tested += cell.end - cell.begin;
+      for (std::uint32_t k = cell.begin; k < cell.end; ++k) testNode(k);
     });
     sortByNode(buf, first);
     return tested;
   }
+  // A certificate also keeps a margin per node of its leaves (kLeafSlots per
+  // leaf, aligned with the leaves), relative to its reference map: a lower
+  // bound of the node's margin there. A node whose margin exceeds how far
+  // the map has moved since cannot pass its test now, and is not tested.
+  constexpr std::uint32_t kSlots = detail::kLeafSlots;
+  // A margin stored as a float no larger than m, and a fresh slot's.
+  const auto lowered = [](double m) {
+    float f = float(m);
+    if (double(f) > m) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+    return f;
+  };
   const std::uint32_t leafFirst = std::uint32_t(buf.leaves.size());
   detail::Certificate<D> made;
   if (previous) {
     // Only the leaves the certificate kept, each still behind its own cell
     // test; the rest stays certified (the same reference map, so its
     // clearance holds), and what is tested now is certified for as far as
-    // it may move beyond what the map has.
+    // it may move beyond what the map has: every margin below is relative
+    // to the reference map (a margin m measured now bounds the one there
+    // from below by m - moved).
+    double clearKept = std::numeric_limits<double>::infinity();
     for (std::uint32_t q = 0; q < previous->leafCount; ++q) {
       const std::uint32_t index = key->previousLeaves[q];
+      const float* old = key->previousMargins + std::size_t(q) * kSlots;
       buf.leaves.push_back(index);
+      const std::size_t slot = buf.margins.size();
+      buf.margins.insert(buf.margins.end(), old, old + kSlots);
       const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
       ++buf.cellChecks;
-      if (!reject(cell)) leaf(cell.begin, cell.end);
+      if (reject(cell)) continue;
+      for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
+        const std::uint32_t j = k - cell.begin;
+        if (j < kSlots && moved + kCertificateSlack < double(old[j])) {
+          clearKept = std::min(clearKept, double(old[j]));
+          continue;
+        }
+        ++tested;
+        const double m = testNode(k) - moved;
+        clearKept = std::min(clearKept, m);
+        if (j < kSlots) buf.margins[slot + j] = lowered(m);
+      }
     }
     made = *previous;
-    made.clearance = std::min(previous->restClearance, std::min(clearCells, clearNodes) - moved);
+    made.clearance = std::min(previous->restClearance, std::min(clearCells - moved, clearKept));
     ++buf.leafWalks;
   } else {
-    // The whole tree, keeping the leaves that survive.
+    // The whole tree, keeping the leaves that survive and their nodes' margins.
     buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
+      const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
       buf.leaves.push_back(index);
-      leaf(tree.cells[index].begin, tree.cells[index].end);
+      const std::size_t slot = buf.margins.size();
+      buf.margins.resize(slot + kSlots, 0.0f);
+      tested += cell.end - cell.begin;
+      for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
+        const double m = testNode(k);
+        clearNodes = std::min(clearNodes, m);
+        if (k - cell.begin < kSlots) buf.margins[slot + (k - cell.begin)] = lowered(m);
+      }
     });
     made = {key->owner, key->other, &owner, &other, map, shift, std::min(clearCells, clearNodes), clearCells};
   }
@@ -397,6 +426,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     *key->out = made;
   } else {
     buf.leaves.resize(leafFirst);
+    buf.margins.resize(std::size_t(leafFirst) * kSlots);
   }
   sortByNode(buf, first);
   return tested;
@@ -474,6 +504,15 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
               const Vec<D>& centreB, const VelocityB& velocityB, const HistoryView<D>& history,
               const NewbornView& newborn) {
   const std::size_t end = buf.nodes.size();
+  // The per-node outputs of the pair's node contacts: node keys, rest
+  // overlaps, shear (below).
+  buf.keys.resize(end);
+  buf.preload.resize(end);
+  if constexpr (Friction) buf.shear.resize(end);
+  for (std::size_t j = begin; j < end; ++j) {
+    buf.keys[j] = nodeKey(buf.nodes[j]);
+    buf.preload[j] = 0.0;
+  }
   // Each node contact's record in the history (both lists ascend by node key)
   // and its spring's rest overlap: carried (and drawn in with the node), or
   // its overlap at birth for a node born this step (NarrowPhase.h).
@@ -482,14 +521,17 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
     for (std::size_t j = begin; j < end; ++j) {
       const NodeContact<D>& c = buf.nodes[j];
       NodeWork<D>& w = buf.work[j];
-      const std::uint32_t key = nodeKey(c);
+      const std::uint32_t key = buf.keys[j];
       while (cursor < history.count && history.keys[cursor] < key) ++cursor;
+      double preload = 0.0;
       if (cursor < history.count && history.keys[cursor] == key) {
         w.history = cursor;
-        if (history.preload) w.preload = std::min(history.preload[cursor], c.overlap);
+        if (history.preload) preload = std::min(history.preload[cursor], c.overlap);
       } else if (!newborn.empty()) {
-        w.preload = newborn.restOverlap(c);
+        preload = newborn.restOverlap(c);
       }
+      buf.preload[j] = preload;
+      buf.anyPreload = buf.anyPreload || preload > 0.0;
     }
   }
   // Pair-level normal stiffness K; for Hertz also the force and its spreading weights w_i delta_i.
@@ -500,7 +542,7 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
     stiffness *= law.kn;
   } else {
     for (std::size_t j = begin; j < end; ++j) {
-      const double overlap = buf.nodes[j].overlap - buf.work[j].preload;
+      const double overlap = buf.nodes[j].overlap - buf.preload[j];
       deepest = std::max(deepest, overlap);
       spreadTotal += buf.work[j].area * overlap;
     }
@@ -522,8 +564,8 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
   double elastic = 0.0, power = 0.0;
   for (std::size_t j = begin; j < end; ++j) {
     NodeContact<D>& c = buf.nodes[j];
-    NodeWork<D>& w = buf.work[j];
-    const double overlap = c.overlap - w.preload;  // the spring's own compression
+    const NodeWork<D>& w = buf.work[j];
+    const double overlap = c.overlap - buf.preload[j];  // the spring's own compression
     // Elastic normal force and the node's share of the pair's stiffness.
     double fn = 0.0, share = 0.0;
     if constexpr (Normal == NormalModel::Linear) {
@@ -609,7 +651,7 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
           ft2 = ft.squaredNorm();
         }
         if (kt > 0.0) elastic += ft2 / (2.0 * kt);
-        w.shear = shear;
+        buf.shear[j] = shear;
         force += ft;
       }
     } else {
@@ -822,12 +864,18 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     buf.dashpots.clear();
     buf.nodes.clear();
     buf.work.clear();
+    buf.shear.clear();
+    buf.preload.clear();
+    buf.keys.clear();
+    buf.anyPreload = false;
     buf.nodeChecks = 0;
     buf.cellChecks = 0;
     buf.certifiedWalks = 0;
     buf.leafWalks = 0;
     std::swap(buf.leaves, buf.previousLeaves);
     buf.leaves.clear();
+    std::swap(buf.margins, buf.previousMargins);
+    buf.margins.clear();
   }
   // Every particle's rotation matrix, once (a pair task reads two).
   rotations_.resize(n);
@@ -855,7 +903,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   }
   // The walk (owner in other) of task k's slot `slot`: its last certificate, its slot for this step's.
   const auto certificateKey = [&](std::size_t slot, std::uint64_t owner, std::uint64_t other) {
-    CertificateKey<D> key{owner, other, nullptr, nullptr, &certificates_[slot], std::uint32_t(threadIndex())};
+    CertificateKey<D> key{owner, other, nullptr, nullptr, nullptr, &certificates_[slot], std::uint32_t(threadIndex())};
     key.out->restClearance = 0.0;
     // A certificate whose leaves are still there (the thread count may have changed).
     const auto matches = [&](const detail::Certificate<D>& c) {
@@ -864,6 +912,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       const auto& leaves = threads_[c.leafThread].previousLeaves;
       if (std::size_t(c.leafFirst) + c.leafCount > leaves.size()) return false;
       key.previousLeaves = leaves.data() + c.leafFirst;
+      key.previousMargins = threads_[c.leafThread].previousMargins.data() + std::size_t(c.leafFirst) * detail::kLeafSlots;
       return true;
     };
     if (slot < previousCertificates_.size() && matches(previousCertificates_[slot])) {
@@ -1063,33 +1112,60 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   if (tasks_.size() <= particlePairTasks) particlePairCount_ = std::size_t(pairTotal);
   if (tasks_.size() <= particlePairTasks + planeTasks) planePairCount_ = std::size_t(pairTotal) - particlePairCount_;
 
-  // Copy every task's records to its place (tasks are independent).
+  // Where one thread's buffers already hold every record in output order
+  // (every task ran on it, in order: one thread, or loops too small to
+  // share), they become the output; otherwise every task's records are
+  // copied to their place (tasks are independent).
   const bool friction = frictionOn();
-  pairs_.resize(pairTotal);
-  dashpots_.resize(pairTotal);
-  nodes_.resize(nodeTotal);
-  shear_.resize(friction ? nodeTotal : 0);
-  preload_.resize(nodeTotal);
-  historyKeys_.resize(nodeTotal);
+  std::uint32_t only = tasks_.empty() ? 0 : tasks_.front().thread;
+  bool inPlace = true;
+  for (const TaskOutput& t : tasks_) {
+    if (t.pairCount + t.nodeCount == 0) continue;
+    inPlace = inPlace && t.thread == only && t.firstPair == t.outPair && t.firstNode == t.outNode;
+  }
+  for (std::size_t q = 0; q < threads_.size() && inPlace; ++q) {
+    if (q != only) inPlace = threads_[q].pairs.empty() && threads_[q].nodes.empty();
+  }
   bool anyPreload = false;
-  const std::ptrdiff_t taskCount = std::ptrdiff_t(tasks_.size());
-#pragma omp parallel for schedule(static) if (taskCount > 1024) reduction(|| : anyPreload)
-  for (std::ptrdiff_t k = 0; k < taskCount; ++k) {
-    const TaskOutput& t = tasks_[std::size_t(k)];
-    const ThreadBuffers<D>& buf = threads_[t.thread];
-    for (std::uint32_t q = 0; q < t.pairCount; ++q) {
-      PairContact<D> rec = buf.pairs[t.firstPair + q];
-      rec.firstNode = std::uint32_t(rec.firstNode - t.firstNode + t.outNode);
-      pairs_[t.outPair + q] = rec;
-      dashpots_[t.outPair + q] = buf.dashpots[t.firstPair + q];
+  if (inPlace) {
+    ThreadBuffers<D>& buf = threads_[only];
+    std::swap(pairs_, buf.pairs);
+    std::swap(dashpots_, buf.dashpots);
+    std::swap(nodes_, buf.nodes);
+    std::swap(preload_, buf.preload);
+    std::swap(historyKeys_, buf.keys);
+    if (friction) {
+      std::swap(shear_, buf.shear);
+    } else {
+      shear_.clear();
     }
-    for (std::uint32_t q = 0; q < t.nodeCount; ++q) {
-      nodes_[t.outNode + q] = buf.nodes[t.firstNode + q];
-      historyKeys_[t.outNode + q] = nodeKey(buf.nodes[t.firstNode + q]);
-      if (friction) shear_[t.outNode + q] = buf.work[t.firstNode + q].shear;
-      const double preload = buf.work[t.firstNode + q].preload;
-      preload_[t.outNode + q] = preload;
-      anyPreload = anyPreload || preload > 0.0;
+    anyPreload = buf.anyPreload;
+  } else {
+    pairs_.resize(pairTotal);
+    dashpots_.resize(pairTotal);
+    nodes_.resize(nodeTotal);
+    shear_.resize(friction ? nodeTotal : 0);
+    preload_.resize(nodeTotal);
+    historyKeys_.resize(nodeTotal);
+    for (const ThreadBuffers<D>& buf : threads_) anyPreload = anyPreload || buf.anyPreload;
+    const std::ptrdiff_t taskCount = std::ptrdiff_t(tasks_.size());
+#pragma omp parallel for schedule(static) if (taskCount > 1024)
+    for (std::ptrdiff_t k = 0; k < taskCount; ++k) {
+      const TaskOutput& t = tasks_[std::size_t(k)];
+      const ThreadBuffers<D>& buf = threads_[t.thread];
+      for (std::uint32_t q = 0; q < t.pairCount; ++q) {
+        PairContact<D> rec = buf.pairs[t.firstPair + q];
+        rec.firstNode = std::uint32_t(rec.firstNode - t.firstNode + t.outNode);
+        pairs_[t.outPair + q] = rec;
+        dashpots_[t.outPair + q] = buf.dashpots[t.firstPair + q];
+      }
+      const auto copy = [&](const auto& from, auto& to) {
+        std::copy_n(from.begin() + std::ptrdiff_t(t.firstNode), t.nodeCount, to.begin() + std::ptrdiff_t(t.outNode));
+      };
+      copy(buf.nodes, nodes_);
+      copy(buf.preload, preload_);
+      copy(buf.keys, historyKeys_);
+      if (friction) copy(buf.shear, shear_);
     }
   }
 

@@ -52,6 +52,7 @@
 #include "lsdem/dynamics/Particles.h"
 #include "lsdem/dynamics/State.h"
 #include "lsdem/dynamics/Wall.h"
+#include "lsdem/geometry/NodeTree.h"
 
 #include <array>
 #include <cstddef>
@@ -89,16 +90,18 @@ static_assert(sizeof(PairDashpot<3>) == 11 * sizeof(double));
 
 namespace detail {
 
-/// Per-node working values of the contact solver (internal).
+/// Per-node working values of the contact solver (internal): what the law
+/// reads besides the NodeContact, dropped after the step.
 template <int D>
 struct NodeWork {
   double stiffness = 0.0;          ///< stiffness factor: direction weight x (1 | w_i / w_ref); k_i = kn x this
   double area = 0.0;               ///< direction weight x node weight w_i (m in 2D, m^2 in 3D)
   double gradient = 1.0;           ///< |grad phi| of the other body's level set at the node (1 for planes)
-  Vec<D> shear = Vec<D>::Zero();   ///< shear displacement after this step, world frame, m
-  double preload = 0.0;            ///< the spring's rest overlap (ContactSolver::markNewborn), m
   std::int64_t history = -1;       ///< its record in the pair's history, or -1
 };
+
+/// Node margins a certificate keeps per leaf (internal): the node tree's leaf size.
+inline constexpr std::uint32_t kLeafSlots = geometry::NodeTree<3>::kLeafSize;
 
 /// A separation certificate (internal; ContactSolver::setSeparationCertificates):
 /// when the composed map of the walk of `owner`'s nodes against `other`'s
@@ -109,7 +112,9 @@ struct NodeWork {
 /// that grid; while it has moved less, testing the nodes of those leaves
 /// (`leafCount` tree cells from `leafFirst` of thread `leafThread`'s leaf
 /// list, each still behind its own cell test)
-/// finds every contact. When the walk found no contact, no node at all can
+/// finds every contact; a node of those leaves whose margin (kept with the
+/// leaves, a lower bound of how far it was from passing its test at `map`)
+/// exceeds the move cannot pass it either, and is not tested. When the walk found no contact, no node at all can
 /// reach it before a move of `clearance` cells (0: it found one) and the
 /// walk is spared. A restClearance of 0: no certificate.
 template <int D>
@@ -124,13 +129,20 @@ struct Certificate {
   std::uint32_t leafThread = 0, leafFirst = 0, leafCount = 0;
 };
 
-/// Output buffers of one thread (internal); aligned so threads do not share cache lines.
+/// Output buffers of one thread (internal); aligned so threads do not share
+/// cache lines. The per-node outputs are the solver's own arrays' layout
+/// (nodes, shear, preload, keys), so where one thread's buffers already are
+/// the output in order (every task ran on it), gather() swaps them in.
 template <int D>
 struct alignas(64) ThreadBuffers {
   std::vector<PairContact<D>> pairs;
   std::vector<PairDashpot<D>> dashpots;  ///< aligned with pairs
   std::vector<NodeContact<D>> nodes;
-  std::vector<NodeWork<D>> work;
+  std::vector<NodeWork<D>> work;         ///< aligned with nodes
+  std::vector<Vec<D>> shear;             ///< aligned with nodes: shear displacement after this step, world frame, m
+  std::vector<double> preload;           ///< aligned with nodes: the spring's rest overlap (markNewborn), m
+  std::vector<std::uint32_t> keys;       ///< aligned with nodes: their node keys (owner bit, node index)
+  bool anyPreload = false;               ///< some preload is > 0
   std::uint64_t nodeChecks = 0;
   std::uint64_t cellChecks = 0;  ///< node-tree cells tested (bulk rejection)
   std::uint64_t certifiedWalks = 0;  ///< walks a separation certificate spared
@@ -138,6 +150,10 @@ struct alignas(64) ThreadBuffers {
   /// Node-tree cell indices of the leaves the certificates made this step
   /// keep (and of the last step's, read by any thread this step).
   std::vector<std::uint32_t> leaves, previousLeaves;
+  /// Their nodes' margins, kLeafSlots per leaf (aligned with leaves and
+  /// previousLeaves): cells of the other's grid, relative to the
+  /// certificate's map (Certificate).
+  std::vector<float> margins, previousMargins;
   // Scratch of sortByNode.
   std::vector<std::uint32_t> order;
   std::vector<NodeContact<D>> nodeScratch;

@@ -111,10 +111,22 @@ class Grid {
   /// the conversion from world units and the outside extension, for callers
   /// that fold the conversion into their own transform (the narrow phase).
   /// The same arithmetic as value() from there on.
-  [[gnu::always_inline]] double valueAtCells(const Vec<D>& g) const { return interpolate<false>(g, nullptr); }
+  [[gnu::always_inline]] double valueAtCells(const Vec<D>& g) const {
+    return interpolate<GradientMode::None>(g, nullptr, 0.0);
+  }
   /// @brief valueAtCells() and the gradient per cell length (divide by
   /// spacing() for world units); the same value bit for bit.
-  [[gnu::always_inline]] double valueAndGradientAtCells(const Vec<D>& g, Vec<D>& gradCells) const { return interpolate<true>(g, &gradCells); }
+  [[gnu::always_inline]] double valueAndGradientAtCells(const Vec<D>& g, Vec<D>& gradCells) const {
+    return interpolate<GradientMode::Always>(g, &gradCells, 0.0);
+  }
+  /// @brief valueAtCells(), and where the value is below `threshold` also
+  /// the gradient of valueAndGradientAtCells(), from the same corner values:
+  /// one look-up where a caller that needs the gradient only for points
+  /// inside would otherwise make two. `gradCells` is left as it was where
+  /// the value is not below `threshold`.
+  [[gnu::always_inline]] double valueAtCellsGradientBelow(const Vec<D>& g, double threshold, Vec<D>& gradCells) const {
+    return interpolate<GradientMode::Below>(g, &gradCells, threshold);
+  }
 
   /// @brief The largest |grad phi| of the multilinear interpolant inside the
   /// node box (world units per world unit): exact. In a cell each component of
@@ -125,8 +137,9 @@ class Grid {
   double maxGradientNorm() const;
 
  private:
-  template <bool Gradient>
-  [[gnu::always_inline]] inline double interpolate(const Vec<D>& g, Vec<D>* gradCells) const;
+  enum class GradientMode { None, Always, Below };
+  template <GradientMode Mode>
+  [[gnu::always_inline]] inline double interpolate(const Vec<D>& g, Vec<D>* gradCells, double threshold) const;
   /// Grid coordinates g clamped into the node box.
   Vec<D> clampToBox(const Vec<D>& g) const;
 
@@ -138,12 +151,13 @@ class Grid {
 
 // ---- inline look-ups (the narrow phase calls these once per node per step) ----
 
-// The interpolant at grid coordinates g inside the box; with `Gradient`,
-// also its derivative per cell length in *gradCells. value() and
-// valueAndGradient() share this arithmetic, so their values agree bit for bit.
+// The interpolant at grid coordinates g inside the box; with Mode Always
+// (Below: where the value is below `threshold`), also its derivative per cell
+// length in *gradCells. Every look-up shares this arithmetic, so their
+// values agree bit for bit.
 template <int D>
-template <bool Gradient>
-inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells) const {
+template <typename Grid<D>::GradientMode Mode>
+inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells, double threshold) const {
   // Cell containing g (clamped so the upper border uses the last cell) and the
   // fractional position t in [0, 1]^D inside it. g >= 0 (every caller
   // clamps it into the box or tests it is inside), so truncation is the floor
@@ -162,11 +176,12 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells) const {
     const double v01 = values_[n0 + sy], v11 = values_[n0 + sy + 1];
     const double a0 = v00 + t[0] * (v10 - v00);  // along x at y = 0
     const double a1 = v01 + t[0] * (v11 - v01);  // along x at y = 1
-    if constexpr (Gradient) {
+    const double value = a0 + t[1] * (a1 - a0);
+    if (Mode == GradientMode::Always || (Mode == GradientMode::Below && value < threshold)) {
       (*gradCells)[0] = (v10 - v00) + t[1] * ((v11 - v01) - (v10 - v00));
       (*gradCells)[1] = a1 - a0;
     }
-    return a0 + t[1] * (a1 - a0);
+    return value;
   } else {
     const std::size_t sy = std::size_t(dims_[0]);
     const std::size_t sz = sy * std::size_t(dims_[1]);
@@ -178,7 +193,8 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells) const {
     const double x00 = v000 + t[0] * (v100 - v000), x10 = v010 + t[0] * (v110 - v010);
     const double x01 = v001 + t[0] * (v101 - v001), x11 = v011 + t[0] * (v111 - v011);
     const double y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
-    if constexpr (Gradient) {
+    const double value = y0 + t[2] * (y1 - y0);
+    if (Mode == GradientMode::Always || (Mode == GradientMode::Below && value < threshold)) {
       // d/dx: differences along x bilinearly interpolated in (y, z).
       const double d00 = v100 - v000, d10 = v110 - v010, d01 = v101 - v001, d11 = v111 - v011;
       const double dy0 = d00 + t[1] * (d10 - d00), dy1 = d01 + t[1] * (d11 - d01);
@@ -186,7 +202,7 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells) const {
       (*gradCells)[1] = (x10 - x00) + t[2] * ((x11 - x01) - (x10 - x00));
       (*gradCells)[2] = y1 - y0;
     }
-    return y0 + t[2] * (y1 - y0);
+    return value;
   }
 }
 
@@ -199,7 +215,7 @@ template <int D>
 inline double Grid<D>::value(const Vec<D>& x) const {
   const Vec<D> g = toGrid(x);
   const Vec<D> gc = clampToBox(g);
-  const double inside = interpolate<false>(gc, nullptr);
+  const double inside = interpolate<GradientMode::None>(gc, nullptr, 0.0);
   if (gc == g) return inside;
   return inside + (spacing_ * (g - gc)).norm();
 }
@@ -209,7 +225,7 @@ inline double Grid<D>::valueAndGradient(const Vec<D>& x, Vec<D>& grad) const {
   const Vec<D> g = toGrid(x);
   const Vec<D> gc = clampToBox(g);
   Vec<D> gradCells;
-  const double inside = interpolate<true>(gc, &gradCells);
+  const double inside = interpolate<GradientMode::Always>(gc, &gradCells, 0.0);
   grad = gradCells;  // per cell of distance -> per world unit, since values are in world units
   // Fast path: x inside the node box.
   if (gc == g) {
