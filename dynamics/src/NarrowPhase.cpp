@@ -290,17 +290,19 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const auto beyondBox = [upper](const Vec<D>& g) {
     return std::max((-g.array()).maxCoeff(), (g.array() - upper.array()).maxCoeff());
   };
-  const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
+  // A tree cell's test: true when none of its nodes can touch, with its
+  // margin in cells in `clear` (certificates only).
+  const auto cellRejected = [&](const typename geometry::NodeTree<D>::Cell& cell, double& clear) {
     const Vec<D> g = map * cell.centre + shift;
     const double r = cell.radius / h;
     const double apart2 = (g - centre).squaredNorm();
     if (apart2 > (reach + r) * (reach + r)) {
-      if (certify) clearCells = std::min(clearCells, std::sqrt(apart2) - reach - r);
+      if (certify) clear = std::sqrt(apart2) - reach - r;
       return true;
     }
     const double outside = beyondBox(g) - r;
     if (outside > 0.0) {
-      if (certify) clearCells = std::min(clearCells, outside);
+      clear = outside;
       return true;
     }
     // The slope bound holds along segments in the grid box, and only nodes in
@@ -309,10 +311,16 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     const Vec<D> inside = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
     const double above = grid.valueAtCells(inside) - (slope * cell.radius + margin);
     if (above > 0.0) {
-      if (certify) clearCells = std::min(clearCells, above * perSlopeCell);
+      clear = above * perSlopeCell;
       return true;
     }
     return false;
+  };
+  const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
+    double clear = 0.0;
+    if (!cellRejected(cell, clear)) return false;
+    clearCells = std::min(clearCells, clear);
+    return true;
   };
   // One node (tree position k): appends its contact, or returns its margin
   // in cells (how far it may move before the test that rejected it could
@@ -357,12 +365,15 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     sortByNode(buf, first);
     return tested;
   }
-  // A certificate also keeps a margin per node of its leaves (kLeafSlots per
-  // leaf, aligned with the leaves), relative to its reference map: a lower
-  // bound of the node's margin there. A node whose margin exceeds how far
-  // the map has moved since cannot pass its test now, and is not tested.
+  // A certificate also keeps margins for its leaves (kLeafSlots per leaf,
+  // aligned with the leaves), relative to its reference map: for each node,
+  // a lower bound of its margin there; for the leaf's cell, the same, or
+  // kOpen when the leaf held a contact (its cell test would pass: it is not
+  // made), or 0 (make it). What the map has not moved by as much as its
+  // margin cannot pass its test now, and is not tested.
   constexpr std::uint32_t kSlots = detail::kLeafSlots;
-  // A margin stored as a float no larger than m, and a fresh slot's.
+  constexpr float kOpen = -1.0f;
+  // A margin stored as a float no larger than m.
   const auto lowered = [](double m) {
     float f = float(m);
     if (double(f) > m) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
@@ -371,12 +382,11 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const std::uint32_t leafFirst = std::uint32_t(buf.leaves.size());
   detail::Certificate<D> made;
   if (previous) {
-    // Only the leaves the certificate kept, each still behind its own cell
-    // test; the rest stays certified (the same reference map, so its
-    // clearance holds), and what is tested now is certified for as far as
-    // it may move beyond what the map has: every margin below is relative
-    // to the reference map (a margin m measured now bounds the one there
-    // from below by m - moved).
+    // Only the leaves the certificate kept; the rest stays certified (the
+    // same reference map, so its clearance holds), and what is tested now is
+    // certified for as far as it may move beyond what the map has: every
+    // margin below is relative to the reference map (a margin m measured
+    // now bounds the one there from below by m - moved).
     double clearKept = std::numeric_limits<double>::infinity();
     for (std::uint32_t q = 0; q < previous->leafCount; ++q) {
       const std::uint32_t index = key->previousLeaves[q];
@@ -384,11 +394,24 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       buf.leaves.push_back(index);
       const std::size_t slot = buf.margins.size();
       buf.margins.insert(buf.margins.end(), old, old + kSlots);
+      const double cellClear = double(old[0]);
+      if (moved + kCertificateSlack < cellClear) {
+        clearKept = std::min(clearKept, cellClear);
+        continue;
+      }
       const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
-      ++buf.cellChecks;
-      if (reject(cell)) continue;
+      if (!(cellClear < 0.0)) {
+        ++buf.cellChecks;
+        double clear = 0.0;
+        if (cellRejected(cell, clear)) {
+          clearKept = std::min(clearKept, clear - moved);
+          buf.margins[slot] = std::max(0.0f, lowered(clear - moved));
+          continue;
+        }
+      }
+      const std::size_t found = buf.nodes.size();
       for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
-        const std::uint32_t j = k - cell.begin;
+        const std::uint32_t j = 1 + k - cell.begin;
         if (j < kSlots && moved + kCertificateSlack < double(old[j])) {
           clearKept = std::min(clearKept, double(old[j]));
           continue;
@@ -398,23 +421,27 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         clearKept = std::min(clearKept, m);
         if (j < kSlots) buf.margins[slot + j] = lowered(m);
       }
+      buf.margins[slot] = buf.nodes.size() > found ? kOpen : 0.0f;
     }
     made = *previous;
-    made.clearance = std::min(previous->restClearance, std::min(clearCells - moved, clearKept));
+    made.clearance = std::min(previous->restClearance, clearKept);
     ++buf.leafWalks;
   } else {
-    // The whole tree, keeping the leaves that survive and their nodes' margins.
+    // The whole tree, keeping the leaves that survive and their margins.
     buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
       const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
       buf.leaves.push_back(index);
       const std::size_t slot = buf.margins.size();
       buf.margins.resize(slot + kSlots, 0.0f);
+      const std::size_t found = buf.nodes.size();
       tested += cell.end - cell.begin;
       for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
         const double m = testNode(k);
         clearNodes = std::min(clearNodes, m);
-        if (k - cell.begin < kSlots) buf.margins[slot + (k - cell.begin)] = lowered(m);
+        const std::uint32_t j = 1 + k - cell.begin;
+        if (j < kSlots) buf.margins[slot + j] = lowered(m);
       }
+      buf.margins[slot] = buf.nodes.size() > found ? kOpen : 0.0f;
     });
     made = {key->owner, key->other, &owner, &other, map, shift, std::min(clearCells, clearNodes), clearCells};
   }

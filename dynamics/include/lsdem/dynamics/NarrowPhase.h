@@ -100,8 +100,9 @@ struct NodeWork {
   std::int64_t history = -1;       ///< its record in the pair's history, or -1
 };
 
-/// Node margins a certificate keeps per leaf (internal): the node tree's leaf size.
-inline constexpr std::uint32_t kLeafSlots = geometry::NodeTree<3>::kLeafSize;
+/// Margins a certificate keeps per leaf (internal): its cell's, then its
+/// nodes' (the node tree's leaf size; a larger leaf's further nodes have none).
+inline constexpr std::uint32_t kLeafSlots = 1 + geometry::NodeTree<3>::kLeafSize;
 
 /// A separation certificate (internal; ContactSolver::setSeparationCertificates):
 /// when the composed map of the walk of `owner`'s nodes against `other`'s
@@ -111,10 +112,10 @@ inline constexpr std::uint32_t kLeafSlots = geometry::NodeTree<3>::kLeafSize;
 /// before some point of the owner moves `restClearance` cells relative to
 /// that grid; while it has moved less, testing the nodes of those leaves
 /// (`leafCount` tree cells from `leafFirst` of thread `leafThread`'s leaf
-/// list, each still behind its own cell test)
-/// finds every contact; a node of those leaves whose margin (kept with the
-/// leaves, a lower bound of how far it was from passing its test at `map`)
-/// exceeds the move cannot pass it either, and is not tested. When the walk found no contact, no node at all can
+/// list) finds every contact. A leaf's cell or node whose margin (kept
+/// with the leaves: a lower bound of how far it was from passing its test
+/// at `map`) exceeds the move cannot pass it either, and is not tested.
+/// When the walk found no contact, no node at all can
 /// reach it before a move of `clearance` cells (0: it found one) and the
 /// walk is spared. A restClearance of 0: no certificate.
 template <int D>
@@ -150,7 +151,7 @@ struct alignas(64) ThreadBuffers {
   /// Node-tree cell indices of the leaves the certificates made this step
   /// keep (and of the last step's, read by any thread this step).
   std::vector<std::uint32_t> leaves, previousLeaves;
-  /// Their nodes' margins, kLeafSlots per leaf (aligned with leaves and
+  /// Their margins, kLeafSlots per leaf (aligned with leaves and
   /// previousLeaves): cells of the other's grid, relative to the
   /// certificate's map (Certificate).
   std::vector<float> margins, previousMargins;
