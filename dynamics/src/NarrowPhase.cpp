@@ -524,8 +524,9 @@ inline double boundaryWeight(double overlap, double normalSpeed, double dt) {
 // normal force (linear per node or Hertz per pair), damping, friction with
 // history; fills each node's force and shear and the pair record's totals.
 // `invMassSum` = 1/ma + 1/mb (1/ma against a boundary); `centreB` is the point
-// b's torque is taken about; velocityB(x) is b's material velocity at x.
-template <int D, NormalModel Normal, bool Friction, bool Damping, class VelocityB>
+// b's torque is taken about; velocityB(x) is b's material velocity at x;
+// `Boundary`: b is a plane or tool.
+template <int D, NormalModel Normal, bool Friction, bool Damping, bool Boundary, class VelocityB>
 void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, std::size_t begin, const LawConstants& law,
               double invMassSum, double hertzRadius, const Vec<D>& xa, const Vec<D>& va, const Spin<D>& wa,
               const Vec<D>& centreB, const VelocityB& velocityB, const HistoryView<D>& history,
@@ -611,7 +612,8 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
     Vec<D> force;
     if constexpr (Damping || Friction) {
       // Velocity of a's material point relative to b's at the contact point.
-      const Vec<D> vrel = va + Rotation<D>::velocityAt(wa, c.point - xa) - velocityB(c.point);
+      const Vec<D> vb = velocityB(c.point);
+      const Vec<D> vrel = va + Rotation<D>::velocityAt(wa, c.point - xa) - vb;
       const double vn = vrel.dot(c.normal);
       // Dashpot opposing the normal relative velocity, weighted by the part of
       // the step the node is in contact (see boundaryWeight).
@@ -628,9 +630,14 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
         const Vec<D> fd = fdn * c.normal;
         dash.force += fd;
         dash.torqueA += Rotation<D>::moment(c.point - xa, fd);
-        dash.torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-fd));
         dash.power += p;
-        dash.boundaryPower += fd.dot(velocityB(c.point));
+        // What the energy ledger reads (World.cpp): b's moment for a
+        // particle pair, the work rate on the boundary for a boundary.
+        if constexpr (Boundary) {
+          dash.boundaryPower += fd.dot(vb);
+        } else {
+          dash.torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-fd));
+        }
       }
       force = fn * c.normal;
       if constexpr (Friction) {
@@ -1034,7 +1041,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       const Spin<D>& wb = p.angularVelocity[ib];
       const auto velocityB = [&](const Vec<D>& x) { return Vec<D>(vb + Rotation<D>::velocityAt(wb, x - xb)); };
       PairDashpot<D> dash;
-      applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, law, p.invMass[ia] + p.invMass[ib], radius, xa,
+      applyLaw<D, Normal, Friction, Damping, false>(rec, dash, buf, begin, law, p.invMass[ia] + p.invMass[ib], radius, xa,
                                              p.velocity[ia], p.angularVelocity[ia], xb, velocityB,
                                              historyOf(p.id[ia], p.id[ib]),
                                              NewbornView{newbornOf(p.id[ia]), newbornOf(p.id[ib]), p.id[ib], p.id[ia]});
@@ -1067,7 +1074,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         const auto velocityB = [&](const Vec<D>&) { return plane.velocity; };
         PairDashpot<D> dash;
         const LawConstants planeLaw = boundaryLaw(law, planeConstants(j));
-        applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, planeLaw, p.invMass[std::size_t(i)], radius, x,
+        applyLaw<D, Normal, Friction, Damping, true>(rec, dash, buf, begin, planeLaw, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
                                                plane.point, velocityB,
                                                historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)),
@@ -1112,7 +1119,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         const auto velocityB = [&](const Vec<D>& at) { return tool.velocityAt(at); };
         PairDashpot<D> dash;
         const LawConstants toolLaw = boundaryLaw(law, toolConstants(j));
-        applyLaw<D, Normal, Friction, Damping>(rec, dash, buf, begin, toolLaw, p.invMass[std::size_t(i)], radius, x,
+        applyLaw<D, Normal, Friction, Damping, true>(rec, dash, buf, begin, toolLaw, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
                                                tool.position, velocityB,
                                                historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)),

@@ -80,9 +80,9 @@ template <int D>
 struct PairDashpot {
   Vec<D> force = Vec<D>::Zero();              ///< dashpot force on a, N (b gets -force), world frame
   Spin<D> torqueA = Rotation<D>::zeroSpin();  ///< its torque on a about a's centroid, N m
-  Spin<D> torqueB = Rotation<D>::zeroSpin();  ///< torque of -force on b about b's centroid (particle pairs), N m
+  Spin<D> torqueB = Rotation<D>::zeroSpin();  ///< particle pairs: torque of -force on b about b's centroid, N m (0 for boundaries)
   double power = 0.0;          ///< sum over nodes of c_i v_n^2 at the sampled velocities, W (part of dissipatedPower)
-  double boundaryPower = 0.0;  ///< plane and tool pairs: sum over nodes of the node's dashpot force . the boundary's velocity there, W
+  double boundaryPower = 0.0;  ///< plane and tool pairs: sum over nodes of the node's dashpot force . the boundary's velocity there, W (0 for particle pairs)
 };
 // No padding: written raw to checkpoints (State.h).
 static_assert(sizeof(PairDashpot<2>) == 6 * sizeof(double));
