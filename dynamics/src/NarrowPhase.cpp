@@ -183,8 +183,7 @@ template <int D>
 struct CertificateKey {
   std::uint64_t owner = 0, other = 0;
   const detail::Certificate<D>* previous = nullptr;
-  const std::uint32_t* previousLeaves = nullptr;  // its leaves (tree cell indices)
-  const float* previousMargins = nullptr;         // their nodes' margins (kLeafSlots per leaf)
+  const detail::KeptLeaf* previousLeaves = nullptr;  // its leaves
   detail::Certificate<D>* out = nullptr;
   std::uint32_t thread = 0;  // the calling thread's index
 };
@@ -271,8 +270,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       key->out->leafThread = key->thread;
       key->out->leafFirst = std::uint32_t(buf.leaves.size());
       buf.leaves.insert(buf.leaves.end(), key->previousLeaves, key->previousLeaves + previous->leafCount);
-      buf.margins.insert(buf.margins.end(), key->previousMargins,
-                         key->previousMargins + std::size_t(previous->leafCount) * detail::kLeafSlots);
       ++buf.certifiedWalks;
       return 0;
     }
@@ -342,18 +339,16 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     Vec<D> normal = gradToWorld * grad;
     const double length = normal.norm();
     if (!(length > 0.0)) return 0.0;
-    NodeContact<D> c;
+    NodeContact<D>& c = buf.nodes.emplace_back();
     c.point = Ro * x + xo;
     c.normal = normal / length;
     c.overlap = -phi;
     c.node = i;
     c.ownerIsB = ownerIsB;
-    buf.nodes.push_back(c);
-    NodeWork<D> w;
+    NodeWork<D>& w = buf.work.emplace_back();
     w.stiffness = stiffnessFactor<Formulation>(weights[i], weightToFactor);
     w.area = directionWeight * weights[i];
     w.gradient = length / h;
-    buf.work.push_back(w);
     return 0.0;
   };
   if (!certify) {
@@ -365,19 +360,19 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     sortByNode(buf, first);
     return tested;
   }
-  // A certificate also keeps margins for its leaves (kLeafSlots per leaf,
-  // aligned with the leaves), relative to its reference map: for each node,
-  // a lower bound of its margin there; for the leaf's cell, the same, or
-  // kOpen when the leaf held a contact (its cell test would pass: it is not
-  // made), or 0 (make it). What the map has not moved by as much as its
-  // margin cannot pass its test now, and is not tested.
-  constexpr std::uint32_t kSlots = detail::kLeafSlots;
+  // A certificate also keeps margins for its leaves (KeptLeaf), relative to
+  // its reference map: for each node, a lower bound of its margin there;
+  // for the leaf's cell, the same, or kOpen when the leaf held a contact
+  // (its cell test would pass: it is not made), or 0 (make it). What the
+  // map has not moved by as much as its margin cannot pass its test now,
+  // and is not tested.
+  constexpr std::uint32_t kSlots = detail::KeptLeaf::kNodeSlots;
   constexpr float kOpen = -1.0f;
-  // A margin stored as a float no larger than m.
+  // A margin m > 0 stored as a float no larger than it (a float rounds
+  // within 2^-24 of m; none certifies more than 1e30 cells); 0 for m <= 0
+  // (and NaN), which certifies nothing.
   const auto lowered = [](double m) {
-    float f = float(m);
-    if (double(f) > m) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-    return f;
+    return m > 0.0 ? float(std::min(m * (1.0 - 0x1p-20), 1e30)) : 0.0f;
   };
   const std::uint32_t leafFirst = std::uint32_t(buf.leaves.size());
   detail::Certificate<D> made;
@@ -388,40 +383,37 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     // margin below is relative to the reference map (a margin m measured
     // now bounds the one there from below by m - moved).
     double clearKept = std::numeric_limits<double>::infinity();
+    const double reach = moved + kCertificateSlack;
     for (std::uint32_t q = 0; q < previous->leafCount; ++q) {
-      const std::uint32_t index = key->previousLeaves[q];
-      const float* old = key->previousMargins + std::size_t(q) * kSlots;
-      buf.leaves.push_back(index);
-      const std::size_t slot = buf.margins.size();
-      buf.margins.insert(buf.margins.end(), old, old + kSlots);
-      const double cellClear = double(old[0]);
-      if (moved + kCertificateSlack < cellClear) {
+      detail::KeptLeaf& kept = buf.leaves.emplace_back(key->previousLeaves[q]);
+      const double cellClear = double(kept.cellMargin);
+      if (reach < cellClear) {
         clearKept = std::min(clearKept, cellClear);
         continue;
       }
-      const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
+      const typename geometry::NodeTree<D>::Cell& cell = tree.cells[kept.cell];
       if (!(cellClear < 0.0)) {
         ++buf.cellChecks;
         double clear = 0.0;
         if (cellRejected(cell, clear)) {
           clearKept = std::min(clearKept, clear - moved);
-          buf.margins[slot] = std::max(0.0f, lowered(clear - moved));
+          kept.cellMargin = lowered(clear - moved);
           continue;
         }
       }
       const std::size_t found = buf.nodes.size();
       for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
-        const std::uint32_t j = 1 + k - cell.begin;
-        if (j < kSlots && moved + kCertificateSlack < double(old[j])) {
-          clearKept = std::min(clearKept, double(old[j]));
+        const std::uint32_t j = k - cell.begin;
+        if (j < kSlots && reach < double(kept.nodeMargin[j])) {
+          clearKept = std::min(clearKept, double(kept.nodeMargin[j]));
           continue;
         }
         ++tested;
         const double m = testNode(k) - moved;
         clearKept = std::min(clearKept, m);
-        if (j < kSlots) buf.margins[slot + j] = lowered(m);
+        if (j < kSlots) kept.nodeMargin[j] = lowered(m);
       }
-      buf.margins[slot] = buf.nodes.size() > found ? kOpen : 0.0f;
+      kept.cellMargin = buf.nodes.size() > found ? kOpen : 0.0f;
     }
     made = *previous;
     made.clearance = std::min(previous->restClearance, clearKept);
@@ -430,18 +422,17 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     // The whole tree, keeping the leaves that survive and their margins.
     buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
       const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
-      buf.leaves.push_back(index);
-      const std::size_t slot = buf.margins.size();
-      buf.margins.resize(slot + kSlots, 0.0f);
+      detail::KeptLeaf& kept = buf.leaves.emplace_back();
+      kept.cell = index;
       const std::size_t found = buf.nodes.size();
       tested += cell.end - cell.begin;
       for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
         const double m = testNode(k);
         clearNodes = std::min(clearNodes, m);
-        const std::uint32_t j = 1 + k - cell.begin;
-        if (j < kSlots) buf.margins[slot + j] = lowered(m);
+        const std::uint32_t j = k - cell.begin;
+        if (j < kSlots) kept.nodeMargin[j] = lowered(m);
       }
-      buf.margins[slot] = buf.nodes.size() > found ? kOpen : 0.0f;
+      kept.cellMargin = buf.nodes.size() > found ? kOpen : 0.0f;
     });
     made = {key->owner, key->other, &owner, &other, map, shift, std::min(clearCells, clearNodes), clearCells};
   }
@@ -453,7 +444,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     *key->out = made;
   } else {
     buf.leaves.resize(leafFirst);
-    buf.margins.resize(std::size_t(leafFirst) * kSlots);
   }
   sortByNode(buf, first);
   return tested;
@@ -535,12 +525,9 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
   // The per-node outputs of the pair's node contacts: node keys, rest
   // overlaps, shear (below).
   buf.keys.resize(end);
-  buf.preload.resize(end);
+  buf.preload.resize(end, 0.0);
   if constexpr (Friction) buf.shear.resize(end);
-  for (std::size_t j = begin; j < end; ++j) {
-    buf.keys[j] = nodeKey(buf.nodes[j]);
-    buf.preload[j] = 0.0;
-  }
+  for (std::size_t j = begin; j < end; ++j) buf.keys[j] = nodeKey(buf.nodes[j]);
   // Each node contact's record in the history (both lists ascend by node key)
   // and its spring's rest overlap: carried (and drawn in with the node), or
   // its overlap at birth for a node born this step (NarrowPhase.h).
@@ -588,12 +575,21 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
     (void)invMassSum;
   }
 
-  // Node by node: normal, damping and friction forces, summed into the pair.
+  // Node by node: normal, damping and friction forces, summed into the
+  // pair (in locals, written to the records once).
   double elastic = 0.0, power = 0.0;
+  Vec<D> sumForce = Vec<D>::Zero(), dashForce = Vec<D>::Zero();
+  Spin<D> torqueA = Rotation<D>::zeroSpin(), torqueB = Rotation<D>::zeroSpin();
+  Spin<D> dashTorqueA = Rotation<D>::zeroSpin(), dashTorqueB = Rotation<D>::zeroSpin();
+  double dashPower = 0.0, dashBoundaryPower = 0.0;
+  NodeContact<D>* const nodes = buf.nodes.data();
+  const NodeWork<D>* const work = buf.work.data();
+  const double* const preloads = buf.preload.data();
+  Vec<D>* const shears = Friction ? buf.shear.data() : nullptr;
   for (std::size_t j = begin; j < end; ++j) {
-    NodeContact<D>& c = buf.nodes[j];
-    const NodeWork<D>& w = buf.work[j];
-    const double overlap = c.overlap - buf.preload[j];  // the spring's own compression
+    NodeContact<D>& c = nodes[j];
+    const NodeWork<D>& w = work[j];
+    const double overlap = c.overlap - preloads[j];  // the spring's own compression
     // Elastic normal force and the node's share of the pair's stiffness.
     double fn = 0.0, share = 0.0;
     if constexpr (Normal == NormalModel::Linear) {
@@ -628,15 +624,15 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
         power += p;
         // The dashpot's own force and moments, for the energy ledger.
         const Vec<D> fd = fdn * c.normal;
-        dash.force += fd;
-        dash.torqueA += Rotation<D>::moment(c.point - xa, fd);
-        dash.power += p;
+        dashForce += fd;
+        dashTorqueA += Rotation<D>::moment(c.point - xa, fd);
+        dashPower += p;
         // What the energy ledger reads (World.cpp): b's moment for a
         // particle pair, the work rate on the boundary for a boundary.
         if constexpr (Boundary) {
-          dash.boundaryPower += fd.dot(vb);
+          dashBoundaryPower += fd.dot(vb);
         } else {
-          dash.torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-fd));
+          dashTorqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-fd));
         }
       }
       force = fn * c.normal;
@@ -685,7 +681,7 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
           ft2 = ft.squaredNorm();
         }
         if (kt > 0.0) elastic += ft2 / (2.0 * kt);
-        buf.shear[j] = shear;
+        shears[j] = shear;
         force += ft;
       }
     } else {
@@ -693,9 +689,19 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
     }
     // This node's force on a, and its moments about a's centroid and b's reference point.
     c.force = force;
-    rec.force += force;
-    rec.torqueA += Rotation<D>::moment(c.point - xa, force);
-    rec.torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-force));
+    sumForce += force;
+    torqueA += Rotation<D>::moment(c.point - xa, force);
+    torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-force));
+  }
+  rec.force = sumForce;
+  rec.torqueA = torqueA;
+  rec.torqueB = torqueB;
+  if constexpr (Damping) {
+    dash.force = dashForce;
+    dash.torqueA = dashTorqueA;
+    dash.torqueB = dashTorqueB;
+    dash.power = dashPower;
+    dash.boundaryPower = dashBoundaryPower;
   }
   if constexpr (Normal == NormalModel::Hertz) elastic += 0.4 * hertz * deepest;
   rec.elasticEnergy = elastic;
@@ -908,8 +914,6 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     buf.leafWalks = 0;
     std::swap(buf.leaves, buf.previousLeaves);
     buf.leaves.clear();
-    std::swap(buf.margins, buf.previousMargins);
-    buf.margins.clear();
   }
   // Every particle's rotation matrix, once (a pair task reads two).
   rotations_.resize(n);
@@ -937,7 +941,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   }
   // The walk (owner in other) of task k's slot `slot`: its last certificate, its slot for this step's.
   const auto certificateKey = [&](std::size_t slot, std::uint64_t owner, std::uint64_t other) {
-    CertificateKey<D> key{owner, other, nullptr, nullptr, nullptr, &certificates_[slot], std::uint32_t(threadIndex())};
+    CertificateKey<D> key{owner, other, nullptr, nullptr, &certificates_[slot], std::uint32_t(threadIndex())};
     key.out->restClearance = 0.0;
     // A certificate whose leaves are still there (the thread count may have changed).
     const auto matches = [&](const detail::Certificate<D>& c) {
@@ -946,7 +950,6 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       const auto& leaves = threads_[c.leafThread].previousLeaves;
       if (std::size_t(c.leafFirst) + c.leafCount > leaves.size()) return false;
       key.previousLeaves = leaves.data() + c.leafFirst;
-      key.previousMargins = threads_[c.leafThread].previousMargins.data() + std::size_t(c.leafFirst) * detail::kLeafSlots;
       return true;
     };
     if (slot < previousCertificates_.size() && matches(previousCertificates_[slot])) {

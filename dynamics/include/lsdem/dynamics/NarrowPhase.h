@@ -100,9 +100,16 @@ struct NodeWork {
   std::int64_t history = -1;       ///< its record in the pair's history, or -1
 };
 
-/// Margins a certificate keeps per leaf (internal): its cell's, then its
-/// nodes' (the node tree's leaf size; a larger leaf's further nodes have none).
-inline constexpr std::uint32_t kLeafSlots = 1 + geometry::NodeTree<3>::kLeafSize;
+/// A tree leaf a certificate keeps (internal), with its margins: its
+/// cell's, then its nodes' (the node tree's leaf size; a larger leaf's
+/// further nodes have none), in cells of the other's grid, relative to the
+/// certificate's map (Certificate; collectLevelSet in NarrowPhase.cpp).
+struct KeptLeaf {
+  static constexpr std::uint32_t kNodeSlots = geometry::NodeTree<3>::kLeafSize;
+  std::uint32_t cell = 0;
+  float cellMargin = 0.0f;
+  std::array<float, kNodeSlots> nodeMargin{};
+};
 
 /// A separation certificate (internal; ContactSolver::setSeparationCertificates):
 /// when the composed map of the walk of `owner`'s nodes against `other`'s
@@ -148,13 +155,9 @@ struct alignas(64) ThreadBuffers {
   std::uint64_t cellChecks = 0;  ///< node-tree cells tested (bulk rejection)
   std::uint64_t certifiedWalks = 0;  ///< walks a separation certificate spared
   std::uint64_t leafWalks = 0;       ///< walks that tested only the leaves a certificate kept
-  /// Node-tree cell indices of the leaves the certificates made this step
-  /// keep (and of the last step's, read by any thread this step).
-  std::vector<std::uint32_t> leaves, previousLeaves;
-  /// Their margins, kLeafSlots per leaf (aligned with leaves and
-  /// previousLeaves): cells of the other's grid, relative to the
-  /// certificate's map (Certificate).
-  std::vector<float> margins, previousMargins;
+  /// The leaves the certificates made this step keep (and the last
+  /// step's, read by any thread this step).
+  std::vector<KeptLeaf> leaves, previousLeaves;
   // Scratch of sortByNode.
   std::vector<std::uint32_t> order;
   std::vector<NodeContact<D>> nodeScratch;
@@ -359,7 +362,8 @@ class ContactSolver {
   /// @brief Power dissipated by contact damping and sliding friction in the last compute(), W.
   double dissipatedPower() const { return dissipatedPower_; }
   /// @brief Nodes tested one by one against a level set or plane in the last
-  /// compute() (those of node-tree leaves that bulk rejection kept).
+  /// compute() (those of node-tree leaves that bulk rejection kept, less
+  /// those a certificate's node margins cleared).
   std::uint64_t nodeChecks() const { return nodeChecks_; }
   /// @brief Node-tree cells tested in the last compute() (bulk rejection; one
   /// level-set look-up each against a level set, one dot product against a plane).
