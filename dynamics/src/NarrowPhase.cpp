@@ -1181,10 +1181,13 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
     pairs_.resize(pairTotal);
     dashpots_.resize(pairTotal);
     nodes_.resize(nodeTotal);
-    shear_.resize(friction ? nodeTotal : 0);
-    preload_.resize(nodeTotal);
-    historyKeys_.resize(nodeTotal);
     for (const ThreadBuffers<D>& buf : threads_) anyPreload = anyPreload || buf.anyPreload;
+    // Only what the next step reads: rest overlaps where some spring has
+    // one, node keys where there is a history (friction or rest overlaps).
+    const bool keys = friction || anyPreload;
+    shear_.resize(friction ? nodeTotal : 0);
+    preload_.resize(anyPreload ? nodeTotal : 0);
+    historyKeys_.resize(keys ? nodeTotal : 0);
     const std::ptrdiff_t taskCount = std::ptrdiff_t(tasks_.size());
 #pragma omp parallel for schedule(static) if (taskCount > 1024)
     for (std::ptrdiff_t k = 0; k < taskCount; ++k) {
@@ -1200,8 +1203,8 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
         std::copy_n(from.begin() + std::ptrdiff_t(t.firstNode), t.nodeCount, to.begin() + std::ptrdiff_t(t.outNode));
       };
       copy(buf.nodes, nodes_);
-      copy(buf.preload, preload_);
-      copy(buf.keys, historyKeys_);
+      if (anyPreload) copy(buf.preload, preload_);
+      if (keys) copy(buf.keys, historyKeys_);
       if (friction) copy(buf.shear, shear_);
     }
   }
