@@ -33,7 +33,11 @@
 /// walked from the root, and a cell whose sphere misses the other body's
 /// bounding sphere or grid box, or lies wholly outside the other body by its
 /// level set (phi at the centre > Shape::levelSetSlope() x radius), is skipped
-/// with every node in it; against a plane, one dot product per cell. Only the
+/// with every node in it; against a plane, one dot product per cell. Walks
+/// that found nothing, and the parts of walks that rejected, are not repeated
+/// while the bodies have moved less than the margin they measured
+/// (separation certificates; down to single nodes of the leaves kept, see
+/// Certificate). Only the
 /// nodes of the leaves that remain are tested one by one: one D x D
 /// matrix-vector product, a bounding-sphere test, a grid-box test and, only
 /// for nodes near the other body, one multilinear look-up. The test is exact,
