@@ -383,11 +383,11 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     // margin below is relative to the reference map (a margin m measured
     // now bounds the one there from below by m - moved).
     double clearKept = std::numeric_limits<double>::infinity();
-    const double reach = moved + kCertificateSlack;
+    const double movedBound = moved + kCertificateSlack;  // a margin above this still holds
     for (std::uint32_t q = 0; q < previous->leafCount; ++q) {
       detail::KeptLeaf& kept = buf.leaves.emplace_back(key->previousLeaves[q]);
       const double cellClear = double(kept.cellMargin);
-      if (reach < cellClear) {
+      if (movedBound < cellClear) {
         clearKept = std::min(clearKept, cellClear);
         continue;
       }
@@ -404,7 +404,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       const std::size_t found = buf.nodes.size();
       for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
         const std::uint32_t j = k - cell.begin;
-        if (j < kSlots && reach < double(kept.nodeMargin[j])) {
+        if (j < kSlots && movedBound < double(kept.nodeMargin[j])) {
           clearKept = std::min(clearKept, double(kept.nodeMargin[j]));
           continue;
         }

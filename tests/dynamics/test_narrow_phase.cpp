@@ -85,6 +85,39 @@ PairList allPairs(const Particles<D>& p) {
   return pairs;
 }
 
+// Eight grains of three shapes on a ring of `radius` about the origin (in
+// the x-y plane), orientations drawn from `seed`.
+template <int D>
+Particles<D> ringOfGrains(double radius, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const auto shapes = std::array{grain<D>(1), grain<D>(2), grain<D>(3)};
+  Particles<D> p;
+  for (int i = 0; i < 8; ++i) {
+    ParticleDef<D> def;
+    def.shape = shapes[std::size_t(i) % 3];
+    const double angle = 2.0 * std::numbers::pi * i / 8.0;
+    def.position = Vec<D>::Zero();
+    def.position[0] = radius * std::cos(angle);
+    def.position[1] = radius * std::sin(angle);
+    def.orientation = randomOrientation<D>(rng);
+    p.add(def);
+  }
+  return p;
+}
+
+// Two lists of node contacts equal bit for bit: nodes, forces, overlaps.
+template <int D>
+::testing::AssertionResult sameContacts(const std::vector<NodeContact<D>>& a, const std::vector<NodeContact<D>>& b) {
+  if (a.size() != b.size()) return ::testing::AssertionFailure() << a.size() << " against " << b.size() << " contacts";
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    if (a[k].node != b[k].node || std::memcmp(a[k].force.data(), b[k].force.data(), sizeof(Vec<D>)) != 0 ||
+        std::memcmp(&a[k].overlap, &b[k].overlap, sizeof(double)) != 0) {
+      return ::testing::AssertionFailure() << "node contact " << k << " differs";
+    }
+  }
+  return ::testing::AssertionSuccess();
+}
+
 template <int D>
 void clearForces(Particles<D>& p) {
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -380,19 +413,7 @@ TEST(NarrowPhase, ForcesAndMomentsBalance3D) { checkBalance<3>(); }
 // contact, the tree walks (only the leaves a certificate kept are tested).
 template <int D>
 void checkCertificatesExact() {
-  std::mt19937_64 rng(21);
-  const auto shapes = std::array{grain<D>(1), grain<D>(2), grain<D>(3)};
-  Particles<D> p;
-  for (int i = 0; i < 8; ++i) {
-    ParticleDef<D> def;
-    def.shape = shapes[std::size_t(i) % 3];
-    const double angle = 2.0 * std::numbers::pi * i / 8.0;
-    def.position = Vec<D>::Zero();
-    def.position[0] = 2.0 * std::cos(angle);
-    def.position[1] = 2.0 * std::sin(angle);
-    def.orientation = randomOrientation<D>(rng);
-    p.add(def);
-  }
+  Particles<D> p = ringOfGrains<D>(2.0, 21);
   ContactSolver<D> with(ContactLawDef{}), without(ContactLawDef{});
   without.setSeparationCertificates(false);
   const auto hub = grain<D>(4);
@@ -426,15 +447,8 @@ void checkCertificatesExact() {
     leafOnly += with.leafWalks();
     EXPECT_EQ(without.leafWalks(), 0u);
     EXPECT_EQ(without.certifiedWalks(), 0u);
-    const auto& a = with.nodeContacts();
-    const auto& b = without.nodeContacts();
-    ASSERT_EQ(a.size(), b.size()) << "pass " << pass;
-    passesTouching += !a.empty();
-    for (std::size_t k = 0; k < a.size(); ++k) {
-      ASSERT_EQ(a[k].node, b[k].node) << "pass " << pass;
-      ASSERT_EQ(std::memcmp(a[k].force.data(), b[k].force.data(), sizeof(Vec<D>)), 0) << "pass " << pass;
-      ASSERT_EQ(std::memcmp(&a[k].overlap, &b[k].overlap, sizeof(double)), 0) << "pass " << pass;
-    }
+    ASSERT_TRUE(sameContacts(with.nodeContacts(), without.nodeContacts())) << "pass " << pass;
+    passesTouching += !with.nodeContacts().empty();
   }
   EXPECT_GT(spared, 100u);
   EXPECT_GT(leafOnly, 100u);
@@ -457,19 +471,7 @@ TEST(NarrowPhase, SeparationCertificatesAreExact3D) { checkCertificatesExact<3>(
 // are those of a solver without certificates, bit for bit.
 template <int D>
 void checkNodeMargins() {
-  std::mt19937_64 rng(5);
-  const auto shapes = std::array{grain<D>(1), grain<D>(2), grain<D>(3)};
-  Particles<D> p;
-  for (int i = 0; i < 8; ++i) {
-    ParticleDef<D> def;
-    def.shape = shapes[std::size_t(i) % 3];
-    const double angle = 2.0 * std::numbers::pi * i / 8.0;
-    def.position = Vec<D>::Zero();
-    def.position[0] = 1.2 * std::cos(angle);
-    def.position[1] = 1.2 * std::sin(angle);
-    def.orientation = randomOrientation<D>(rng);
-    p.add(def);
-  }
+  const Particles<D> p = ringOfGrains<D>(1.2, 5);
   const auto pairs = allPairs(p);
   ContactSolver<D> with(ContactLawDef{}), without(ContactLawDef{});
   without.setSeparationCertificates(false);
@@ -477,17 +479,12 @@ void checkNodeMargins() {
   const std::uint64_t firstChecks = with.nodeChecks();
   with.compute(p, pairs, {}, {}, 1e-6);
   without.compute(p, pairs, {}, {}, 1e-6);
-  const auto& a = with.nodeContacts();
-  const auto& b = without.nodeContacts();
+  const std::size_t contacts = with.nodeContacts().size();
   ASSERT_GE(with.particleContacts().size(), 4u);
   EXPECT_GE(with.leafWalks(), with.particleContacts().size());
-  EXPECT_EQ(with.nodeChecks(), a.size());
-  EXPECT_GT(firstChecks, 2 * a.size());
-  ASSERT_EQ(a.size(), b.size());
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    ASSERT_EQ(a[k].node, b[k].node);
-    ASSERT_EQ(std::memcmp(a[k].force.data(), b[k].force.data(), sizeof(Vec<D>)), 0);
-  }
+  EXPECT_EQ(with.nodeChecks(), contacts);
+  EXPECT_GT(firstChecks, 2 * contacts);
+  EXPECT_TRUE(sameContacts(with.nodeContacts(), without.nodeContacts()));
 }
 
 TEST(NarrowPhase, NodeMarginsSpareClearNodes2D) { checkNodeMargins<2>(); }
