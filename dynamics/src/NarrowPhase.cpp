@@ -287,8 +287,11 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const auto beyondBox = [upper](const Vec<D>& g) {
     return std::max((-g.array()).maxCoeff(), (g.array() - upper.array()).maxCoeff());
   };
-  // A tree cell's test: true when none of its nodes can touch, with its
-  // margin in cells in `clear` (certificates only).
+  // A tree cell's test: true when none of its nodes can touch. With
+  // certificates, `clear` gets its margin in cells: for a rejected cell, how
+  // far it may move before its test could pass; for a passed one, how far
+  // before it could be rejected (the least of its three tests' slack), so
+  // that a leaf walk need not make it again before then.
   const auto cellRejected = [&](const typename geometry::NodeTree<D>::Cell& cell, double& clear) {
     const Vec<D> g = map * cell.centre + shift;
     const double r = cell.radius / h;
@@ -311,11 +314,16 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       clear = above * perSlopeCell;
       return true;
     }
+    if (certify) clear = std::min({reach + r - std::sqrt(apart2), -outside, -above * perSlopeCell});
     return false;
   };
+  double passed = 0.0;  // the margin of the last cell the walk kept (certificates)
   const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
     double clear = 0.0;
-    if (!cellRejected(cell, clear)) return false;
+    if (!cellRejected(cell, clear)) {
+      passed = clear;
+      return false;
+    }
     clearCells = std::min(clearCells, clear);
     return true;
   };
@@ -339,16 +347,10 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     Vec<D> normal = gradToWorld * grad;
     const double length = normal.norm();
     if (!(length > 0.0)) return 0.0;
-    NodeContact<D>& c = buf.nodes.emplace_back();
-    c.point = Ro * x + xo;
-    c.normal = normal / length;
-    c.overlap = -phi;
-    c.node = i;
-    c.ownerIsB = ownerIsB;
-    NodeWork<D>& w = buf.work.emplace_back();
-    w.stiffness = stiffnessFactor<Formulation>(weights[i], weightToFactor);
-    w.area = directionWeight * weights[i];
-    w.gradient = length / h;
+    // Whole records, not value-initialised then written field by field.
+    buf.nodes.push_back({Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB});
+    buf.work.push_back({stiffnessFactor<Formulation>(weights[i], weightToFactor), directionWeight * weights[i],
+                        length / h, -1});
     return 0.0;
   };
   if (!certify) {
@@ -362,12 +364,12 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   }
   // A certificate also keeps margins for its leaves (KeptLeaf), relative to
   // its reference map: for each node, a lower bound of its margin there;
-  // for the leaf's cell, the same, or kOpen when the leaf held a contact
-  // (its cell test would pass: it is not made), or 0 (make it). What the
-  // map has not moved by as much as its margin cannot pass its test now,
-  // and is not tested.
+  // for the leaf's cell, the same when its test rejected it, or minus the
+  // margin by which it passed (its test cannot reject it before a move that
+  // large: it is not made, the nodes are tested), or 0 (make it). What the
+  // map has not moved by as much as its margin cannot change its test's
+  // outcome now, and is not tested.
   constexpr std::uint32_t kSlots = detail::KeptLeaf::kNodeSlots;
-  constexpr float kOpen = -1.0f;
   // A margin m > 0 stored as a float no larger than it (a float rounds
   // within 2^-24 of m; none certifies more than 1e30 cells); 0 for m <= 0
   // (and NaN), which certifies nothing.
@@ -392,7 +394,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         continue;
       }
       const typename geometry::NodeTree<D>::Cell& cell = tree.cells[kept.cell];
-      if (!(cellClear < 0.0)) {
+      if (!(movedBound < -cellClear)) {
         ++buf.cellChecks;
         double clear = 0.0;
         if (cellRejected(cell, clear)) {
@@ -400,8 +402,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
           kept.cellMargin = lowered(clear - moved);
           continue;
         }
+        kept.cellMargin = -lowered(clear - moved);
       }
-      const std::size_t found = buf.nodes.size();
       for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
         const std::uint32_t j = k - cell.begin;
         if (j < kSlots && movedBound < double(kept.nodeMargin[j])) {
@@ -413,7 +415,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         clearKept = std::min(clearKept, m);
         if (j < kSlots) kept.nodeMargin[j] = lowered(m);
       }
-      kept.cellMargin = buf.nodes.size() > found ? kOpen : 0.0f;
     }
     made = *previous;
     made.clearance = std::min(previous->restClearance, clearKept);
@@ -424,7 +425,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
       detail::KeptLeaf& kept = buf.leaves.emplace_back();
       kept.cell = index;
-      const std::size_t found = buf.nodes.size();
+      kept.cellMargin = -lowered(passed);
       tested += cell.end - cell.begin;
       for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
         const double m = testNode(k);
@@ -432,7 +433,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         const std::uint32_t j = k - cell.begin;
         if (j < kSlots) kept.nodeMargin[j] = lowered(m);
       }
-      kept.cellMargin = buf.nodes.size() > found ? kOpen : 0.0f;
     });
     made = {key->owner, key->other, &owner, &other, map, shift, std::min(clearCells, clearNodes), clearCells};
   }
@@ -514,12 +514,13 @@ inline double boundaryWeight(double overlap, double normalSpeed, double dt) {
 // normal force (linear per node or Hertz per pair), damping, friction with
 // history; fills each node's force and shear and the pair record's totals.
 // `invMassSum` = 1/ma + 1/mb (1/ma against a boundary); `centreB` is the point
-// b's torque is taken about; velocityB(x) is b's material velocity at x;
-// `Boundary`: b is a plane or tool.
-template <int D, NormalModel Normal, bool Friction, bool Damping, bool Boundary, class VelocityB>
+// b's torque is taken about; b's material velocity at x is
+// vbAtA + wb x (x - xa) (vbAtA: at a's centroid xa; wb: b's spin, 0 for a
+// plane); `Boundary`: b is a plane or tool.
+template <int D, NormalModel Normal, bool Friction, bool Damping, bool Boundary>
 void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, std::size_t begin, const LawConstants& law,
               double invMassSum, double hertzRadius, const Vec<D>& xa, const Vec<D>& va, const Spin<D>& wa,
-              const Vec<D>& centreB, const VelocityB& velocityB, const HistoryView<D>& history,
+              const Vec<D>& centreB, const Vec<D>& vbAtA, const Spin<D>& wb, const HistoryView<D>& history,
               const NewbornView& newborn) {
   const std::size_t end = buf.nodes.size();
   // The per-node outputs of the pair's node contacts: node keys, rest
@@ -579,16 +580,20 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
   // pair (in locals, written to the records once).
   double elastic = 0.0, power = 0.0;
   Vec<D> sumForce = Vec<D>::Zero(), dashForce = Vec<D>::Zero();
-  Spin<D> torqueA = Rotation<D>::zeroSpin(), torqueB = Rotation<D>::zeroSpin();
-  Spin<D> dashTorqueA = Rotation<D>::zeroSpin(), dashTorqueB = Rotation<D>::zeroSpin();
-  double dashPower = 0.0, dashBoundaryPower = 0.0;
+  Spin<D> torqueA = Rotation<D>::zeroSpin(), dashTorqueA = Rotation<D>::zeroSpin();
+  double dashPower = 0.0;
   NodeContact<D>* const nodes = buf.nodes.data();
   const NodeWork<D>* const work = buf.work.data();
   const double* const preloads = buf.preload.data();
   Vec<D>* const shears = Friction ? buf.shear.data() : nullptr;
+  // Velocity of a's material point relative to b's at arm r from xa:
+  // relative0 + spin x r (both bodies rigid).
+  const Vec<D> relative0 = va - vbAtA;
+  const Spin<D> spin = wa - wb;
   for (std::size_t j = begin; j < end; ++j) {
     NodeContact<D>& c = nodes[j];
     const NodeWork<D>& w = work[j];
+    const Vec<D> arm = c.point - xa;
     const double overlap = c.overlap - preloads[j];  // the spring's own compression
     // Elastic normal force and the node's share of the pair's stiffness.
     double fn = 0.0, share = 0.0;
@@ -608,8 +613,7 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
     Vec<D> force;
     if constexpr (Damping || Friction) {
       // Velocity of a's material point relative to b's at the contact point.
-      const Vec<D> vb = velocityB(c.point);
-      const Vec<D> vrel = va + Rotation<D>::velocityAt(wa, c.point - xa) - vb;
+      const Vec<D> vrel = relative0 + Rotation<D>::velocityAt(spin, arm);
       const double vn = vrel.dot(c.normal);
       // Dashpot opposing the normal relative velocity, weighted by the part of
       // the step the node is in contact (see boundaryWeight).
@@ -625,15 +629,8 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
         // The dashpot's own force and moments, for the energy ledger.
         const Vec<D> fd = fdn * c.normal;
         dashForce += fd;
-        dashTorqueA += Rotation<D>::moment(c.point - xa, fd);
+        dashTorqueA += Rotation<D>::moment(arm, fd);
         dashPower += p;
-        // What the energy ledger reads (World.cpp): b's moment for a
-        // particle pair, the work rate on the boundary for a boundary.
-        if constexpr (Boundary) {
-          dashBoundaryPower += fd.dot(vb);
-        } else {
-          dashTorqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-fd));
-        }
       }
       force = fn * c.normal;
       if constexpr (Friction) {
@@ -680,28 +677,37 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
           shear *= scale;
           ft2 = ft.squaredNorm();
         }
-        if (kt > 0.0) elastic += ft2 / (2.0 * kt);
+        // The spring's energy k_t |s|^2 / 2 (= |f_t|^2 / (2 k_t): f_t = -k_t s, sliding or not).
+        elastic += 0.5 * kt * shear.squaredNorm();
         shears[j] = shear;
         force += ft;
       }
     } else {
       force = fn * c.normal;
     }
-    // This node's force on a, and its moments about a's centroid and b's reference point.
+    // This node's force on a, and its moment about a's centroid.
     c.force = force;
     sumForce += force;
-    torqueA += Rotation<D>::moment(c.point - xa, force);
-    torqueB += Rotation<D>::moment(c.point - centreB, Vec<D>(-force));
+    torqueA += Rotation<D>::moment(arm, force);
   }
+  // The moments on b about its reference point, from the sums: a node's arm
+  // about it is its arm about a's centroid plus (xa - centreB).
+  const Vec<D> fromB = xa - centreB;
   rec.force = sumForce;
   rec.torqueA = torqueA;
-  rec.torqueB = torqueB;
+  rec.torqueB = -(torqueA + Rotation<D>::moment(fromB, sumForce));
   if constexpr (Damping) {
     dash.force = dashForce;
     dash.torqueA = dashTorqueA;
-    dash.torqueB = dashTorqueB;
+    // What the energy ledger reads (World.cpp): b's moment for a particle
+    // pair; for a boundary, the dashpot's work rate on it, sum fd . (vbAtA +
+    // wb x r) = F_d . vbAtA + wb . (sum r x fd).
+    if constexpr (Boundary) {
+      dash.boundaryPower = dashForce.dot(vbAtA) + Rotation<D>::dot(wb, dashTorqueA);
+    } else {
+      dash.torqueB = -(dashTorqueA + Rotation<D>::moment(fromB, dashForce));
+    }
     dash.power = dashPower;
-    dash.boundaryPower = dashBoundaryPower;
   }
   if constexpr (Normal == NormalModel::Hertz) elastic += 0.4 * hertz * deepest;
   rec.elasticEnergy = elastic;
@@ -1042,10 +1048,10 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       }
       const Vec<D>& vb = p.velocity[ib];
       const Spin<D>& wb = p.angularVelocity[ib];
-      const auto velocityB = [&](const Vec<D>& x) { return Vec<D>(vb + Rotation<D>::velocityAt(wb, x - xb)); };
       PairDashpot<D> dash;
       applyLaw<D, Normal, Friction, Damping, false>(rec, dash, buf, begin, law, p.invMass[ia] + p.invMass[ib], radius, xa,
-                                             p.velocity[ia], p.angularVelocity[ia], xb, velocityB,
+                                             p.velocity[ia], p.angularVelocity[ia], xb,
+                                             Vec<D>(vb + Rotation<D>::velocityAt(wb, xa - xb)), wb,
                                              historyOf(p.id[ia], p.id[ib]),
                                              NewbornView{newbornOf(p.id[ia]), newbornOf(p.id[ib]), p.id[ib], p.id[ia]});
       buf.pairs.push_back(rec);
@@ -1074,12 +1080,11 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         rec.firstNode = std::uint32_t(begin);
         rec.nodeCount = std::uint32_t(buf.nodes.size() - begin);
         const double radius = Normal == NormalModel::Hertz ? equivalentRadius<D>(s.volume()) : 0.0;
-        const auto velocityB = [&](const Vec<D>&) { return plane.velocity; };
         PairDashpot<D> dash;
         const LawConstants planeLaw = boundaryLaw(law, planeConstants(j));
         applyLaw<D, Normal, Friction, Damping, true>(rec, dash, buf, begin, planeLaw, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
-                                               plane.point, velocityB,
+                                               plane.point, plane.velocity, Rotation<D>::zeroSpin(),
                                                historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)),
                                                NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kPlaneTag | std::uint64_t(j), 0});
         buf.pairs.push_back(rec);
@@ -1119,12 +1124,11 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         if constexpr (Normal == NormalModel::Hertz) {
           radius = combinedRadius(equivalentRadius<D>(s.volume()), equivalentRadius<D>(ts.volume()));
         }
-        const auto velocityB = [&](const Vec<D>& at) { return tool.velocityAt(at); };
         PairDashpot<D> dash;
         const LawConstants toolLaw = boundaryLaw(law, toolConstants(j));
         applyLaw<D, Normal, Friction, Damping, true>(rec, dash, buf, begin, toolLaw, p.invMass[std::size_t(i)], radius, x,
                                                p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
-                                               tool.position, velocityB,
+                                               tool.position, tool.velocityAt(x), tool.angularVelocity,
                                                historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)),
                                                NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kToolTag | std::uint64_t(j), 0});
         buf.pairs.push_back(rec);

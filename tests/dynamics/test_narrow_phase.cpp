@@ -466,7 +466,8 @@ TEST(NarrowPhase, SeparationCertificatesAreExact3D) { checkCertificatesExact<3>(
 // step is a leaf walk for every touching direction, and a node of a kept
 // leaf is tested only when its margin from the first step does not clear
 // it (those inside, which the force needs, and none that are clear by more
-// than the slack): so the nodes tested equal the node contacts, against
+// than the slack), and no leaf cell is tested again: so the nodes tested
+// equal the node contacts, against
 // more than twice as many in the first step, and the contacts and forces
 // are those of a solver without certificates, bit for bit.
 template <int D>
@@ -484,6 +485,9 @@ void checkNodeMargins() {
   EXPECT_GE(with.leafWalks(), with.particleContacts().size());
   EXPECT_EQ(with.nodeChecks(), contacts);
   EXPECT_GT(firstChecks, 2 * contacts);
+  // Every kept leaf's cell test holds its outcome (rejected or passed) by
+  // its margin: none is made again.
+  EXPECT_EQ(with.cellChecks(), 0u);
   EXPECT_TRUE(sameContacts(with.nodeContacts(), without.nodeContacts()));
 }
 

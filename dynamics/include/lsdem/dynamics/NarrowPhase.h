@@ -107,7 +107,9 @@ struct NodeWork {
 /// A tree leaf a certificate keeps (internal), with its margins: its
 /// cell's, then its nodes' (the node tree's leaf size; a larger leaf's
 /// further nodes have none), in cells of the other's grid, relative to the
-/// certificate's map (Certificate; collectLevelSet in NarrowPhase.cpp).
+/// certificate's map (Certificate; collectLevelSet in NarrowPhase.cpp). A
+/// cell margin m > 0: the cell's test rejects it until a move of m; m < 0:
+/// it passes until a move of -m; 0: test it.
 struct KeptLeaf {
   static constexpr std::uint32_t kNodeSlots = geometry::NodeTree<3>::kLeafSize;
   std::uint32_t cell = 0;
