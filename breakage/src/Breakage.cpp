@@ -86,12 +86,12 @@ bool Breakage<D>::isBelowMinimum(const Shape<D>& shape) const {
 
 template <int D>
 void Breakage<D>::afterStep(World<D>& world) {
-  Particles<D>& p = world.particles();
+  const Particles<D>& p = world.particles();
 
   // (i) Weibull strengths (eq. 12) for particles that have none, keyed by global id.
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (p.strength[i] <= 0.0) {
-      p.strength[i] = sampleStrength(def_.weibull, def_.seed, p.id[i], p.shape[i]->descriptors().equivalentDiameter);
+      world.setStrength(i, sampleStrength(def_.weibull, def_.seed, p.id[i], p.shape[i]->descriptors().equivalentDiameter));
     }
   }
 
@@ -240,13 +240,11 @@ std::vector<typename Breakage<D>::Inherited> Breakage<D>::inheritedRestOverlaps(
 
 template <int D>
 void Breakage<D>::applyQueue(World<D>& world) {
-  Particles<D>& p = world.particles();
-  dynamics::EnergyLedger& ledger = world.energyLedger();
+  const Particles<D>& p = world.particles();
   const double now = world.time();
   const double m = def_.weibull.modulus;
   std::sort(queue_.begin(), queue_.end(), [](const Pending& a, const Pending& b) { return a.id < b.id; });
-  parents_.clear();
-  adds_.clear();
+  splits_.clear();
   addCutFace_.clear();
   addInherited_.clear();
   std::vector<std::size_t> addEvent;
@@ -296,7 +294,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
       if (!split.isSplit) {
         // No cut resolves at this grid: the grain stays whole from now on
         // rather than being retried every step.
-        p.strength[i] = std::numeric_limits<double>::infinity();
+        world.setStrength(i, std::numeric_limits<double>::infinity());
         ++unsplittable_;
       }
     }
@@ -339,6 +337,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
     // The parent's springs that started relaxed (ContactSolver, rest
     // overlaps) pass to its fragments, so breaking does not load them again.
     const auto rest = world.contacts().restOverlaps(p, i);
+    dynamics::Replacement<D> product;
     for (const Fragment<D>& f : split.fragments) {
       const FragmentState<D> st = fragmentState(f, p.position[i], rotation, p.velocity[i], p.angularVelocity[i]);
       ParticleDef<D> def;
@@ -367,43 +366,36 @@ void Breakage<D>::applyQueue(World<D>& world) {
       ev.fragmentKineticEnergy += kinetic;
       const bool fines = small;
       if (fines) {
+        // Removed at once (World::replace gives it its id and books its energy).
         dynamics::RemovedParticle r;
-        r.id = p.nextId();
-        p.reserveIdsBelow(r.id + 1);
-        r.time = now;
         r.mass = mass;
         r.volume = f.volume;
         r.sieveSize = f.shape->descriptors().sieveSize;
         r.reason = "fines";
-        ledger.addedEnergy += kinetic;  // a fragment, and then removed
-        world.recordRemoval(r, kinetic);
+        product.fines.emplace_back(std::move(r), kinetic);
         finesMass_ += mass;
         ev.finesVolumes.push_back(f.volume);
       } else {
-        adds_.push_back(std::move(def));
+        product.children.push_back(std::move(def));
         addCutFace_.push_back(f.cutFaceNodes);
         addInherited_.push_back(inheritedRestOverlaps(rest, q.id, shape, f));
         addEvent.push_back(events_.size());
         ev.childVolumes.push_back(f.volume);
       }
     }
-    ledger.addedEnergy -= parentKinetic;
-    parents_.push_back(i);
+    product.parent = i;
+    splits_.push_back(std::move(product));
     events_.push_back(std::move(ev));
   }
-  if (parents_.empty()) return;
+  if (splits_.empty()) return;
 
-  // Parents leave the store, highest index first (swap-removal keeps the others valid).
-  std::sort(parents_.begin(), parents_.end(), std::greater<>());
-  for (std::size_t i : parents_) p.remove(i);
-
-  // Fragments enter it in the order of their parents' ids.
+  // Parents leave, their fines are recorded, fragments enter in the order of
+  // their parents' ids (World::replace keeps the ledger and the time step).
+  const std::vector<std::size_t> added = world.replace(splits_);
   eventOf_.assign(p.size(), -1);
-  for (std::size_t k = 0; k < adds_.size(); ++k) {
-    const std::size_t i = p.add(adds_[k]);
+  for (std::size_t k = 0; k < added.size(); ++k) {
+    const std::size_t i = added[k];
     events_[addEvent[k]].children.push_back(p.id[i]);
-    ledger.addedEnergy += p.kineticEnergy(i);
-    eventOf_.resize(p.size(), -1);
     eventOf_[i] = std::int64_t(addEvent[k]);
     // Its contacts start relaxed: new-face nodes, and the parent's rest overlaps.
     if (!def_.relaxNewContacts) continue;
@@ -416,7 +408,6 @@ void Breakage<D>::applyQueue(World<D>& world) {
       }
     }
   }
-  world.particlesChanged();
   checkEnergy(world, firstEvent);
 }
 

@@ -3,6 +3,7 @@
 #include "lsdem/dynamics/World.h"
 
 #include <cmath>
+#include <span>
 #include <utility>
 #include <stdexcept>
 #include <string>
@@ -11,15 +12,16 @@ namespace lsdem::dynamics {
 
 template <int D>
 void Gravity<D>::applyForces(World<D>& world, double dt) {
-  Particles<D>& p = world.particles();
+  const Particles<D>& p = world.particles();
+  const std::span<Vec<D>> force = world.forces();
   double power = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
     const Vec<D> f = p.mass[i] * g_;
-    p.force[i] += f;
+    force[i] += f;
     power += f.dot(p.velocity[i]);
   }
   // Exact work over the closing step: x(n+1) - x(n) = dt v(n+1/2).
-  world.energyLedger().gravityWork += power * dt;
+  world.addGravityWork(power * dt);
 }
 
 template <int D>
@@ -31,21 +33,23 @@ GlobalDamping<D>::GlobalDamping(double coefficient) : c_(coefficient) {
 
 template <int D>
 void GlobalDamping<D>::applyForces(World<D>& world, double /*dt*/) {
-  Particles<D>& p = world.particles();
+  const Particles<D>& p = world.particles();
+  const std::span<Vec<D>> force = world.forces();
+  const std::span<Spin<D>> torque = world.torques();
   double power = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
     const Vec<D> f = -c_ * p.mass[i] * p.velocity[i];
-    p.force[i] += f;
+    force[i] += f;
     power -= f.dot(p.velocity[i]);
     if constexpr (D == 2) {
       const double t = -c_ * p.inertia[i] * p.angularVelocity[i];
-      p.torque[i] += t;
+      torque[i] += t;
       power -= t * p.angularVelocity[i];
     } else {
       // I w in the world frame: rotate to the principal frame and back.
       const Vec<3> wb = p.orientation[i].conjugate() * p.angularVelocity[i];
       const Vec<3> t = -c_ * (p.orientation[i] * Vec<3>(p.inertia[i].cwiseProduct(wb)));
-      p.torque[i] += t;
+      torque[i] += t;
       power -= t.dot(p.angularVelocity[i]);
     }
   }
@@ -61,7 +65,9 @@ LocalDamping<D>::LocalDamping(double alpha) : alpha_(alpha) {
 
 template <int D>
 void LocalDamping<D>::applyForces(World<D>& world, double /*dt*/) {
-  Particles<D>& p = world.particles();
+  const Particles<D>& p = world.particles();
+  const std::span<Vec<D>> force = world.forces();
+  const std::span<Spin<D>> torque = world.torques();
   double power = 0.0;
   auto damp = [&](double& f, double v) {
     const double df = -alpha_ * std::abs(f) * (v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0));
@@ -69,11 +75,11 @@ void LocalDamping<D>::applyForces(World<D>& world, double /*dt*/) {
     power -= df * v;
   };
   for (std::size_t i = 0; i < p.size(); ++i) {
-    for (int a = 0; a < D; ++a) damp(p.force[i][a], p.velocity[i][a]);
+    for (int a = 0; a < D; ++a) damp(force[i][a], p.velocity[i][a]);
     if constexpr (D == 2) {
-      damp(p.torque[i], p.angularVelocity[i]);
+      damp(torque[i], p.angularVelocity[i]);
     } else {
-      for (int a = 0; a < 3; ++a) damp(p.torque[i][a], p.angularVelocity[i][a]);
+      for (int a = 0; a < 3; ++a) damp(torque[i][a], p.angularVelocity[i][a]);
     }
   }
   power_ = power;

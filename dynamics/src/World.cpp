@@ -4,6 +4,7 @@
 #include "lsdem/dynamics/TimeStep.h"
 
 #include <algorithm>
+#include <functional>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -416,6 +417,48 @@ template <int D>
 void World<D>::addEffect(std::unique_ptr<Effect<D>> effect) {
   effects_.push_back(std::move(effect));
   effectSeconds_.push_back(0.0);
+}
+
+template <int D>
+std::vector<std::size_t> World<D>::replace(std::vector<Replacement<D>>& splits) {
+  std::vector<std::size_t> parents;
+  parents.reserve(splits.size());
+  for (const Replacement<D>& s : splits) {
+    if (s.parent >= particles_.size()) {
+      throw std::out_of_range("World::replace: parent index " + std::to_string(s.parent) + " of " +
+                              std::to_string(particles_.size()) + " particles");
+    }
+    parents.push_back(s.parent);
+  }
+  std::sort(parents.begin(), parents.end(), std::greater<>());
+  if (std::adjacent_find(parents.begin(), parents.end()) != parents.end()) {
+    throw std::out_of_range("World::replace: a parent given twice");
+  }
+  // The ledger, split by split: the fines' kinetic energy is brought (by a
+  // fragment) and carried away at once; the parent's leaves with it.
+  for (Replacement<D>& s : splits) {
+    for (auto& [r, kinetic] : s.fines) {
+      r.id = particles_.nextId();
+      particles_.reserveIdsBelow(r.id + 1);
+      r.time = time_;
+      energy_.addedEnergy += kinetic;
+      recordRemoval(r, kinetic);
+    }
+    energy_.addedEnergy -= particles_.kineticEnergy(s.parent);
+  }
+  // Parents leave, highest index first (swap-removal keeps the others valid);
+  // the children enter in order and bring their kinetic energy.
+  for (std::size_t i : parents) particles_.remove(i);
+  std::vector<std::size_t> added;
+  for (const Replacement<D>& s : splits) {
+    for (const ParticleDef<D>& def : s.children) {
+      const std::size_t i = particles_.add(def);
+      energy_.addedEnergy += particles_.kineticEnergy(i);
+      added.push_back(i);
+    }
+  }
+  particlesChanged();
+  return added;
 }
 
 template <int D>

@@ -397,7 +397,7 @@ TEST(BreakageEffect, ManualBreaksThatCannotBeAppliedAreLoggedNotThrown) {
   Breakage<2>& brk = *effect;
   w.addEffect(std::move(effect));
   w.step();
-  w.particles().strength[1] = std::numeric_limits<double>::infinity();
+  w.setStrength(1, std::numeric_limits<double>::infinity());
 
   const double mass = w.particleMass();
   while (w.time() < 0.001 + 1.5 * w.dt()) ASSERT_NO_THROW(w.step());

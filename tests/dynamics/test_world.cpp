@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -11,6 +12,7 @@
 #include <optional>
 #include <tuple>
 #include <random>
+#include <stdexcept>
 
 #ifdef LSDEM_HAVE_OPENMP
 #include <omp.h>
@@ -202,6 +204,82 @@ TEST(World, OutflowRemovesAndRecords) {
   EXPECT_DOUBLE_EQ(w.removed()[0].mass, m);
   EXPECT_NEAR(w.removed()[0].time, std::sqrt(2 * 0.5 / 9.81), 0.01);
   EXPECT_DOUBLE_EQ(w.removedMass(), m);
+}
+
+// World::replace, the one way particles are split: parents leave without a
+// removal record, fines are recorded (ids taken before the children's), the
+// children enter in order, and the ledger books exactly the kinetic energy
+// the change brings, so the budget holds across it (free discs: no contact,
+// no gravity, so the ledger's kinetic terms after a step are the discs' own).
+TEST(World, ReplaceBooksTheSplitAndKeepsTheBudget) {
+  World<2> w{WorldDef<2>{}};
+  const auto big = test::sphereShape<2>(0.05);
+  const auto small = test::sphereShape<2>(0.02);
+  for (int k = 0; k < 3; ++k) {
+    ParticleDef<2> p;
+    p.shape = big;
+    p.position = Vec<2>(0.5 * k, 0.0);
+    p.velocity = Vec<2>(0.1 * (k + 1), -0.2);
+    p.angularVelocity = 1.0 + k;
+    w.addParticle(p);
+  }
+  w.step();
+  const std::uint64_t idB = w.particles().id[1];
+  const double before = w.energy().balanceError();
+  const double added0 = w.energy().addedEnergy;
+  const double kineticParents = w.particles().kineticEnergy(0) + w.particles().kineticEnergy(2);
+  const std::uint64_t firstId = w.particles().nextId();
+
+  const auto child = [&](double x, double vx) {
+    ParticleDef<2> c;
+    c.shape = small;
+    c.position = Vec<2>(x, 0.01);
+    c.velocity = Vec<2>(vx, 0.3);
+    c.angularVelocity = -2.0;
+    return c;
+  };
+  std::vector<Replacement<2>> splits(2);
+  splits[0].parent = 2;
+  splits[0].children = {child(1.0, 0.5), child(1.05, 0.7)};
+  RemovedParticle fines;
+  fines.mass = 1e-3;
+  fines.reason = "fines";
+  splits[0].fines.emplace_back(fines, 0.25);
+  splits[1].parent = 0;
+  splits[1].children = {child(0.0, -0.4)};
+  const std::vector<std::size_t> added = w.replace(splits);
+
+  const Particles<2>& p = w.particles();
+  ASSERT_EQ(added.size(), 3u);
+  ASSERT_EQ(p.size(), 4u);
+  EXPECT_FALSE(w.contactsCurrent());
+  // The untouched disc stays; the fines took the first new id, the children the next ones in order.
+  EXPECT_EQ(std::count(p.id.begin(), p.id.end(), idB), 1);
+  ASSERT_EQ(w.removed().size(), 1u);
+  EXPECT_EQ(w.removed()[0].id, firstId);
+  EXPECT_EQ(w.removed()[0].reason, "fines");
+  EXPECT_EQ(w.removed()[0].time, w.time());
+  double kineticChildren = 0.0;
+  for (std::size_t k = 0; k < added.size(); ++k) {
+    EXPECT_EQ(p.id[added[k]], firstId + 1 + k);
+    kineticChildren += p.kineticEnergy(added[k]);
+  }
+  EXPECT_DOUBLE_EQ(p.position[added[1]].x(), 1.05);
+  EXPECT_NEAR(w.energy().addedEnergy - added0, kineticChildren + 0.25 - kineticParents, 1e-15);
+  EXPECT_EQ(w.energy().removedEnergy, 0.25);
+  // The budget holds across the change once the step has measured the new set.
+  w.step();
+  EXPECT_NEAR(w.energy().balanceError(), before, 1e-12 * w.energy().scale());
+
+  // A parent out of range or given twice is refused, and nothing changes.
+  std::vector<Replacement<2>> bad(1);
+  bad[0].parent = 4;
+  EXPECT_THROW(w.replace(bad), std::out_of_range);
+  bad.resize(2);
+  bad[0].parent = 1;
+  bad[1].parent = 1;
+  EXPECT_THROW(w.replace(bad), std::out_of_range);
+  EXPECT_EQ(w.particles().size(), 4u);
 }
 
 // With a discharge box, what leaves the outflow box inside it is the

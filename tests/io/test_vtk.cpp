@@ -65,7 +65,8 @@ Orientation<D> someRotation(double angle) {
 
 // Three separated grains (two shapes) with distinct poses and motions, and a floor.
 template <int D>
-World<D> smallWorld() {
+// `moved`: the first particle shifted by 0.01 m along every axis and turned.
+World<D> smallWorld(bool moved = false) {
   WorldDef<D> def;
   def.contact.kn = 1e5;
   def.contact.ks = 0.8e5;
@@ -92,6 +93,10 @@ World<D> smallWorld() {
     p.strength = 1e6 * (k + 1);
     p.generation = k;
     if (k == 2) p.parent = 7;
+    if (k == 0 && moved) {
+      p.position += Vec<D>::Constant(0.01);
+      p.orientation = someRotation<D>(2.0);
+    }
     w.addParticle(p);
   }
   return w;
@@ -273,7 +278,7 @@ template <int D>
 void checkSurfaceFrame() {
   ScratchDir dir("surfaces" + std::to_string(D));
   World<D> w = smallWorld<D>();
-  Particles<D>& p = w.particles();
+  const Particles<D>& p = w.particles();
   io::SurfaceCache<D> cache;
   io::writeSurfaceFrame<D>(dir / "b.vtp", w, cache, VtkEncoding::Binary);
   io::writeSurfaceFrame<D>(dir / "a.vtp", w, cache, VtkEncoding::Ascii);
@@ -340,16 +345,16 @@ void checkSurfaceFrame() {
   }
   // Moved and rotated, an ellipse's surface follows: the old points are off it.
   const Vec<D> old = pointOf<D>(b, cellList.cell(0)[0]);
-  p.position[0] += Vec<D>::Constant(0.01);
-  p.orientation[0] = someRotation<D>(2.0);
-  io::writeSurfaceFrame<D>(dir / "moved.vtp", w, cache, VtkEncoding::Binary);
+  const World<D> shifted = smallWorld<D>(true);
+  const Particles<D>& q = shifted.particles();
+  io::writeSurfaceFrame<D>(dir / "moved.vtp", shifted, cache, VtkEncoding::Binary);
   const test::VtpFile m = test::readVtp(dir / "moved.vtp");
   const Vec<D> moved = pointOf<D>(m, (D == 2 ? m.lineCells : m.polyCells).cell(0)[0]);
   EXPECT_GT((moved - old).norm(), 0.005);
-  const Vec<D> body = p.rotation(0).transpose() * (moved - p.position[0]);
-  EXPECT_LT(std::abs(p.shape[0]->value(body)), surfaceTolerance<D>() * p.shape[0]->grid().spacing());
-  const Vec<D> oldBody = p.rotation(0).transpose() * (old - p.position[0]);
-  EXPECT_GT(std::abs(p.shape[0]->value(oldBody)), 3.0 * surfaceTolerance<D>() * p.shape[0]->grid().spacing());
+  const Vec<D> body = q.rotation(0).transpose() * (moved - q.position[0]);
+  EXPECT_LT(std::abs(q.shape[0]->value(body)), surfaceTolerance<D>() * q.shape[0]->grid().spacing());
+  const Vec<D> oldBody = q.rotation(0).transpose() * (old - q.position[0]);
+  EXPECT_GT(std::abs(q.shape[0]->value(oldBody)), 3.0 * surfaceTolerance<D>() * q.shape[0]->grid().spacing());
 }
 
 // Boundary frame: the floor clipped to the extent box exactly; a tool's

@@ -27,9 +27,11 @@
 ///      birth time now and strength childStrength() (eq. 13; a parent made
 ///      unbreakable, strength infinite, gives its fragments none, so step 1
 ///      samples theirs); a fragment below
-///      minVolume or minNodes is recorded with World::recordRemoval as "fines"
-///      with its kinetic energy instead;
-///   4. world.particlesChanged() once after the batch (the time step is re-checked).
+///      minVolume or minNodes is recorded as removed ("fines") with its
+///      kinetic energy instead;
+///   4. the batch goes to the world in one World::replace (parents out,
+///      fines recorded, fragments in, the ledger booked, the time step
+///      re-checked once).
 ///
 /// Manual breaks never stop a run: one that is due for a particle that is no
 /// longer there, whose surface does not cut the particle (a plane or surface
@@ -284,9 +286,8 @@ class Breakage final : public dynamics::Effect<D> {
   };
   std::vector<Neighbour> around_;
   std::vector<Pending> queue_;
-  std::vector<std::size_t> parents_;
-  std::vector<dynamics::ParticleDef<D>> adds_;
-  std::vector<std::vector<std::uint32_t>> addCutFace_;  // aligned with adds_: Fragment::cutFaceNodes
+  std::vector<dynamics::Replacement<D>> splits_;  // this batch's, in the order of the parents' ids
+  std::vector<std::vector<std::uint32_t>> addCutFace_;  // per fragment that enters (in splits_ order): Fragment::cutFaceNodes
   // A rest overlap a fragment takes over: of its node (childOwns; key = the
   // partner), or of another body's node inside it (key = that body's id).
   struct Inherited {
@@ -295,7 +296,7 @@ class Breakage final : public dynamics::Effect<D> {
     double restOverlap = 0.0;
     bool childOwns = true;
   };
-  std::vector<std::vector<Inherited>> addInherited_;  // aligned with adds_
+  std::vector<std::vector<Inherited>> addInherited_;  // aligned with addCutFace_
   static std::vector<Inherited> inheritedRestOverlaps(
       const std::vector<typename dynamics::ContactSolver<D>::RestOverlap>& rest, std::uint64_t parentId,
       const geometry::Shape<D>& parent, const Fragment<D>& f);

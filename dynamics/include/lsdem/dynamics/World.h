@@ -32,8 +32,10 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 namespace lsdem::dynamics {
@@ -175,6 +177,17 @@ struct RemovedParticle {
   std::string reason;        ///< "outflow", "fines", ...
 };
 
+/// One particle's split, for World::replace: the fragments that enter as
+/// particles, and the matter the split removes at once (fines) as removal
+/// records with the kinetic energy each carried (J); replace() gives those
+/// records their ids and time.
+template <int D>
+struct Replacement {
+  std::size_t parent = 0;  ///< index of the particle that leaves
+  std::vector<ParticleDef<D>> children;
+  std::vector<std::pair<RemovedParticle, double>> fines;
+};
+
 /// Stages of the step whose wall-clock time is reported.
 enum class Stage { Integrate, Kinematics, BroadPhase, NarrowPhase, Accumulate, Effects, AfterStep, Count };
 const char* stageName(Stage s);
@@ -205,8 +218,18 @@ class World {
   std::size_t addPlane(const PlaneDef<D>& def);
   /// @brief Declares one more effect (breakage plugs in here).
   void addEffect(std::unique_ptr<Effect<D>> effect);
-  /// @brief Tells the world particles were replaced in bulk (breakage): the
-  /// broad phase rebuilds and the time step is re-checked.
+  /// @brief Replaces particles by others (breakage): each parent leaves (no
+  /// removal record: its matter goes on in its fragments), its fines are
+  /// recorded as removed, then the children enter, in the order given; the
+  /// ledger books the kinetic energy this adds (the children's and the
+  /// fines', less the parents') and what the fines carry away; then
+  /// particlesChanged(). Returns the children's indices, in order.
+  /// @note Throws std::out_of_range for a parent index out of range or given twice.
+  std::vector<std::size_t> replace(std::vector<Replacement<D>>& splits);
+  /// @brief Sets particle i's strength (breakage: eq. 12-13; infinite: unbreakable).
+  void setStrength(std::size_t i, double strength) { particles_.strength.at(i) = strength; }
+  /// @brief Tells the world particles were replaced in bulk: the broad phase
+  /// rebuilds and the time step is re-checked (replace() calls it).
   void particlesChanged();
   /// @brief Marks nodes of particle `id` as born this step (a fragment's new
   /// face): their contacts found at the next evaluation start relaxed
@@ -248,8 +271,17 @@ class World {
                  const std::function<std::shared_ptr<const geometry::Shape<D>>(std::uint32_t)>& shapeAt);
 
   // ---- state ----
-  Particles<D>& particles() { return particles_; }
+  /// @brief The particles, read-only: the set changes only through
+  /// addParticle, removeParticle, replace and setStrength, so that ids,
+  /// contact history, broad phase, stiffness cache, time step and energy
+  /// ledger stay consistent.
   const Particles<D>& particles() const { return particles_; }
+  /// @brief The particles' force and torque accumulators, for force effects
+  /// (Effect::applyForces), which add to them.
+  std::span<Vec<D>> forces() { return particles_.force; }
+  std::span<Spin<D>> torques() { return particles_.torque; }
+  /// @brief Books work done on the particles by a field force (gravity), J.
+  void addGravityWork(double joules) { energy_.gravityWork += joules; }
   double time() const { return time_; }
   double dt() const { return dt_; }
   /// @brief The critical time step of the current particles (s).
@@ -281,7 +313,6 @@ class World {
   /// @brief Loads of the particles on planes and tools from the last step.
   const BoundaryLoads<D>& boundaryLoads() const { return loads_; }
   const EnergyLedger& energy() const { return energy_; }
-  EnergyLedger& energyLedger() { return energy_; }
   const std::vector<RemovedParticle>& removed() const { return removed_; }
   /// @brief Names of the effects that run, in order.
   std::vector<std::string> effectNames() const;
