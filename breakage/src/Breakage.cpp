@@ -101,7 +101,6 @@ void Breakage<D>::afterStep(World<D>& world) {
 
   // (iii)-(iv) Splits between steps, then one re-check of the time step.
   if (!queue_.empty()) applyQueue(world);
-  removedSeen_ = world.removed().size();
 }
 
 template <int D>
@@ -109,40 +108,31 @@ void Breakage<D>::queueFailures(World<D>& world) {
   const Particles<D>& p = world.particles();
   const double now = world.time();
 
-  // Stale contact records: an earlier effect of this afterStep removed or added particles.
-  bool stale = false;
-  for (std::size_t k = removedSeen_; k < world.removed().size() && !stale; ++k) {
-    stale = world.removed()[k].time == now;
-  }
-  for (std::size_t i = 0; i < p.size() && !stale; ++i) stale = p.birthTime[i] == now;
-  if (stale) ++skipped_;
-
-  // eq. 5-6 per grain and the criterion (eq. 7-10) at its own strength.
+  // eq. 5-6 per grain and the criterion (eq. 7-10) at its own strength, on
+  // contact records of the particles as they are (readsContacts).
   bool havePoints = false;
-  if (!stale) {
-    grainStresses(p, world.contacts(), stress_);
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (stress_[i].isZero(0.0) || !std::isfinite(p.strength[i])) continue;  // infinite: unsplittable
-      const Vec<3> principal = principalStressTriple<D>(stress_[i]);
-      if (!criterion_->fails(principal, p.strength[i])) continue;
-      const Shape<D>& shape = *p.shape[i];
-      if (def_.haltBelowMinimum && isBelowMinimum(shape)) continue;
-      if (shape.volume() < def_.minBreakableVolume) continue;
-      // Fracture plane: buckling (eq. 21) for slender grains, else the strongest contacts (eq. 18-20).
-      const bool buckling = def_.buckling && circumscribedVolumeRatio(shape) > def_.bucklingRatio;
-      std::optional<HalfSpace<D>> plane;
-      if (buckling) {
-        plane = bucklingPlane(shape, p.position[i], p.rotation(i), def_.seed, p.id[i]);
-      } else {
-        if (!havePoints) {
-          strongestContacts(p, world.contacts(), points_);
-          havePoints = true;
-        }
-        plane = fracturePlane<D>(p.position[i], points_.of(i), shape.descriptors().equivalentDiameter);
+  grainStresses(p, world.contacts(), stress_);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (stress_[i].isZero(0.0) || !std::isfinite(p.strength[i])) continue;  // infinite: unsplittable
+    const Vec<3> principal = principalStressTriple<D>(stress_[i]);
+    if (!criterion_->fails(principal, p.strength[i])) continue;
+    const Shape<D>& shape = *p.shape[i];
+    if (def_.haltBelowMinimum && isBelowMinimum(shape)) continue;
+    if (shape.volume() < def_.minBreakableVolume) continue;
+    // Fracture plane: buckling (eq. 21) for slender grains, else the strongest contacts (eq. 18-20).
+    const bool buckling = def_.buckling && circumscribedVolumeRatio(shape) > def_.bucklingRatio;
+    std::optional<HalfSpace<D>> plane;
+    if (buckling) {
+      plane = bucklingPlane(shape, p.position[i], p.rotation(i), def_.seed, p.id[i]);
+    } else {
+      if (!havePoints) {
+        strongestContacts(p, world.contacts(), points_);
+        havePoints = true;
       }
-      if (!plane) continue;
-      queue_.push_back({p.id[i], i, criterion_->characteristicStress(principal), *plane, false, buckling, nullptr});
+      plane = fracturePlane<D>(p.position[i], points_.of(i), shape.descriptors().equivalentDiameter);
     }
+    if (!plane) continue;
+    queue_.push_back({p.id[i], i, criterion_->characteristicStress(principal), *plane, false, buckling, nullptr});
   }
 
   // Manual breaks that are due (they replace a natural failure of the same particle).
@@ -157,7 +147,7 @@ void Breakage<D>::queueFailures(World<D>& world) {
     }
     const std::size_t i = std::size_t(it - p.id.begin());
     double value = 0.0;
-    if (!stale && i < stress_.size() && !stress_[i].isZero(0.0)) {
+    if (i < stress_.size() && !stress_[i].isZero(0.0)) {
       value = criterion_->characteristicStress(principalStressTriple<D>(stress_[i]));
     }
     HalfSpace<D> plane = mb.plane;
@@ -489,8 +479,8 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
   out.put(finesMass_);
   out.put(std::uint64_t(unsplit_));
   out.put(std::uint64_t(unsplittable_));
-  out.put(std::uint64_t(skipped_));
-  out.put(std::uint64_t(removedSeen_));
+  out.put(std::uint64_t(0));  // reserved (steps whose stresses were skipped, before contacts were kept current)
+  out.put(std::uint64_t(0));  // reserved (removals seen, before contacts were kept current)
   out.put(std::uint64_t(events_.size()));
   for (const BreakageEvent<D>& e : events_) {
     out.put(e.time);
@@ -541,8 +531,8 @@ void Breakage<D>::loadState(dynamics::StateReader& in) {
   finesMass_ = in.get<double>();
   unsplit_ = std::size_t(in.get<std::uint64_t>());
   unsplittable_ = std::size_t(in.get<std::uint64_t>());
-  skipped_ = std::size_t(in.get<std::uint64_t>());
-  removedSeen_ = std::size_t(in.get<std::uint64_t>());
+  (void)in.get<std::uint64_t>();  // reserved
+  (void)in.get<std::uint64_t>();  // reserved
   events_.resize(std::size_t(in.get<std::uint64_t>()));
   for (BreakageEvent<D>& e : events_) {
     e.time = in.get<double>();

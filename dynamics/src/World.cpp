@@ -632,10 +632,12 @@ void World<D>::step() {
   ++steps_;
   stageSeconds_[std::size_t(Stage::Integrate)] += secondsSince(t0);
 
-  // Between steps: removal, breakage, recorders.
+  // Between steps: removal, breakage, recorders. An effect that reads the
+  // contacts gets them for the particles as they are (Effect::readsContacts).
   t0 = Clock::now();
   for (std::size_t e = 0; e < effects_.size(); ++e) {
     const auto te = Clock::now();
+    if (effects_[e]->readsContacts()) refreshContacts();
     effects_[e]->afterStep(*this);
     effectSeconds_[e] += secondsSince(te);
   }

@@ -821,7 +821,6 @@ class Runner {
             .field("raw_volume_error", b.rawVolumeError())
             .field("unsplit_failures", b.unsplitFailures())
             .field("unsplittable", b.unsplittable())
-            .field("skipped_steps", b.skippedSteps())
             .field("largest_split_energy_gain", b.largestEnergyGain())
             .field("largest_split_energy_gain_J", b.largestEnergyGainJoules())
             .field("unchecked_splits", b.uncheckedSplits());

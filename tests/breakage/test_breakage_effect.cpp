@@ -195,10 +195,10 @@ CrushResult crush(int perRow, int rows, double cells, double speed, double sigma
   out.energyError = w.energy().relativeBalanceError();
   out.splitRelease = w.energy().splitRelease / w.energy().boundaryWork;
   std::printf("[ crush %dD ] %zu breakages, %zu fines, %zu particles, %llu steps, %.1f s, max mass error %.2e, "
-              "unsplit %zu (unsplittable %zu), skipped %zu, energy balance %.2e, split release %.3f of the platen work, "
+              "unsplit %zu (unsplittable %zu), energy balance %.2e, split release %.3f of the platen work, "
               "splits' energy change mean %.3f of the parent's, largest gain %.3g of the energy scale\n",
               D, out.breakages, out.fines, p.size(), (unsigned long long)out.steps, out.seconds, out.maxMassError,
-              brk.unsplitFailures(), brk.unsplittable(), brk.skippedSteps(), out.energyError, out.splitRelease,
+              brk.unsplitFailures(), brk.unsplittable(), out.energyError, out.splitRelease,
               out.meanEnergyChange, out.largestEnergyGain);
   return out;
 }

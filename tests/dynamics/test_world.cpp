@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -280,6 +281,68 @@ TEST(World, ReplaceBooksTheSplitAndKeepsTheBudget) {
   bad[1].parent = 1;
   EXPECT_THROW(w.replace(bad), std::out_of_range);
   EXPECT_EQ(w.particles().size(), 4u);
+}
+
+// Effects need no declaration order: an effect that removes a particle
+// runs before one that reads the contacts in the same afterStep, and the
+// reader gets the records of the particles as they are (World refreshes
+// them for an effect that readsContacts()). Three discs pressed in a row;
+// the first is removed after step 1: the reader then sees the one contact
+// left, between the two discs that remain, at their current indices.
+namespace {
+struct RemoveFirstAfter final : Effect<2> {
+  std::uint64_t id = 0;
+  std::string name() const override { return "remove"; }
+  void afterStep(World<2>& w) override {
+    if (w.steps() != 1) return;
+    const auto& ids = w.particles().id;
+    w.removeParticle(std::size_t(std::find(ids.begin(), ids.end(), id) - ids.begin()), "test");
+  }
+};
+struct ContactReader final : Effect<2> {
+  std::vector<std::array<std::uint64_t, 2>> seen;  // ids of the touching pairs, last step
+  bool current = false;
+  std::string name() const override { return "reader"; }
+  bool readsContacts() const override { return true; }
+  void afterStep(World<2>& w) override {
+    current = w.contactsCurrent();
+    seen.clear();
+    const auto& p = w.particles();
+    for (const PairContact<2>& c : w.contacts().particleContacts()) {
+      ASSERT_LT(std::max(c.a, c.b), p.size());
+      seen.push_back({std::min(p.id[c.a], p.id[c.b]), std::max(p.id[c.a], p.id[c.b])});
+    }
+  }
+};
+}  // namespace
+
+TEST(World, AnEffectThatReadsContactsGetsThemForTheParticlesAsTheyAre) {
+  const auto disc = test::sphereShape<2>(0.05);
+  const auto run = [&](bool removeFirst) {
+    World<2> w{WorldDef<2>{}};
+    for (int k = 0; k < 3; ++k) {
+      ParticleDef<2> p;
+      p.shape = disc;
+      p.position = Vec<2>(0.098 * k, 0.0);
+      w.addParticle(p);
+    }
+    auto remove = std::make_unique<RemoveFirstAfter>();
+    remove->id = removeFirst ? w.particles().id[0] : ~std::uint64_t(0);
+    auto reader = std::make_unique<ContactReader>();
+    ContactReader* r = reader.get();
+    if (removeFirst) w.addEffect(std::move(remove));
+    w.addEffect(std::move(reader));
+    w.step();  // the removal, then the reading, after step 1
+    EXPECT_TRUE(r->current);
+    return std::make_tuple(r->seen, std::vector<std::uint64_t>(w.particles().id.begin(), w.particles().id.end()));
+  };
+  const auto [all, idsAll] = run(false);
+  ASSERT_EQ(all.size(), 2u);  // first-second, second-third
+  const auto [left, ids] = run(true);
+  ASSERT_EQ(ids.size(), 2u);
+  ASSERT_EQ(left.size(), 1u);
+  EXPECT_EQ(left[0], all[1]);
+  EXPECT_EQ(left[0], (std::array<std::uint64_t, 2>{std::min(ids[0], ids[1]), std::max(ids[0], ids[1])}));
 }
 
 // With a discharge box, what leaves the outflow box inside it is the

@@ -62,11 +62,10 @@
 /// worst split either way (docs/breakage.md "Energy check").
 ///
 /// Contacts and indices. The stresses need the contact records to describe
-/// the particles as they are. When an effect that ran before this one in the
-/// same afterStep added or removed particles (a removal recorded, or a particle
-/// born, at the current time), the records are stale: that step's stress
-/// evaluation is skipped (strengths and manual breaks still run) and counted in
-/// skippedSteps(). Declare breakage before such effects to avoid it.
+/// the particles as they are: breakage reads contacts (readsContacts()), so
+/// when an effect that ran before it in the same afterStep added or removed
+/// particles, the world evaluates the contacts again before it runs
+/// (World::step). Effects may be declared in any order.
 ///
 /// Cost: an absent effect costs nothing (the scene adds it). A present one
 /// walks the particles and the contact records once per step into buffers it
@@ -202,6 +201,8 @@ class Breakage final : public dynamics::Effect<D> {
   std::string name() const override { return "breakage"; }
   /// @brief Strengths, stresses, failures and splits of this step (file comment).
   void afterStep(dynamics::World<D>& world) override;
+  /// @brief The stresses and fracture planes come from the contact records.
+  bool readsContacts() const override { return true; }
   /// @brief Writes the log, totals and which manual breaks are done (checkpoints).
   void saveState(dynamics::StateWriter& out) const override;
   void loadState(dynamics::StateReader& in) override;
@@ -225,8 +226,6 @@ class Breakage final : public dynamics::Effect<D> {
   /// resolution through their centroid either; they were made unbreakable
   /// (strength set to infinity).
   std::size_t unsplittable() const { return unsplittable_; }
-  /// @brief Steps whose stress evaluation was skipped for stale contacts (file comment).
-  std::size_t skippedSteps() const { return skipped_; }
   /// @brief Stops the run (std::runtime_error out of afterStep, naming the
   /// split) when a split's energyGain() exceeds `fraction` of the run's energy
   /// scale (EnergyLedger::scale at the split); +infinity (the default): report only.
@@ -306,8 +305,6 @@ class Breakage final : public dynamics::Effect<D> {
   double finesMass_ = 0.0;
   std::size_t unsplit_ = 0;
   std::size_t unsplittable_ = 0;
-  std::size_t skipped_ = 0;
-  std::size_t removedSeen_ = 0;
   std::vector<ManualBreakNotApplied> manualNotApplied_;
   // Energy check.
   std::vector<double> springs_;    // per particle: elastic energy of its contacts

@@ -47,8 +47,13 @@ class Effect {
   /// the ledger's damping loss over the half kicks those forces act through.
   virtual double dampingPower() const { return 0.0; }
   /// @brief Runs between steps, after the integration (removal, breakage,
-  /// recorders). May add or remove particles.
+  /// recorders). May add, remove or replace particles (through World).
   virtual void afterStep(World<D>& world) { (void)world; }
+  /// @brief True when afterStep reads World::contacts(). The world then
+  /// hands it contact records of the particles as they are: where an earlier
+  /// effect of the same afterStep changed the particles, it evaluates them
+  /// again first (World::refreshContacts), so effects need no declaration order.
+  virtual bool readsContacts() const { return false; }
   /// @brief Writes the effect's state (a checkpoint); stateless effects write nothing.
   virtual void saveState(StateWriter& out) const { (void)out; }
   /// @brief Reads back what saveState wrote, into an effect built from the same definition.
