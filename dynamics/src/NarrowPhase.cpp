@@ -510,19 +510,26 @@ inline double boundaryWeight(double overlap, double normalSpeed, double dt) {
   return overlap < travel ? 0.5 + overlap / travel : 1.0;
 }
 
-// The contact law for one pair whose node contacts are buf.nodes[begin, end):
-// normal force (linear per node or Hertz per pair), damping, friction with
-// history; fills each node's force and shear and the pair record's totals.
+// The contact law for one pair (a, b) whose node contacts are
+// buf.nodes[begin, end): normal force (linear per node or Hertz per pair),
+// damping, friction with history; fills each node's force and shear, and
+// appends the pair's record and its dashpot's to buf.
 // `invMassSum` = 1/ma + 1/mb (1/ma against a boundary); `centreB` is the point
 // b's torque is taken about; b's material velocity at x is
 // vbAtA + wb x (x - xa) (vbAtA: at a's centroid xa; wb: b's spin, 0 for a
 // plane); `Boundary`: b is a plane or tool.
 template <int D, NormalModel Normal, bool Friction, bool Damping, bool Boundary>
-void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, std::size_t begin, const LawConstants& law,
+void applyLaw(ThreadBuffers<D>& buf, std::size_t begin, std::uint32_t a, std::uint32_t b, const LawConstants& law,
               double invMassSum, double hertzRadius, const Vec<D>& xa, const Vec<D>& va, const Spin<D>& wa,
               const Vec<D>& centreB, const Vec<D>& vbAtA, const Spin<D>& wb, const HistoryView<D>& history,
               const NewbornView& newborn) {
   const std::size_t end = buf.nodes.size();
+  PairContact<D> rec;
+  rec.a = a;
+  rec.b = b;
+  rec.firstNode = std::uint32_t(begin);
+  rec.nodeCount = std::uint32_t(end - begin);
+  PairDashpot<D> dash;
   // The per-node outputs of the pair's node contacts: node keys, rest
   // overlaps, shear (below).
   buf.keys.resize(end);
@@ -712,6 +719,8 @@ void applyLaw(PairContact<D>& rec, PairDashpot<D>& dash, ThreadBuffers<D>& buf, 
   if constexpr (Normal == NormalModel::Hertz) elastic += 0.4 * hertz * deepest;
   rec.elasticEnergy = elastic;
   rec.dissipatedPower = power;
+  buf.pairs.push_back(rec);
+  buf.dashpots.push_back(dash);
 }
 
 // Calls f(std::true_type) or f(std::false_type): a runtime flag made a template argument.
@@ -1037,25 +1046,17 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       buf.nodeChecks += collectLevelSet<D, Formulation>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf, baKey);
       if (buf.nodes.size() == begin) return;
       // The law on the pair's node contacts.
-      PairContact<D> rec;
-      rec.a = ia;
-      rec.b = ib;
-      rec.firstNode = std::uint32_t(begin);
-      rec.nodeCount = std::uint32_t(buf.nodes.size() - begin);
       double radius = 0.0;
       if constexpr (Normal == NormalModel::Hertz) {
         radius = combinedRadius(equivalentRadius<D>(sa.volume()), equivalentRadius<D>(sb.volume()));
       }
       const Vec<D>& vb = p.velocity[ib];
       const Spin<D>& wb = p.angularVelocity[ib];
-      PairDashpot<D> dash;
-      applyLaw<D, Normal, Friction, Damping, false>(rec, dash, buf, begin, law, p.invMass[ia] + p.invMass[ib], radius, xa,
-                                             p.velocity[ia], p.angularVelocity[ia], xb,
-                                             Vec<D>(vb + Rotation<D>::velocityAt(wb, xa - xb)), wb,
-                                             historyOf(p.id[ia], p.id[ib]),
-                                             NewbornView{newbornOf(p.id[ia]), newbornOf(p.id[ib]), p.id[ib], p.id[ia]});
-      buf.pairs.push_back(rec);
-      buf.dashpots.push_back(dash);
+      applyLaw<D, Normal, Friction, Damping, false>(buf, begin, ia, ib, law, p.invMass[ia] + p.invMass[ib], radius, xa,
+                                                    p.velocity[ia], p.angularVelocity[ia], xb,
+                                                    Vec<D>(vb + Rotation<D>::velocityAt(wb, xa - xb)), wb,
+                                                    historyOf(p.id[ia], p.id[ib]),
+                                                    NewbornView{newbornOf(p.id[ia]), newbornOf(p.id[ib]), p.id[ib], p.id[ia]});
     });
   }
 
@@ -1074,21 +1075,14 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         const std::size_t begin = buf.nodes.size();
         buf.nodeChecks += collectPlane<D, Formulation>(s, rotations_[std::size_t(i)], x, plane, offset, buf);
         if (buf.nodes.size() == begin) continue;
-        PairContact<D> rec;
-        rec.a = std::uint32_t(i);
-        rec.b = std::uint32_t(j);
-        rec.firstNode = std::uint32_t(begin);
-        rec.nodeCount = std::uint32_t(buf.nodes.size() - begin);
         const double radius = Normal == NormalModel::Hertz ? equivalentRadius<D>(s.volume()) : 0.0;
-        PairDashpot<D> dash;
-        const LawConstants planeLaw = boundaryLaw(law, planeConstants(j));
-        applyLaw<D, Normal, Friction, Damping, true>(rec, dash, buf, begin, planeLaw, p.invMass[std::size_t(i)], radius, x,
-                                               p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
-                                               plane.point, plane.velocity, Rotation<D>::zeroSpin(),
-                                               historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)),
-                                               NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kPlaneTag | std::uint64_t(j), 0});
-        buf.pairs.push_back(rec);
-        buf.dashpots.push_back(dash);
+        applyLaw<D, Normal, Friction, Damping, true>(buf, begin, std::uint32_t(i), std::uint32_t(j),
+                                                     boundaryLaw(law, planeConstants(j)), p.invMass[std::size_t(i)],
+                                                     radius, x, p.velocity[std::size_t(i)],
+                                                     p.angularVelocity[std::size_t(i)], plane.point, plane.velocity,
+                                                     Rotation<D>::zeroSpin(),
+                                                     historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)),
+                                                     NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kPlaneTag | std::uint64_t(j), 0});
       }
     });
   }
@@ -1115,24 +1109,17 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
                                                           Rotation<D>::matrix(tool.orientation), tool.position, 1.0,
                                                           1.0, 0, buf, certify ? &key : nullptr);
         if (buf.nodes.size() == begin) continue;
-        PairContact<D> rec;
-        rec.a = std::uint32_t(i);
-        rec.b = std::uint32_t(j);
-        rec.firstNode = std::uint32_t(begin);
-        rec.nodeCount = std::uint32_t(buf.nodes.size() - begin);
         double radius = 0.0;
         if constexpr (Normal == NormalModel::Hertz) {
           radius = combinedRadius(equivalentRadius<D>(s.volume()), equivalentRadius<D>(ts.volume()));
         }
-        PairDashpot<D> dash;
-        const LawConstants toolLaw = boundaryLaw(law, toolConstants(j));
-        applyLaw<D, Normal, Friction, Damping, true>(rec, dash, buf, begin, toolLaw, p.invMass[std::size_t(i)], radius, x,
-                                               p.velocity[std::size_t(i)], p.angularVelocity[std::size_t(i)],
-                                               tool.position, tool.velocityAt(x), tool.angularVelocity,
-                                               historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)),
-                                               NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kToolTag | std::uint64_t(j), 0});
-        buf.pairs.push_back(rec);
-        buf.dashpots.push_back(dash);
+        applyLaw<D, Normal, Friction, Damping, true>(buf, begin, std::uint32_t(i), std::uint32_t(j),
+                                                     boundaryLaw(law, toolConstants(j)), p.invMass[std::size_t(i)],
+                                                     radius, x, p.velocity[std::size_t(i)],
+                                                     p.angularVelocity[std::size_t(i)], tool.position,
+                                                     tool.velocityAt(x), tool.angularVelocity,
+                                                     historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)),
+                                                     NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kToolTag | std::uint64_t(j), 0});
       }
     });
   }
