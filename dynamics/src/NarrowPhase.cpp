@@ -289,7 +289,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   };
   // A tree cell's test: true when none of its nodes can touch. With
   // certificates, `clear` gets its margin in cells: for a rejected cell, how
-  // far it may move before its test could pass; for a passed one, how far
+  // far it may move before its test could pass; for a passed leaf, how far
   // before it could be rejected (the least of its three tests' slack), so
   // that a leaf walk need not make it again before then.
   const auto cellRejected = [&](const typename geometry::NodeTree<D>::Cell& cell, double& clear) {
@@ -314,7 +314,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       clear = above * perSlopeCell;
       return true;
     }
-    if (certify) clear = std::min({reach + r - std::sqrt(apart2), -outside, -above * perSlopeCell});
+    // (Only a leaf's is kept: KeptLeaf.)
+    if (certify && cell.child == 0) clear = std::min({reach + r - std::sqrt(apart2), -outside, -above * perSlopeCell});
     return false;
   };
   double passed = 0.0;  // the margin of the last cell the walk kept (certificates)
