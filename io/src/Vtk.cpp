@@ -496,9 +496,11 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
   std::vector<std::int32_t> generation(n);
   std::vector<double> radius(n), diameter(n), mass(n), stress(n, 0.0), strength(n);
   std::vector<double> velocity, spin, orientation;
+  std::array<std::vector<double>, 3> axes;  // the body axes in the world (glyph orientation)
   velocity.reserve(3 * n);
   spin.reserve(3 * n);
   orientation.reserve(4 * n);
+  for (auto& a : axes) a.reserve(3 * n);
   piece.points.reserve(3 * n);
   for (std::size_t i = 0; i < n; ++i) {
     push3<D>(piece.points, p.position[i]);
@@ -515,6 +517,14 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
     push3<D>(velocity, p.velocity[i]);
     pushSpin<D>(spin, p.angularVelocity[i]);
     pushQuaternion<D>(orientation, p.orientation[i]);
+    const geometry::Mat<D> r = p.rotation(i);
+    for (int a = 0; a < 3; ++a) {
+      if (a < D) {
+        push3<D>(axes[std::size_t(a)], Vec<D>(r.col(a)));
+      } else {
+        axes[std::size_t(a)].insert(axes[std::size_t(a)].end(), {0.0, 0.0, 1.0});  // 2D: the z axis
+      }
+    }
   }
   // Point data, in the order ParaView lists them.
   piece.pointData.push_back({"id", 1, std::move(id)});
@@ -526,6 +536,9 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
   piece.pointData.push_back({"velocity", 3, std::move(velocity)});
   piece.pointData.push_back({"angular_velocity", 3, std::move(spin)});
   piece.pointData.push_back({"orientation", 4, std::move(orientation)});
+  piece.pointData.push_back({"axis_x", 3, std::move(axes[0])});
+  piece.pointData.push_back({"axis_y", 3, std::move(axes[1])});
+  piece.pointData.push_back({"axis_z", 3, std::move(axes[2])});
   piece.pointData.push_back({"stress", 1, std::move(stress)});
   piece.pointData.push_back({"strength", 1, std::move(strength)});
   writeVtp(file, piece, encoding);

@@ -257,6 +257,12 @@ void checkParticleFrame() {
       const Mat<3> r3 = quat.toRotationMatrix();
       EXPECT_NEAR(quat.norm(), 1.0, 1e-14);
       EXPECT_LT((r3.template topLeftCorner<D, D>() - p.rotation(i)).norm(), 1e-14);
+      // The body axes in the world are the rotation's columns (z in 2D).
+      for (int a = 0; a < 3; ++a) {
+        const auto& axis = f->pointArray(std::string("axis_") + "xyz"[a]).f64;
+        const Vec<3> expected = a < D ? Vec<3>(r3.col(a)) : Vec<3>::UnitZ();
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(axis[3 * i + std::size_t(c)], expected[c], 1e-14) << a << c;
+      }
     }
   }
   // Without a stress measure the column holds zeros.
