@@ -616,13 +616,11 @@ void writeContactFrame(const std::filesystem::path& file, const dynamics::World<
   const dynamics::Particles<D>& p = world.particles();
   const auto& nodes = world.contacts().nodeContacts();
   VtpPiece piece;
-  // One point per particle, at its centroid.
-  std::vector<std::uint64_t> pointId(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    push3<D>(piece.points, p.position[i]);
-    pointId[i] = p.id[i];
-  }
-  // One line per touching pair.
+  // One line per touching pair, between two points of its own at the two
+  // centroids: the pair's values are point data too (at both ends), so a
+  // Tube filter can vary its radius by them.
+  std::vector<std::uint64_t> pointId;
+  std::vector<double> pointMagnitude, pointNormalForce;
   std::vector<double> force, magnitude, normalForce, tangentialForce;
   std::vector<std::int32_t> nodeCount;
   std::vector<std::uint64_t> idA, idB;
@@ -631,8 +629,13 @@ void writeContactFrame(const std::filesystem::path& file, const dynamics::World<
       world.contactsCurrent() ? world.contacts().particleContacts() : std::span<const dynamics::PairContact<D>>();
   for (const dynamics::PairContact<D>& c : pairs) {
     if (c.nodeCount == 0 || c.a >= p.size() || c.b >= p.size()) continue;
-    const std::array<std::int64_t, 2> ends{std::int64_t(c.a), std::int64_t(c.b)};
+    const std::int64_t first = std::int64_t(pointId.size());
+    const std::array<std::int64_t, 2> ends{first, first + 1};
     piece.lines.add(ends);
+    for (const std::uint32_t i : {c.a, c.b}) {
+      push3<D>(piece.points, p.position[i]);
+      pointId.push_back(p.id[i]);
+    }
     // The overlap-weighted mean node normal (eq. 4, from b towards a) splits
     // the force: with per-node springs it is the direction of the total
     // normal force, so the rest is friction.
@@ -645,12 +648,16 @@ void writeContactFrame(const std::filesystem::path& file, const dynamics::World<
     push3<D>(force, c.force);
     magnitude.push_back(c.force.norm());
     normalForce.push_back(fn);
+    pointMagnitude.insert(pointMagnitude.end(), 2, c.force.norm());
+    pointNormalForce.insert(pointNormalForce.end(), 2, fn);
     tangentialForce.push_back((c.force - fn * normal).norm());
     nodeCount.push_back(std::int32_t(c.nodeCount));
     idA.push_back(p.id[c.a]);
     idB.push_back(p.id[c.b]);
   }
   piece.pointData.push_back({"id", 1, std::move(pointId)});
+  piece.pointData.push_back({"force_magnitude", 1, std::move(pointMagnitude)});
+  piece.pointData.push_back({"normal_force", 1, std::move(pointNormalForce)});
   piece.cellData.push_back({"force", 3, std::move(force)});
   piece.cellData.push_back({"force_magnitude", 1, std::move(magnitude)});
   piece.cellData.push_back({"normal_force", 1, std::move(normalForce)});

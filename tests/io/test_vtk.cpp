@@ -456,12 +456,21 @@ void checkContactFrame() {
   io::writeContactFrame<D>(dir / "a.vtp", w, VtkEncoding::Ascii);
   const test::VtpFile b = test::readVtp(dir / "b.vtp");
   const test::VtpFile a = test::readVtp(dir / "a.vtp");
-  EXPECT_EQ(b.points, 4u);
+  EXPECT_EQ(b.points, 2 * touching);
   EXPECT_EQ(b.lines, touching);
   std::size_t line = 0;
   for (const auto& c : w.contacts().particleContacts()) {
     if (c.nodeCount == 0) continue;
-    EXPECT_EQ(b.lineCells.cell(line), (std::vector<std::int64_t>{c.a, c.b}));
+    // A line of its own two points, at the centroids, carrying the pair's
+    // force as point data too (Tube by force_magnitude).
+    const std::int64_t first = std::int64_t(2 * line);
+    EXPECT_EQ(b.lineCells.cell(line), (std::vector<std::int64_t>{first, first + 1}));
+    for (const auto& [end, i] : {std::pair{first, c.a}, std::pair{first + 1, c.b}}) {
+      EXPECT_EQ(b.pointArray("id").u64[std::size_t(end)], w.particles().id[i]);
+      for (int k = 0; k < D; ++k) EXPECT_EQ(pointOf<3>(b, end)[k], w.particles().position[i][k]);
+      EXPECT_EQ(b.pointArray("force_magnitude").f64[std::size_t(end)], c.force.norm());
+      EXPECT_EQ(b.pointArray("normal_force").f64[std::size_t(end)], b.cellArray("normal_force").f64[line]);
+    }
     EXPECT_EQ(b.cellArray("id_a").u64[line], w.particles().id[c.a]);
     EXPECT_EQ(b.cellArray("id_b").u64[line], w.particles().id[c.b]);
     EXPECT_EQ(b.cellArray("node_contacts").i32[line], int(c.nodeCount));
@@ -569,7 +578,7 @@ TEST(Vtk, FrameWriterSeriesAndResume) {
     }
     EXPECT_EQ(writer.nextFrame(), 3u);
   }
-  const std::map<std::string, std::size_t> points{{"particles", 3}, {"contacts", 3}};
+  const std::map<std::string, std::size_t> points{{"particles", 3}};
   std::vector<double> times;
   for (const char* series : {"particles", "surfaces", "boundaries", "contacts"}) {
     const auto entries = test::readPvd((def.directory / (std::string(series) + ".pvd")).string());
@@ -579,6 +588,9 @@ TEST(Vtk, FrameWriterSeriesAndResume) {
       EXPECT_EQ(entries[k].file, "frames/" + std::string(series) + "_00000" + std::to_string(k) + ".vtp");
       if (points.count(series)) {
         EXPECT_EQ(f.points, points.at(series));
+      }
+      if (std::string(series) == "contacts") {
+        EXPECT_EQ(f.points, 2 * f.lines);  // each chain its own two ends
       }
       if (std::string(series) == "boundaries") {
         EXPECT_EQ(f.polys, 1u);  // the floor
