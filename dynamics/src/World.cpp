@@ -4,9 +4,9 @@
 #include "lsdem/dynamics/TimeStep.h"
 
 #include <algorithm>
-#include <functional>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>

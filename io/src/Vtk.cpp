@@ -645,10 +645,11 @@ void writeContactFrame(const std::filesystem::path& file, const dynamics::World<
     }
     if (normal.norm() > 0.0) normal.normalize();
     const double fn = c.force.dot(normal);
+    const double size = c.force.norm();
     push3<D>(force, c.force);
-    magnitude.push_back(c.force.norm());
+    magnitude.push_back(size);
     normalForce.push_back(fn);
-    pointMagnitude.insert(pointMagnitude.end(), 2, c.force.norm());
+    pointMagnitude.insert(pointMagnitude.end(), 2, size);
     pointNormalForce.insert(pointNormalForce.end(), 2, fn);
     tangentialForce.push_back((c.force - fn * normal).norm());
     nodeCount.push_back(std::int32_t(c.nodeCount));
