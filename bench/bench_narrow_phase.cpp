@@ -9,7 +9,11 @@
 #include "lsdem/geometry/ShapeDef.h"
 
 #include <benchmark/benchmark.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <random>
@@ -115,6 +119,45 @@ void BM_NarrowPhase(benchmark::State& state) {
                                                   benchmark::Counter::kIsIterationInvariantRate);
   state.SetLabel("node checks");
 }
+
+#ifdef _OPENMP
+// Thread scaling measured in pairs: each iteration runs one compute() at 1
+// thread and one at all threads (two solvers, so each keeps its own
+// per-thread caches), back to back, so a slow spell of the machine slows
+// both alike. Counters: the median wall time of each and the median of the
+// iterations' ratios (medians: a spell that hits one of a pair is dropped).
+template <int D>
+void BM_NarrowPhaseThreads(benchmark::State& state) {
+  const Cluster<D> c = makeCluster<D>(int(state.range(0)), double(state.range(1)), 0.01 * double(state.range(2)));
+  const int threads = omp_get_max_threads();
+  ContactSolver<D> one(ContactLawDef{}), all(ContactLawDef{});
+  const auto timed = [&](ContactSolver<D>& solver, int n) {
+    omp_set_num_threads(n);
+    const double start = omp_get_wtime();
+    solver.compute(c.particles, c.pairs, {}, {}, 1e-6);
+    benchmark::DoNotOptimize(solver.pairContacts().data());
+    return omp_get_wtime() - start;
+  };
+  for (int warm = 0; warm < 2; ++warm) timed(one, 1), timed(all, threads);
+  std::vector<double> oneTimes, allTimes, ratios;
+  for (auto _ : state) {
+    oneTimes.push_back(timed(one, 1));
+    allTimes.push_back(timed(all, threads));
+    ratios.push_back(oneTimes.back() / allTimes.back());
+  }
+  omp_set_num_threads(threads);
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  state.counters["threads"] = threads;
+  state.counters["1 thread ms"] = 1e3 * median(oneTimes);
+  state.counters["all ms"] = 1e3 * median(allTimes);
+  state.counters["speedup"] = median(ratios);
+}
+// The settled and the pressed bed of BM_NarrowPhase.
+BENCHMARK(BM_NarrowPhaseThreads<3>)->Args({10, 20, 97})->Args({10, 20, 90})->Unit(benchmark::kMillisecond)->UseRealTime();
+#endif
 
 // The raw trilinear look-up limit: Grid::value at precomputed points in the
 // grid box of a shape 20 cells across (24^D values with padding: in cache, as

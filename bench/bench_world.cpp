@@ -547,8 +547,7 @@ void timeSteps(benchmark::State& state, World<D>& world, const std::vector<Shape
   state.counters["store B/p"] = storeBytesPerParticle(world.particles());
   state.counters["shapes B/p"] = shapeBytes / n;
   state.counters["contacts B/p"] =
-      double(capacityBytesOf(c.nodeContacts()) + capacityBytesOf(c.nodeShear()) + capacityBytesOf(c.pairContacts()) +
-             capacityBytesOf(world.broadPhase().pairs())) /
+      double(c.recordBytes() + capacityBytesOf(world.broadPhase().pairs())) /
       n;
   state.counters["threads"] = threadCount();
   state.counters["setup s"] = setupSeconds;

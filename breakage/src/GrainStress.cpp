@@ -22,7 +22,7 @@ void checkIndex(std::uint32_t index, std::size_t count, const char* what) {
 /// first one on ties); the record must have nodeCount > 0.
 template <int D>
 const dynamics::NodeContact<D>& strongestNode(const dynamics::PairContact<D>& pair,
-                                              const std::vector<dynamics::NodeContact<D>>& nodes, double& force) {
+                                              std::span<const dynamics::NodeContact<D>> nodes, double& force) {
   const dynamics::NodeContact<D>* best = &nodes[pair.firstNode];
   force = best->force.norm();
   for (std::uint32_t k = 1; k < pair.nodeCount; ++k) {
@@ -76,7 +76,7 @@ template <int D>
 void grainStresses(const dynamics::Particles<D>& particles, const dynamics::ContactSolver<D>& contacts,
                    std::vector<Mat<D>>& out) {
   const std::size_t n = particles.size();
-  const std::vector<dynamics::NodeContact<D>>& nodes = contacts.nodeContacts();
+  const std::span<const dynamics::NodeContact<D>> nodes = contacts.nodeContacts();
   out.assign(n, Mat<D>::Zero());
 
   // Particle pairs: a gets the node force, b the opposite; both about their own centroid.
@@ -114,9 +114,9 @@ template <int D>
 void strongestContacts(const dynamics::Particles<D>& particles, const dynamics::ContactSolver<D>& contacts,
                        GrainContactPoints<D>& out) {
   const std::size_t n = particles.size();
-  const std::vector<dynamics::NodeContact<D>>& nodes = contacts.nodeContacts();
+  const std::span<const dynamics::NodeContact<D>> nodes = contacts.nodeContacts();
   const std::span<const dynamics::PairContact<D>> particlePairs = contacts.particleContacts();
-  const std::vector<dynamics::PairContact<D>>& all = contacts.pairContacts();
+  const std::span<const dynamics::PairContact<D>> all = contacts.pairContacts();
 
   // Count one entry per touching pair and particle side; row starts by prefix sum.
   out.offset.assign(n + 1, 0);

@@ -48,6 +48,24 @@ int threadIndex() {
   return 0;
 #endif
 }
+double wallSeconds() {
+#ifdef _OPENMP
+  return omp_get_wtime();
+#else
+  return 0.0;
+#endif
+}
+int threadsHere() {
+#ifdef _OPENMP
+  return omp_get_num_threads();
+#else
+  return 1;
+#endif
+}
+// Cost units of a task (ContactSolver::splitIntoBlocks) besides its tests:
+// each node record it writes, and the task itself.
+constexpr std::uint64_t kRecordCost = 16;
+constexpr std::uint64_t kTaskCost = 32;
 
 template <int D>
 std::uint32_t nodeKey(const NodeContact<D>& c) {
@@ -1006,33 +1024,17 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     while (last != newborn_.end() && last->id == id) ++last;
     return {first, last};
   };
-  // Runs task k on the calling thread's buffers and records where its output went.
-  const auto runTask = [&](std::size_t k, auto&& body) {
-    const int t = threadIndex();
-    ThreadBuffers<D>& buf = threads_[std::size_t(t)];
-    TaskOutput& out = tasks_[k];
-    out.thread = std::uint32_t(t);
-    out.firstPair = std::uint32_t(buf.pairs.size());
-    out.firstNode = std::uint32_t(buf.nodes.size());
-    body(buf);
-    out.pairCount = std::uint32_t(buf.pairs.size()) - out.firstPair;
-    out.nodeCount = std::uint32_t(buf.nodes.size()) - out.firstNode;
-  };
-
   // Particle pairs: both directions, each weighted 1/2 (order independence, see the header).
-  const std::ptrdiff_t pairCount = std::ptrdiff_t(pairTasks);
-#pragma omp parallel for schedule(dynamic, 8) if (pairCount > 32)
-  for (std::ptrdiff_t k = 0; k < pairCount; ++k) {
-    runTask(std::size_t(k), [&](ThreadBuffers<D>& buf) {
-      const std::uint32_t ia = pairs[std::size_t(k)][0], ib = pairs[std::size_t(k)][1];
+  const auto pairTask = [&](std::size_t k, ThreadBuffers<D>& buf) {
+      const std::uint32_t ia = pairs[k][0], ib = pairs[k][1];
       const Shape<D>& sa = *p.shape[ia];
       const Shape<D>& sb = *p.shape[ib];
       const Vec<D>& xa = p.position[ia];
       const Vec<D>& xb = p.position[ib];
       CertificateKey<D> ab, ba;
       if (certify) {
-        ab = certificateKey(2 * std::size_t(k), p.id[ia], p.id[ib]);
-        ba = certificateKey(2 * std::size_t(k) + 1, p.id[ib], p.id[ia]);
+        ab = certificateKey(2 * k, p.id[ia], p.id[ib]);
+        ba = certificateKey(2 * k + 1, p.id[ib], p.id[ia]);
       }
       // Bounding spheres apart: no node can touch.
       const double reach = sa.boundingRadius() + sb.boundingRadius();
@@ -1058,14 +1060,10 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
                                                     Vec<D>(vb + Rotation<D>::velocityAt(wb, xa - xb)), wb,
                                                     historyOf(p.id[ia], p.id[ib]),
                                                     NewbornView{newbornOf(p.id[ia]), newbornOf(p.id[ib]), p.id[ib], p.id[ia]});
-    });
-  }
+  };
 
   // Particles against planes: one-sided, exact distances.
-  const std::ptrdiff_t planeCount = std::ptrdiff_t(planeTasks);
-#pragma omp parallel for schedule(dynamic, 64) if (planeCount > 256)
-  for (std::ptrdiff_t i = 0; i < planeCount; ++i) {
-    runTask(pairTasks + std::size_t(i), [&](ThreadBuffers<D>& buf) {
+  const auto planeTask = [&](std::size_t i, ThreadBuffers<D>& buf) {
       const Shape<D>& s = *p.shape[std::size_t(i)];
       const Vec<D>& x = p.position[std::size_t(i)];
       for (std::size_t j = 0; j < planes.size(); ++j) {
@@ -1085,14 +1083,10 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
                                                      historyOf(p.id[std::size_t(i)], kPlaneTag | std::uint64_t(j)),
                                                      NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kPlaneTag | std::uint64_t(j), 0});
       }
-    });
-  }
+  };
 
   // Particles against tools: the particle's nodes in the tool's level set, weight 1.
-  const std::ptrdiff_t toolCount = std::ptrdiff_t(toolTasks);
-#pragma omp parallel for schedule(dynamic, 64) if (toolCount > 256)
-  for (std::ptrdiff_t i = 0; i < toolCount; ++i) {
-    runTask(pairTasks + planeTasks + std::size_t(i), [&](ThreadBuffers<D>& buf) {
+  const auto toolTask = [&](std::size_t i, ThreadBuffers<D>& buf) {
       const Shape<D>& s = *p.shape[std::size_t(i)];
       const Vec<D>& x = p.position[std::size_t(i)];
       for (std::size_t j = 0; j < tools.size(); ++j) {
@@ -1122,8 +1116,96 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
                                                      historyOf(p.id[std::size_t(i)], kToolTag | std::uint64_t(j)),
                                                      NewbornView{newbornOf(p.id[std::size_t(i)]), {}, kToolTag | std::uint64_t(j), 0});
       }
-    });
+  };
+
+  // Task k (pairs, then planes, then tools) on the calling thread's
+  // buffers: where its records went, and what it cost (tests made and
+  // records written: the next step's split into blocks weighs by it).
+  const auto runTask = [&](std::size_t k) {
+    ThreadBuffers<D>& buf = threads_[std::size_t(threadIndex())];
+    TaskOutput& out = tasks_[k];
+    out.thread = std::uint32_t(threadIndex());
+    out.firstPair = std::uint32_t(buf.pairs.size());
+    out.firstNode = std::uint32_t(buf.nodes.size());
+    const std::uint64_t checks = buf.nodeChecks + buf.cellChecks;
+    if (k < pairTasks) {
+      pairTask(k, buf);
+    } else if (k < pairTasks + planeTasks) {
+      planeTask(k - pairTasks, buf);
+    } else {
+      toolTask(k - pairTasks - planeTasks, buf);
+    }
+    out.pairCount = std::uint32_t(buf.pairs.size()) - out.firstPair;
+    out.nodeCount = std::uint32_t(buf.nodes.size()) - out.firstNode;
+    out.cost = std::uint32_t(std::min<std::uint64_t>(buf.nodeChecks + buf.cellChecks - checks + kRecordCost * out.nodeCount +
+                                                          kTaskCost,
+                                                      std::numeric_limits<std::uint32_t>::max()));
+  };
+
+  // Each thread runs whole blocks of consecutive tasks in order, so a
+  // block's records are contiguous in its thread's buffers and gather()
+  // moves them in bulk (or not at all: block 0 stays where it is).
+  const bool share = pairTasks > 32 || planeTasks > 256 || toolTasks > 256;
+  splitIntoBlocks(tasks_.size(), share ? threads_.size() : 1);
+  const std::size_t blockCount = blocks_.size() - 1;
+  blockSeconds_.assign(blockCount, 0.0);
+#pragma omp parallel if (blockCount > 1)
+  {
+    const std::size_t step = std::size_t(threadsHere());
+    for (std::size_t b = std::size_t(threadIndex()); b < blockCount; b += step) {
+      const double start = wallSeconds();
+      for (std::size_t k = blocks_[b]; k < blocks_[b + 1]; ++k) runTask(k);
+      blockSeconds_[b] = wallSeconds() - start;
+    }
   }
+}
+
+template <int D>
+void ContactSolver<D>::splitIntoBlocks(std::size_t taskCount, std::size_t parts) {
+  // Runs of consecutive tasks of about equal time. A task's time is
+  // estimated from the last step: the cost of the task at the same relative
+  // place in its list (the list changes little between steps), times the
+  // seconds per unit of cost its block took then (which corrects the cost
+  // model and a thread slower than the others); 1 each before any.
+  parts = std::max<std::size_t>(1, std::min(parts, taskCount));
+  const std::size_t known = taskCost_.size();
+  const std::size_t lastBlocks = blockSeconds_.size();
+  std::vector<double>& rate = blockRate_;
+  rate.assign(lastBlocks, 1.0);
+  if (known > 0 && lastBlocks > 1 && blocks_.size() == lastBlocks + 1 && blocks_.back() == known) {
+    for (std::size_t b = 0; b < lastBlocks; ++b) {
+      double cost = 0.0;
+      for (std::size_t k = blocks_[b]; k < blocks_[b + 1]; ++k) cost += double(taskCost_[k]);
+      if (cost > 0.0 && blockSeconds_[b] > 0.0) rate[b] = blockSeconds_[b] / cost;
+    }
+    // Relative to their mean, so the units do not matter.
+    double mean = 0.0;
+    for (const double r : rate) mean += r / double(lastBlocks);
+    for (double& r : rate) r /= mean;
+  } else {
+    rate.assign(1, 1.0);
+    blocks_.assign({0, known});
+  }
+  estimate_.resize(taskCount);
+  double total = 0.0;
+  std::size_t block = 0;
+  for (std::size_t k = 0; k < taskCount; ++k) {
+    if (known == 0) {
+      estimate_[k] = 1.0;
+    } else {
+      const std::size_t q = known == taskCount ? k : k * known / taskCount;
+      while (block + 1 < rate.size() && q >= blocks_[block + 1]) ++block;
+      estimate_[k] = double(taskCost_[q]) * rate[block];
+    }
+    total += estimate_[k];
+  }
+  blocks_.assign(1, 0);
+  double sum = 0.0;
+  for (std::size_t k = 0; k < taskCount && blocks_.size() < parts; ++k) {
+    sum += estimate_[k];
+    if (sum >= total * double(blocks_.size()) / double(parts)) blocks_.push_back(k + 1);
+  }
+  while (blocks_.size() <= parts) blocks_.push_back(taskCount);
 }
 
 template <int D>
@@ -1141,65 +1223,101 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   if (tasks_.size() <= particlePairTasks) particlePairCount_ = std::size_t(pairTotal);
   if (tasks_.size() <= particlePairTasks + planeTasks) planePairCount_ = std::size_t(pairTotal) - particlePairCount_;
 
-  // Where one thread's buffers already hold every record in output order
-  // (every task ran on it, in order: one thread, or loops too small to
-  // share), they become the output; otherwise every task's records are
-  // copied to their place (tasks are independent).
+  // The output is the blocks' records in block order. Where one thread's
+  // buffers hold exactly block 0's (the rule: a thread per block), they
+  // become the output and the other blocks are appended after them;
+  // otherwise (a thread ran several blocks) every block is appended.
   const bool friction = frictionOn();
-  std::uint32_t only = tasks_.empty() ? 0 : tasks_.front().thread;
-  bool inPlace = true;
-  for (const TaskOutput& t : tasks_) {
-    if (t.pairCount + t.nodeCount == 0) continue;
-    inPlace = inPlace && t.thread == only && t.firstPair == t.outPair && t.firstNode == t.outNode;
-  }
-  for (std::size_t q = 0; q < threads_.size() && inPlace; ++q) {
-    if (q != only) inPlace = threads_[q].pairs.empty() && threads_[q].nodes.empty();
-  }
   bool anyPreload = false;
-  if (inPlace) {
-    ThreadBuffers<D>& buf = threads_[only];
-    std::swap(pairs_, buf.pairs);
-    std::swap(dashpots_, buf.dashpots);
-    std::swap(nodes_, buf.nodes);
-    std::swap(preload_, buf.preload);
-    std::swap(historyKeys_, buf.keys);
-    if (friction) {
+  for (const ThreadBuffers<D>& buf : threads_) anyPreload = anyPreload || buf.anyPreload;
+  // Only what the next step reads: rest overlaps where some spring has one,
+  // node keys where there is a history (friction or rest overlaps).
+  const bool keys = friction || anyPreload;
+  const auto blockAt = [&](std::size_t b) {
+    TaskOutput block;
+    const std::size_t first = blocks_[b], last = blocks_[b + 1];
+    if (first == last) return block;
+    block.thread = tasks_[first].thread;
+    block.firstPair = tasks_[first].firstPair;
+    block.firstNode = tasks_[first].firstNode;
+    block.outPair = tasks_[first].outPair;
+    block.outNode = tasks_[first].outNode;
+    block.pairCount = std::uint32_t(tasks_[last - 1].outPair + tasks_[last - 1].pairCount - block.outPair);
+    block.nodeCount = std::uint32_t(tasks_[last - 1].outNode + tasks_[last - 1].nodeCount - block.outNode);
+    return block;
+  };
+  std::size_t next = 0;  // the first block not yet in the output
+  {
+    const TaskOutput head = blockAt(0);
+    ThreadBuffers<D>& buf = threads_[head.thread];
+    if (head.firstPair == 0 && head.firstNode == 0 && buf.pairs.size() == head.pairCount &&
+        buf.nodes.size() == head.nodeCount) {
+      std::swap(pairs_, buf.pairs);
+      std::swap(dashpots_, buf.dashpots);
+      std::swap(nodes_, buf.nodes);
+      std::swap(preload_, buf.preload);
+      std::swap(historyKeys_, buf.keys);
       std::swap(shear_, buf.shear);
+      next = 1;
     } else {
+      pairs_.clear();
+      dashpots_.clear();
+      nodes_.clear();
+      preload_.clear();
+      historyKeys_.clear();
       shear_.clear();
     }
-    anyPreload = buf.anyPreload;
-  } else {
-    pairs_.resize(pairTotal);
-    dashpots_.resize(pairTotal);
-    nodes_.resize(nodeTotal);
-    for (const ThreadBuffers<D>& buf : threads_) anyPreload = anyPreload || buf.anyPreload;
-    // Only what the next step reads: rest overlaps where some spring has
-    // one, node keys where there is a history (friction or rest overlaps).
-    const bool keys = friction || anyPreload;
-    shear_.resize(friction ? nodeTotal : 0);
-    preload_.resize(anyPreload ? nodeTotal : 0);
-    historyKeys_.resize(keys ? nodeTotal : 0);
-    const std::ptrdiff_t taskCount = std::ptrdiff_t(tasks_.size());
-#pragma omp parallel for schedule(static) if (taskCount > 1024)
-    for (std::ptrdiff_t k = 0; k < taskCount; ++k) {
-      const TaskOutput& t = tasks_[std::size_t(k)];
-      const ThreadBuffers<D>& buf = threads_[t.thread];
-      for (std::uint32_t q = 0; q < t.pairCount; ++q) {
-        PairContact<D> rec = buf.pairs[t.firstPair + q];
-        rec.firstNode = std::uint32_t(rec.firstNode - t.firstNode + t.outNode);
-        pairs_[t.outPair + q] = rec;
-        dashpots_[t.outPair + q] = buf.dashpots[t.firstPair + q];
-      }
-      const auto copy = [&](const auto& from, auto& to) {
-        std::copy_n(from.begin() + std::ptrdiff_t(t.firstNode), t.nodeCount, to.begin() + std::ptrdiff_t(t.outNode));
+  }
+  if (!friction) shear_.clear();
+  // The other blocks' records, appended: the arrays grow to their totals
+  // (RecordAllocator: unwritten), then every thread copies an equal share
+  // of the records, block by block.
+  const std::size_t headPairs = pairs_.size(), headNodes = nodes_.size();
+  pairs_.resize(pairTotal);
+  dashpots_.resize(pairTotal);
+  nodes_.resize(nodeTotal);
+  if (anyPreload) preload_.resize(nodeTotal);
+  if (keys) historyKeys_.resize(nodeTotal);
+  if (friction) shear_.resize(nodeTotal);
+  const std::size_t copied = (pairTotal - headPairs) + (nodeTotal - headNodes);
+  const std::size_t blockCount = blocks_.size() - 1;
+  const std::ptrdiff_t shares = copied > 4096 ? std::ptrdiff_t(threads_.size()) : 1;
+#pragma omp parallel for schedule(static) if (shares > 1)
+  for (std::ptrdiff_t share = 0; share < shares; ++share) {
+    // This share: records [from, to) of the copied ones, counting each block's pairs, then its nodes.
+    const std::size_t from = copied * std::size_t(share) / std::size_t(shares);
+    const std::size_t to = copied * std::size_t(share + 1) / std::size_t(shares);
+    std::size_t at = 0;  // records of the blocks before this one
+    for (std::size_t b = next; b < blockCount && at < to; ++b) {
+      const TaskOutput block = blockAt(b);
+      const ThreadBuffers<D>& buf = threads_[block.thread];
+      // The part [lo, hi) of [at, at + count) in this share, as offsets in the block.
+      const auto part = [&](std::size_t count) {
+        const std::size_t lo = std::clamp(from, at, at + count) - at, hi = std::clamp(to, at, at + count) - at;
+        at += count;
+        return std::pair{lo, hi};
       };
-      copy(buf.nodes, nodes_);
-      if (anyPreload) copy(buf.preload, preload_);
-      if (keys) copy(buf.keys, historyKeys_);
-      if (friction) copy(buf.shear, shear_);
+      const auto copy = [](const auto& source, std::size_t first, auto& target, std::size_t out, std::size_t lo,
+                           std::size_t hi) {
+        std::copy(source.begin() + std::ptrdiff_t(first + lo), source.begin() + std::ptrdiff_t(first + hi),
+                  target.begin() + std::ptrdiff_t(out + lo));
+      };
+      const auto [pairLo, pairHi] = part(block.pairCount);
+      copy(buf.pairs, block.firstPair, pairs_, block.outPair, pairLo, pairHi);
+      copy(buf.dashpots, block.firstPair, dashpots_, block.outPair, pairLo, pairHi);
+      for (std::size_t q = block.outPair + pairLo; q < block.outPair + pairHi; ++q) {
+        pairs_[q].firstNode = std::uint32_t(pairs_[q].firstNode - block.firstNode + block.outNode);
+      }
+      const auto [nodeLo, nodeHi] = part(block.nodeCount);
+      copy(buf.nodes, block.firstNode, nodes_, block.outNode, nodeLo, nodeHi);
+      if (anyPreload) copy(buf.preload, block.firstNode, preload_, block.outNode, nodeLo, nodeHi);
+      if (keys) copy(buf.keys, block.firstNode, historyKeys_, block.outNode, nodeLo, nodeHi);
+      if (friction) copy(buf.shear, block.firstNode, shear_, block.outNode, nodeLo, nodeHi);
     }
   }
+  // The next step's blocks weigh tasks by what these cost.
+  taskCost_.resize(tasks_.size());
+  for (std::size_t k = 0; k < tasks_.size(); ++k) taskCost_[k] = tasks_[k].cost;
 
   // Totals, summed in output order.
   elasticEnergy_ = 0.0;
@@ -1240,6 +1358,18 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   }
   const auto less = [](const HistoryPair& x, const HistoryPair& y) { return keyLess(x, y.idA, y.other); };
   if (!std::is_sorted(history_.begin(), history_.end(), less)) std::sort(history_.begin(), history_.end(), less);
+}
+
+template <int D>
+std::size_t ContactSolver<D>::recordBytes() const {
+  const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
+  std::size_t total = bytes(pairs_) + bytes(dashpots_) + bytes(nodes_) + bytes(shear_) + bytes(preload_) +
+                      bytes(historyKeys_) + bytes(history_);
+  for (const ThreadBuffers<D>& buf : threads_) {
+    total += bytes(buf.pairs) + bytes(buf.dashpots) + bytes(buf.nodes) + bytes(buf.work) + bytes(buf.shear) +
+             bytes(buf.preload) + bytes(buf.keys) + bytes(buf.leaves) + bytes(buf.previousLeaves);
+  }
+  return total;
 }
 
 template <int D>

@@ -54,8 +54,8 @@ std::pair<Vec<D>, Spin<D>> advanced(const Particles<D>& p, std::size_t i, double
 // boundaries (which the boundary work already counts).
 template <int D>
 double dashpotLoss(const Particles<D>& p, const ContactSolver<D>& contacts, double lead) {
-  const std::vector<PairContact<D>>& pairs = contacts.pairContacts();
-  const std::vector<PairDashpot<D>>& dash = contacts.pairDashpots();
+  const std::span<const PairContact<D>> pairs = contacts.pairContacts();
+  const std::span<const PairDashpot<D>> dash = contacts.pairDashpots();
   const std::size_t particlePairs = contacts.particleContacts().size();
   double loss = 0.0;
   for (std::size_t k = 0; k < pairs.size(); ++k) {

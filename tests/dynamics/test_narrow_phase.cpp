@@ -107,7 +107,7 @@ Particles<D> ringOfGrains(double radius, std::uint64_t seed) {
 
 // Two lists of node contacts equal bit for bit: nodes, forces, overlaps.
 template <int D>
-::testing::AssertionResult sameContacts(const std::vector<NodeContact<D>>& a, const std::vector<NodeContact<D>>& b) {
+::testing::AssertionResult sameContacts(std::span<const NodeContact<D>> a, std::span<const NodeContact<D>> b) {
   if (a.size() != b.size()) return ::testing::AssertionFailure() << a.size() << " against " << b.size() << " contacts";
   for (std::size_t k = 0; k < a.size(); ++k) {
     if (a[k].node != b[k].node || std::memcmp(a[k].force.data(), b[k].force.data(), sizeof(Vec<D>)) != 0 ||

@@ -62,7 +62,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <memory>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 namespace lsdem::dynamics {
@@ -143,19 +145,47 @@ struct Certificate {
   std::uint32_t leafThread = 0, leafFirst = 0, leafCount = 0;
 };
 
+/// The allocator of the solver's record arrays (internal): a resize leaves
+/// the new records unwritten where they are plain data (doubles, integers,
+/// fixed-size Eigen vectors), because the solver resizes an array only to
+/// fill it whole at once (gather() copies the blocks of several threads in
+/// parallel); writing zeros first would be one more pass over memory.
+template <class T>
+struct RecordAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = RecordAllocator<U>;
+  };
+  RecordAllocator() = default;
+  template <class U>
+  RecordAllocator(const RecordAllocator<U>&) noexcept {}
+  /// Without a value: nothing written (allocate() began the records' lifetime).
+  template <class U>
+  void construct(U* p) noexcept {
+    static_assert(std::is_trivially_destructible_v<U> && std::is_standard_layout_v<U>, "records are plain data");
+    (void)p;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <class T>
+using Records = std::vector<T, RecordAllocator<T>>;
+
 /// Output buffers of one thread (internal); aligned so threads do not share
 /// cache lines. The per-node outputs are the solver's own arrays' layout
 /// (nodes, shear, preload, keys), so where one thread's buffers already are
 /// the output in order (every task ran on it), gather() swaps them in.
 template <int D>
 struct alignas(64) ThreadBuffers {
-  std::vector<PairContact<D>> pairs;
-  std::vector<PairDashpot<D>> dashpots;  ///< aligned with pairs
-  std::vector<NodeContact<D>> nodes;
+  Records<PairContact<D>> pairs;
+  Records<PairDashpot<D>> dashpots;  ///< aligned with pairs
+  Records<NodeContact<D>> nodes;
   std::vector<NodeWork<D>> work;         ///< aligned with nodes
-  std::vector<Vec<D>> shear;             ///< aligned with nodes: shear displacement after this step, world frame, m
-  std::vector<double> preload;           ///< aligned with nodes: the spring's rest overlap (markNewborn), m
-  std::vector<std::uint32_t> keys;       ///< aligned with nodes: their node keys (owner bit, node index)
+  Records<Vec<D>> shear;                 ///< aligned with nodes: shear displacement after this step, world frame, m
+  Records<double> preload;               ///< aligned with nodes: the spring's rest overlap (markNewborn), m
+  Records<std::uint32_t> keys;           ///< aligned with nodes: their node keys (owner bit, node index)
   bool anyPreload = false;               ///< some preload is > 0
   std::uint64_t nodeChecks = 0;
   std::uint64_t cellChecks = 0;  ///< node-tree cells tested (bulk rejection)
@@ -176,6 +206,7 @@ struct TaskOutput {
   std::uint32_t firstPair = 0, pairCount = 0;  ///< in the thread's buffer
   std::uint32_t firstNode = 0, nodeCount = 0;  ///< in the thread's buffer
   std::uint64_t outPair = 0, outNode = 0;      ///< in the solver's output
+  std::uint32_t cost = 0;                      ///< tests made plus weighted records (ContactSolver::splitIntoBlocks)
 };
 
 /// One pair's shear history (internal): key and its node contacts in the
@@ -309,7 +340,7 @@ class ContactSolver {
   /// then particle-tool contacts (by particle, then tool). For plane and tool
   /// records `b` is the plane / tool index and `torqueB` is the torque on the
   /// plane about Plane::point / on the tool about ToolPose::position.
-  const std::vector<PairContact<D>>& pairContacts() const { return pairs_; }
+  std::span<const PairContact<D>> pairContacts() const { return pairs_; }
   /// @brief The particle-pair records of pairContacts().
   std::span<const PairContact<D>> particleContacts() const { return {pairs_.data(), particlePairCount_}; }
   /// @brief The particle-plane records of pairContacts().
@@ -322,19 +353,23 @@ class ContactSolver {
   }
   /// @brief The dashpot's part of each record of pairContacts() (aligned with
   /// it); all zero when the law has no damping.
-  const std::vector<PairDashpot<D>>& pairDashpots() const { return dashpots_; }
+  std::span<const PairDashpot<D>> pairDashpots() const { return dashpots_; }
   /// @brief Node contacts of the last compute(); pair k owns
   /// [pairContacts()[k].firstNode, + nodeCount). Within a pair: the nodes of a
   /// inside b (ownerIsB = 0) by node index, then those of b inside a.
-  const std::vector<NodeContact<D>>& nodeContacts() const { return nodes_; }
+  std::span<const NodeContact<D>> nodeContacts() const { return nodes_; }
   /// @brief Shear displacement of each node contact after the last compute()
   /// (world frame, m; in the tangent plane), aligned with nodeContacts(); empty
   /// when the law has no friction.
-  const std::vector<Vec<D>>& nodeShear() const { return shear_; }
+  std::span<const Vec<D>> nodeShear() const { return shear_; }
 
   /// @brief Rest overlap of each node contact after the last compute() (m),
   /// aligned with nodeContacts(): 0 but for springs born relaxed.
-  const std::vector<double>& nodePreload() const { return preload_; }
+  std::span<const double> nodePreload() const { return preload_; }
+
+  /// @brief Bytes the record arrays hold (capacity): the output of the last
+  /// compute() and the threads' buffers it was gathered from.
+  std::size_t recordBytes() const;
 
   /// @brief Marks nodes of particle `particleId` as born this step (a
   /// fragment's new face, breakage::Fragment::cutFaceNodes): in the next
@@ -390,6 +425,8 @@ class ContactSolver {
   void run(const Particles<D>& particles, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
            const std::vector<ToolPose<D>>& tools, double dt, double shearDt);
   void gather(const Particles<D>& particles, std::size_t particlePairTasks, std::size_t planeTasks);
+  // blocks_ = the bounds of `parts` runs of consecutive tasks of about equal estimated cost.
+  void splitIntoBlocks(std::size_t taskCount, std::size_t parts);
   // The history key of record k's b (HistoryPair::other): a particle's id, or a tagged plane / tool index.
   std::uint64_t partnerKey(const Particles<D>& particles, std::size_t k) const;
 
@@ -398,17 +435,17 @@ class ContactSolver {
   // Constants of boundaries with their own material, by plane / tool index.
   std::vector<std::optional<ContactConstants>> planeConstants_, toolConstants_;
   // Output of the last compute(); nodes_ / shear_ with history_ are also the history.
-  std::vector<PairContact<D>> pairs_;
-  std::vector<PairDashpot<D>> dashpots_;  // aligned with pairs_; not part of the saved state
-  std::vector<NodeContact<D>> nodes_;
-  std::vector<Vec<D>> shear_;
-  std::vector<double> preload_;  // aligned with nodes_
+  detail::Records<PairContact<D>> pairs_;
+  detail::Records<PairDashpot<D>> dashpots_;  // aligned with pairs_; not part of the saved state
+  detail::Records<NodeContact<D>> nodes_;
+  detail::Records<Vec<D>> shear_;
+  detail::Records<double> preload_;  // aligned with nodes_
   std::vector<detail::BirthNode> newborn_;  // sorted by (id, node); for the next compute()
   std::vector<detail::HistoryPair> history_;  // sorted by (idA, other)
   // Node keys of nodes_ (owner bit and node index), aligned with it while
   // history_ is kept: the history merge reads these, not the 88-byte records
   // (filled as gather() copies the records; rebuilt from them on loadState()).
-  std::vector<std::uint32_t> historyKeys_;
+  detail::Records<std::uint32_t> historyKeys_;
   void buildHistoryKeys();
   // Separation certificates: a cache, not saved with the state (a restored
   // run makes them afresh, with the same contacts). Two slots per candidate
@@ -431,6 +468,10 @@ class ContactSolver {
   std::vector<Mat<D>> rotations_;  // each particle's, this compute()
   std::vector<detail::ThreadBuffers<D>> threads_;
   std::vector<detail::TaskOutput> tasks_;
+  std::vector<std::size_t> blocks_;        // task bounds of the blocks, one thread each, this compute()
+  std::vector<std::uint32_t> taskCost_;    // the last compute()'s cost per task
+  std::vector<double> blockSeconds_;       // the last compute()'s wall time per block
+  std::vector<double> blockRate_, estimate_;  // scratch of splitIntoBlocks
   BoundaryLoads<D> loads_;
 };
 

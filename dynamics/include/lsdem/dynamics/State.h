@@ -34,8 +34,8 @@ class StateWriter {
     bytes_.insert(bytes_.end(), p, p + sizeof(T));
   }
   /// @brief Appends a count and the elements of a vector of plain values.
-  template <class T>
-  void putVector(const std::vector<T>& values) {
+  template <class T, class A>
+  void putVector(const std::vector<T, A>& values) {
     put(std::uint64_t(values.size()));
     const auto* p = reinterpret_cast<const char*>(values.data());
     bytes_.insert(bytes_.end(), p, p + values.size() * sizeof(T));
@@ -86,8 +86,8 @@ class StateReader {
     std::memcpy(reinterpret_cast<char*>(&value), take(sizeof(T)), sizeof(T));
     return value;
   }
-  template <class T>
-  void getVector(std::vector<T>& values) {
+  template <class T, class A>
+  void getVector(std::vector<T, A>& values) {
     const std::uint64_t n = get<std::uint64_t>();
     if (n > (size_ - pos_) / (sizeof(T) ? sizeof(T) : 1)) fail("vector of " + std::to_string(n) + " elements");
     values.resize(std::size_t(n));
