@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # Installs the built lsdem (build/) into a scratch prefix and builds a small
 # program against it twice, with find_package(lsdem) and with pkg-config, and
-# runs both (tests/package/). Run after scripts/build.sh.
+# runs both (tests/package/); when the build has the Python module, imports
+# the installed module from the prefix and runs a short scene with it. Run
+# after scripts/build.sh (LSDEM_BUILD_DIR: another build folder than build/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+build=${LSDEM_BUILD_DIR:-build}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 prefix="$work/prefix"
-cmake --install build --prefix "$prefix" >/dev/null
+cmake --install "$build" --prefix "$prefix" >/dev/null
 for f in bin/lsdem include/lsdem/dynamics/World.h; do
   [[ -e "$prefix/$f" ]] || { echo "check_package: $f not installed" >&2; exit 1; }
 done
@@ -25,3 +28,26 @@ read -r -a flags <<<"$(PKG_CONFIG_PATH="$pcdir" pkg-config --static --cflags --l
 g++ -O2 tests/package/consumer.cpp -o "$work/consumer-pc" "${flags[@]}"
 "$work/consumer-pc"
 echo "check_package: find_package and pkg-config consumers built and ran"
+
+# The Python module (docs/python.md), when the build has it: imported from the
+# prefix alone (run from an empty folder), one short scene run.
+if grep -q '^LSDEM_PYTHON:BOOL=ON' "$build/CMakeCache.txt"; then
+  pydir=$(sed -n 's/^LSDEM_PYTHON_INSTALL_DIR:STRING=//p' "$build/CMakeCache.txt")
+  python=$(sed -n 's/^_Python3_EXECUTABLE:INTERNAL=//p' "$build/CMakeCache.txt")
+  compgen -G "$prefix/$pydir/lsdem.*.so" >/dev/null || { echo "check_package: Python module not installed in $pydir" >&2; exit 1; }
+  mkdir "$work/py" && cd "$work/py"
+  PYTHONPATH="$prefix/$pydir" "${python:-/usr/bin/python3}" - "$prefix" <<'PY'
+import json, pathlib, sys
+import lsdem
+prefix = pathlib.Path(sys.argv[1]).resolve()
+assert pathlib.Path(lsdem.__file__).resolve().is_relative_to(prefix), lsdem.__file__
+scene = prefix / "share" / "lsdem" / "examples" / "three_grains" / "three_grains_2d.toml"
+result = lsdem.run(scene, out="out", steps=50, threads=1)
+summary = json.loads(pathlib.Path("out/summary.json").read_text())
+assert result["steps"] == summary["steps"] == 50 and summary["particles"] == 3, summary
+sim = lsdem.Simulation(scene, threads=1)
+sim.step(50)
+assert (sim.positions == lsdem.read_vtp(pathlib.Path("out") / lsdem.read_pvd("out/particles.pvd")[-1][1])["points"][:, :2]).all()
+print(f"check_package: Python module {lsdem.__version__} imported from {lsdem.__file__} and ran {result['steps']} steps")
+PY
+fi

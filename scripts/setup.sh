@@ -9,6 +9,7 @@ packages=(
   libassimp-dev libtomlplusplus-dev libcli11-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox
+  python3-dev pybind11-dev python3-numpy python3-pytest
 )
 
 missing=()
