@@ -509,7 +509,7 @@ class Runner {
     // ParaView series (a resumed run's are read, and refused when damaged, here).
     FrameWriterDef<D> def;
     def.directory = out_;
-    def.encoding = scene_.output.ascii ? VtkEncoding::Ascii : VtkEncoding::Binary;
+    def.encoding = scene_.output.vtkFormat;
     def.particles = scene_.output.particles;
     def.surfaces = scene_.output.surfaces;
     def.boundaries = scene_.output.boundaries;

@@ -751,7 +751,15 @@ class SceneReader {
         else r.fail("vtk", "unknown series '" + s + "' (particles, surfaces, boundaries, contacts)");
       }
     }
-    o.ascii = r.boolean("ascii", false);
+    if (r.has("vtk_format")) {
+      const std::string name = r.string("vtk_format");
+      const std::optional<VtkEncoding> e = encodingNamed(name);
+      if (!e) r.fail("vtk_format", "unknown format '" + name + "' (compressed, appended, binary, ascii)");
+      o.vtkFormat = *e;
+      if (r.has("ascii")) r.fail("ascii", "give vtk_format or ascii, not both");
+    } else if (r.boolean("ascii", false)) {
+      o.vtkFormat = VtkEncoding::Ascii;  // the older key
+    }
     o.historyRows = count("history_rows", o.historyRows);
     o.distributions = count("distributions", o.distributions);
     if (r.has("distribution_times")) {

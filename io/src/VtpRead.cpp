@@ -20,6 +20,8 @@
 #include <sstream>
 #include <string>
 
+#include <zlib.h>
+
 namespace lsdem::io {
 
 static_assert(std::endian::native == std::endian::little,
@@ -119,6 +121,9 @@ class TagScanner {
     at_ = lt;
     return s;
   }
+
+  /// Continues the walk at offset `at`.
+  void skipTo(std::size_t at) { at_ = at; }
 
   [[noreturn]] void fail(std::size_t at, const std::string& key, const std::string& problem) const {
     throw InputError(file_, lineAt(text_, at), key, problem);
@@ -288,10 +293,68 @@ std::optional<std::vector<Out>> fromAscii(std::string_view text, std::string& ba
   }
 }
 
-/// What the file's root says about binary data.
+/// What the file's root says about binary data, and the appended block.
 struct Encoding {
-  bool header64 = false;  ///< header_type UInt64 (else UInt32)
+  bool header64 = false;    ///< header_type UInt64 (else UInt32)
+  bool compressed = false;  ///< compressor="vtkZLibDataCompressor"
+  bool hasAppended = false;  ///< the file has <AppendedData encoding="raw">
+  std::string_view appended;  ///< its bytes after the '_' mark (to the end of the file)
 };
+
+// A header word of `bytes` at `at`.
+std::uint64_t headerWord(std::string_view bytes, std::size_t at, bool header64) {
+  if (header64) {
+    std::uint64_t v = 0;
+    std::memcpy(&v, bytes.data() + at, 8);
+    return v;
+  }
+  std::uint32_t v = 0;
+  std::memcpy(&v, bytes.data() + at, 4);
+  return v;
+}
+
+// The raw bytes of a compressed array at the start of `bytes` (VTK's layout:
+// header [blocks, block size, last block's size (0: full), compressed size
+// of each block], then the zlib streams); sets `used` to the bytes it took.
+// nullopt and `problem` when the data is inconsistent.
+std::optional<std::string> decompress(std::string_view bytes, bool header64, std::size_t& used, std::string& problem) {
+  const std::size_t word = header64 ? 8 : 4;
+  if (bytes.size() < 3 * word) {
+    problem = "the compressed data has no header";
+    return std::nullopt;
+  }
+  const std::uint64_t blocks = headerWord(bytes, 0, header64);
+  const std::uint64_t blockSize = headerWord(bytes, word, header64);
+  const std::uint64_t last = headerWord(bytes, 2 * word, header64);
+  if (blocks > (bytes.size() - 3 * word) / word || (blocks > 0 && blockSize == 0) || last > blockSize) {
+    problem = "the compression header is inconsistent (" + std::to_string(blocks) + " blocks of " +
+              std::to_string(blockSize) + " bytes, the last " + std::to_string(last) + ")";
+    return std::nullopt;
+  }
+  std::size_t at = (3 + std::size_t(blocks)) * word;
+  std::string out;
+  for (std::uint64_t k = 0; k < blocks; ++k) {
+    const std::uint64_t size = headerWord(bytes, (3 + std::size_t(k)) * word, header64);
+    const std::uint64_t raw = k + 1 == blocks && last != 0 ? last : blockSize;
+    if (size > bytes.size() - at) {
+      problem = "block " + std::to_string(k) + " of the compressed data runs past the end of the file";
+      return std::nullopt;
+    }
+    const std::size_t before = out.size();
+    out.resize(before + std::size_t(raw));
+    uLongf length = uLongf(raw);
+    if (uncompress(reinterpret_cast<Bytef*>(out.data() + before), &length,
+                   reinterpret_cast<const Bytef*>(bytes.data() + at), uLong(size)) != Z_OK ||
+        length != raw) {
+      problem = "block " + std::to_string(k) + " of the compressed data does not decompress to " +
+                std::to_string(raw) + " bytes";
+      return std::nullopt;
+    }
+    at += std::size_t(size);
+  }
+  used = at;
+  return out;
+}
 
 // The values of one DataArray element (the scanner sits just after its opening tag).
 VtkArray readDataArray(TagScanner& scan, const Tag& tag, const Encoding& encoding) {
@@ -306,36 +369,91 @@ VtkArray readDataArray(TagScanner& scan, const Tag& tag, const Encoding& encodin
   if (components < 1) scan.fail(tag.begin, key, "NumberOfComponents must be at least 1");
   array.components = int(components);
   const std::string format = tag.attribute("format").value_or("ascii");
-  if (format != "ascii" && format != "binary") {
-    scan.fail(tag.begin, key, "format '" + format + "' is not read (ascii or inline binary only)");
+  if (format != "ascii" && format != "binary" && format != "appended") {
+    scan.fail(tag.begin, key, "format '" + format + "' is not one of ascii, binary, appended");
   }
-  if (tag.selfClosing) {
+  // The raw bytes of a binary or appended array.
+  std::string bytes;
+  const std::size_t headerSize = encoding.header64 ? 8 : 4;
+  // Its bytes after a byte-count header (uncompressed data).
+  const auto counted = [&](std::string_view data) {
+    if (data.size() < headerSize) scan.fail(tag.begin, key, "the binary data has no byte-count header");
+    const std::uint64_t count = headerWord(data, 0, encoding.header64);
+    if (count > data.size() - headerSize) {
+      scan.fail(tag.begin, key,
+                "the header announces " + std::to_string(count) + " bytes but " +
+                    std::to_string(data.size() - headerSize) + " follow");
+    }
+    return std::string(data.substr(headerSize, std::size_t(count)));
+  };
+  const auto compressed = [&](std::string_view data, std::size_t& used) {
+    std::string problem;
+    std::optional<std::string> raw = decompress(data, encoding.header64, used, problem);
+    if (!raw) scan.fail(tag.begin, key, problem);
+    return std::move(*raw);
+  };
+  if (format == "appended") {
+    if (!encoding.hasAppended) scan.fail(tag.begin, key, "format 'appended' but the file has no <AppendedData>");
+    if (!tag.attribute("offset")) scan.fail(tag.begin, key + ".offset", "missing");
+    const std::uint64_t offset = countAttribute(scan, tag, "offset");
+    if (offset > encoding.appended.size()) {
+      scan.fail(tag.begin, key + ".offset", std::to_string(offset) + " is past the end of the appended data");
+    }
+    const std::string_view data = encoding.appended.substr(std::size_t(offset));
+    std::size_t used = 0;
+    bytes = encoding.compressed ? compressed(data, used) : counted(data);
+    if (!tag.selfClosing) {
+      // <DataArray ...></DataArray> with nothing between.
+      scan.content();
+      const std::optional<Tag> close = scan.next();
+      if (!close || !close->closing || close->name != "DataArray") scan.fail(tag.begin, key, "no </DataArray>");
+    }
+  } else if (tag.selfClosing) {
     // An empty array.
     array.values = std::vector<double>();
     return array;
   }
-  const std::string_view text = scan.content();
+  const std::string_view text = format == "appended" ? std::string_view() : scan.content();
 
   if (format == "binary") {
-    // Header (byte count), then the raw values.
-    const std::optional<std::string> bytes = decodeBase64(text);
-    if (!bytes) scan.fail(tag.begin, key, "the base64 data is malformed");
-    const std::size_t headerSize = encoding.header64 ? 8 : 4;
-    if (bytes->size() < headerSize) scan.fail(tag.begin, key, "the binary data has no byte-count header");
-    std::uint64_t count = 0;
-    if (encoding.header64) {
-      std::memcpy(&count, bytes->data(), 8);
+    // Uncompressed: one base64 stream of the byte count and the values (or
+    // two, as VTK writes them). Compressed: the header, then the blocks,
+    // each its own base64 stream (VTK's layout).
+    std::string symbols;
+    for (char c : text) {
+      if (!std::isspace(static_cast<unsigned char>(c))) symbols += c;
+    }
+    const auto decoded = [&](std::string_view part) {
+      const std::optional<std::string> b = decodeBase64(part);
+      if (!b) scan.fail(tag.begin, key, "the base64 data is malformed");
+      return *b;
+    };
+    if (!encoding.compressed) {
+      const std::string all = decoded(symbols);
+      bytes = counted(all);
+      if (bytes.size() != all.size() - headerSize) {
+        scan.fail(tag.begin, key,
+                  "the header announces " + std::to_string(bytes.size()) + " bytes but " +
+                      std::to_string(all.size() - headerSize) + " follow");
+      }
     } else {
-      std::uint32_t c32 = 0;
-      std::memcpy(&c32, bytes->data(), 4);
-      count = c32;
+      // The header's length comes from its first word (the block count).
+      const auto symbolsOf = [](std::size_t n) { return (n + 2) / 3 * 4; };
+      if (symbols.size() < symbolsOf(3 * headerSize)) scan.fail(tag.begin, key, "the compressed data has no header");
+      const std::string first = decoded(std::string_view(symbols).substr(0, symbolsOf(3 * headerSize)));
+      const std::uint64_t blocks = headerWord(first, 0, encoding.header64);
+      if (blocks > symbols.size()) scan.fail(tag.begin, key, "the compression header is inconsistent");
+      const std::size_t headerSymbols = symbolsOf((3 + std::size_t(blocks)) * headerSize);
+      if (symbols.size() < headerSymbols) scan.fail(tag.begin, key, "the compressed data has no header");
+      std::string all = decoded(std::string_view(symbols).substr(0, headerSymbols));
+      all += decoded(std::string_view(symbols).substr(headerSymbols));
+      std::size_t used = 0;
+      bytes = compressed(all, used);
     }
-    if (count != bytes->size() - headerSize) {
-      scan.fail(tag.begin, key,
-                "the header announces " + std::to_string(count) + " bytes but " +
-                    std::to_string(bytes->size() - headerSize) + " follow");
-    }
-    const std::string_view data(bytes->data() + headerSize, count);
+  }
+  if (format != "ascii") {
+    const std::string_view data(bytes);
+    const std::size_t count = data.size();
     auto check = [&](std::size_t size) {
       if (count % size != 0) {
         scan.fail(tag.begin, key, std::to_string(count) + " bytes are not a whole number of " + typeName + " values");
@@ -365,8 +483,8 @@ VtkArray readDataArray(TagScanner& scan, const Tag& tag, const Encoding& encodin
       array.values = std::move(*parsed);
     };
     switch (*type) {
-      case ValueType::Float64:
-      case ValueType::Float32: take(fromAscii<double, double>(text, bad)); break;
+      case ValueType::Float64: take(fromAscii<double, double>(text, bad)); break;
+      case ValueType::Float32: take(fromAscii<float, double>(text, bad)); break;  // as the binary encodings read it
       case ValueType::Int64: take(fromAscii<std::int64_t, std::int64_t>(text, bad)); break;
       case ValueType::UInt64: take(fromAscii<std::uint64_t, std::uint64_t>(text, bad)); break;
       case ValueType::Int32: take(fromAscii<std::int32_t, std::int32_t>(text, bad)); break;
@@ -374,9 +492,11 @@ VtkArray readDataArray(TagScanner& scan, const Tag& tag, const Encoding& encodin
     }
     if (!ok) scan.fail(tag.begin, key, "'" + bad + "' is not a " + typeName + " value");
   }
-  // The closing tag.
-  const std::optional<Tag> close = scan.next();
-  if (!close || !close->closing || close->name != "DataArray") scan.fail(tag.begin, key, "no </DataArray> after the values");
+  // The closing tag of an inline array.
+  if (format != "appended") {
+    const std::optional<Tag> close = scan.next();
+    if (!close || !close->closing || close->name != "DataArray") scan.fail(tag.begin, key, "no </DataArray> after the values");
+  }
   if (array.valueCount() % components != 0) {
     scan.fail(tag.begin, key,
               std::to_string(array.valueCount()) + " values are not a whole number of " + std::to_string(components) +
@@ -440,10 +560,28 @@ VtpPiece readVtp(const std::filesystem::path& file) {
   if (root->attribute("byte_order").value_or("LittleEndian") != "LittleEndian") {
     scan.fail(root->begin, "VTKFile.byte_order", "big-endian files are not read");
   }
-  if (!root->attribute("compressor").value_or("").empty()) {
-    scan.fail(root->begin, "VTKFile.compressor", "compressed data is not read");
-  }
   Encoding encoding;
+  const std::string compressor = root->attribute("compressor").value_or("");
+  if (!compressor.empty() && compressor != "vtkZLibDataCompressor") {
+    scan.fail(root->begin, "VTKFile.compressor", "'" + compressor + "' is not read (vtkZLibDataCompressor only)");
+  }
+  encoding.compressed = !compressor.empty();
+  // The appended block: raw bytes from its '_' mark to the end of the file
+  // (the XML before it has no '<' but in tags: names and values are escaped).
+  const std::size_t appendedAt = text.find("<AppendedData");
+  if (appendedAt != std::string::npos) {
+    TagScanner at(text, file.string());
+    at.skipTo(appendedAt);
+    const std::optional<Tag> tag = at.next();
+    if (tag->attribute("encoding").value_or("") != "raw") {
+      scan.fail(appendedAt, "AppendedData.encoding",
+                "'" + tag->attribute("encoding").value_or("") + "' is not read (raw only)");
+    }
+    const std::size_t mark = text.find('_', tag->end);
+    if (mark == std::string::npos) scan.fail(appendedAt, "AppendedData", "no '_' before the data");
+    encoding.hasAppended = true;
+    encoding.appended = std::string_view(text).substr(mark + 1);
+  }
   const std::string headerType = root->attribute("header_type").value_or("UInt32");
   if (headerType != "UInt64" && headerType != "UInt32") {
     scan.fail(root->begin, "VTKFile.header_type", "'" + headerType + "' is neither UInt64 nor UInt32");
@@ -489,7 +627,15 @@ VtpPiece readVtp(const std::filesystem::path& file) {
       if (countAttribute(scan, *tag, "NumberOfStrips") > 0) scan.fail(tag->begin, "Piece", "triangle strips are not read");
       continue;
     }
-    if (name == "AppendedData") scan.fail(tag->begin, "AppendedData", "appended data is not read (ascii or inline binary only)");
+    if (name == "AppendedData") {
+      // The binary block ends the XML part; the file must end with its closing tags.
+      const std::size_t tail = text.rfind("</AppendedData>");
+      if (tail == std::string::npos || tail < tag->end || text.find("</VTKFile>", tail) == std::string::npos) {
+        scan.fail(tag->begin, "AppendedData", "the file ends before </AppendedData> and </VTKFile>");
+      }
+      closed = true;
+      break;
+    }
     if (pieces == 0 && name != "DataArray") scan.fail(tag->begin, name, "outside a <Piece>");
     // Sections of the piece.
     if (name == "PointData" || name == "CellData" || name == "Points" || name == "FieldData" || name == "Strips") {

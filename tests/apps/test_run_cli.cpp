@@ -286,14 +286,15 @@ TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
     ASSERT_EQ(std::count(row.begin(), row.end(), ','), std::count(header.begin(), header.end(), ',')) << row;
   }
 
-  // 16 kB: the first particles frame (written to a temporary file, then
-  // renamed) is too large.
+  // 16 kB: the first particles frame (compressed) fits, the first surfaces
+  // frame (written to a temporary file, then renamed) is too large.
   const fs::path small = dir / "frame";
   const lsdem::test::ProcessResult frame = runLimited(small, 16384);
   EXPECT_EQ(frame.code, 1) << frame.output;
-  EXPECT_EQ(frame.output, "lsdem: error: cannot write '" + (small / "frames" / "particles_000000.vtp").string() +
+  EXPECT_EQ(frame.output, "lsdem: error: cannot write '" + (small / "frames" / "surfaces_000000.vtp").string() +
                               "': File too large\n");
-  EXPECT_FALSE(fs::exists(small / "frames" / "particles_000000.vtp"));
+  EXPECT_TRUE(fs::exists(small / "frames" / "particles_000000.vtp"));
+  EXPECT_FALSE(fs::exists(small / "frames" / "surfaces_000000.vtp"));
   EXPECT_EQ(temporaryFiles(small), 0u);
   EXPECT_FALSE(fs::exists(small / "lsdem.lock"));
   fs::remove_all(dir);

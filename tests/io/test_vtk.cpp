@@ -332,7 +332,8 @@ void checkSurfaceFrame() {
     }
   }
   EXPECT_LT(worst, surfaceTolerance<D>());
-  // Particle 0's points are its grid-frame contour vertices, placed exactly.
+  // Particle 0's points are its grid-frame contour vertices, placed (to
+  // Float32, as surfaces are written: 0.1 um here).
   std::vector<Vec<D>> gridVertices;
   if constexpr (D == 2) {
     for (const auto& loop : geometry::marchingSquares(p.shape[0]->grid())) {
@@ -343,7 +344,7 @@ void checkSurfaceFrame() {
   }
   for (std::size_t k = 0; k < gridVertices.size(); ++k) {
     const Vec<D> body = p.rotation(0).transpose() * (pointOf<D>(b, std::int64_t(k)) - p.position[0]);
-    ASSERT_LT((p.shape[0]->bodyToGrid().apply(body) - gridVertices[k]).norm(), 1e-14) << k;
+    ASSERT_LT((p.shape[0]->bodyToGrid().apply(body) - gridVertices[k]).norm(), 1e-7) << k;
   }
   // The surfaces sit around the centroids (the shapes are symmetric).
   for (std::size_t i = 0; i < p.size(); ++i) {

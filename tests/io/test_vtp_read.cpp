@@ -9,6 +9,7 @@
 #include "lsdem/io/VtpRead.h"
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <cstdint>
 #include <cstring>
@@ -118,6 +119,63 @@ TEST(VtpRead, BinaryRoundTripIsExact) {
   expectSamePiece(readVtp(f), written);
 }
 
+TEST(VtpRead, CompressedAndAppendedRoundTripsAreExact) {
+  // A piece larger than one compression block (32 KiB), so several blocks
+  // and a partial last one are written and read back.
+  VtpPiece written = samplePiece();
+  std::vector<double> big(3 * 5000);
+  for (std::size_t k = 0; k < big.size(); ++k) big[k] = std::sin(0.001 * double(k)) * 1e3;
+  std::vector<double> points;
+  for (std::size_t k = 0; k < 5000; ++k) points.insert(points.end(), {big[3 * k], big[3 * k + 1], big[3 * k + 2]});
+  written.points = points;
+  written.pointData = {VtkArray{"x", 3, big}};
+  written.cellData.clear();
+  written.verts = {};
+  written.lines = {};
+  written.polys = {};
+  for (VtkEncoding e : {VtkEncoding::Compressed, VtkEncoding::Appended}) {
+    const fs::path f = tempDir() / (std::string(encodingName(e)) + ".vtp");
+    writeVtp(f, written, e);
+    expectSamePiece(readVtp(f), written);
+    const std::string text = readText(f);
+    EXPECT_NE(text.find("<AppendedData encoding=\"raw\">"), std::string::npos);
+    EXPECT_EQ(text.find("compressor=") != std::string::npos, e == VtkEncoding::Compressed);
+  }
+  // The sample piece (every array kind, cells of every kind) too.
+  const fs::path small = tempDir() / "small-compressed.vtp";
+  writeVtp(small, samplePiece(), VtkEncoding::Compressed);
+  expectSamePiece(readVtp(small), samplePiece());
+  // Smooth data compresses: the compressed file is smaller than the raw one.
+  EXPECT_LT(fs::file_size(tempDir() / "compressed.vtp"), fs::file_size(tempDir() / "appended.vtp"));
+}
+
+TEST(VtpRead, VtkStyleInlineCompressedData) {
+  // Inline zlib data as VTK writes it: the compression header and the
+  // blocks as two base64 streams; two blocks of 8 bytes, the last partial.
+  const std::string values = rawBytes<float>({1.f, 2.f, 3.f, 4.f, 5.f, 6.f});  // 24 bytes
+  std::vector<std::string> blocks;
+  for (std::size_t first = 0; first < values.size(); first += 16) {
+    const std::string raw = values.substr(first, 16);
+    uLongf length = compressBound(uLong(raw.size()));
+    std::string z(length, '\0');
+    ASSERT_EQ(compress(reinterpret_cast<Bytef*>(z.data()), &length, reinterpret_cast<const Bytef*>(raw.data()),
+                       uLong(raw.size())),
+              Z_OK);
+    z.resize(length);
+    blocks.push_back(z);
+  }
+  const std::string header = rawBytes<std::uint32_t>(
+      {2u, 16u, 8u, std::uint32_t(blocks[0].size()), std::uint32_t(blocks[1].size())});
+  const std::string text =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\" "
+      "compressor=\"vtkZLibDataCompressor\">\n<PolyData>\n<Piece NumberOfPoints=\"2\">\n"
+      "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"binary\">\n" +
+      base64(header) + base64(blocks[0] + blocks[1]) + "\n</DataArray></Points>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+  const fs::path f = tempDir() / "inline-zlib.vtp";
+  writeText(f, text);
+  EXPECT_EQ(readVtp(f).points, (std::vector<double>{1, 2, 3, 4, 5, 6}));
+}
+
 TEST(VtpRead, AsciiRoundTripIsExact) {
   const fs::path f = tempDir() / "ascii.vtp";
   const VtpPiece written = samplePiece();
@@ -175,9 +233,10 @@ TEST(VtpRead, RefusesBrokenFiles) {
   expectRefused(dir / "truncated.vtp", "ends");
   writeText(dir / "unclosed.vtp", text.substr(0, text.find("</PolyData>")));
   expectRefused(dir / "unclosed.vtp", "ends before </VTKFile>");
-  // Wrong type, compression, appended data.
+  // Wrong type, another compressor.
   expectRefused(variant("grid.vtp", "type=\"PolyData\"", "type=\"ImageData\""), "not PolyData");
-  expectRefused(variant("zlib.vtp", "header_type", "compressor=\"vtkZLibDataCompressor\" header_type"), "compressed");
+  expectRefused(variant("lz4.vtp", "header_type", "compressor=\"vtkLZ4DataCompressor\" header_type"),
+                "vtkZLibDataCompressor only");
   // A point count that disagrees with the points.
   expectRefused(variant("count.vtp", "NumberOfPoints=\"5\"", "NumberOfPoints=\"6\""), "declares 6 points");
   // A cell naming a point that does not exist (the vertex cell's index 4 made 9).
@@ -196,6 +255,24 @@ TEST(VtpRead, RefusesBrokenFiles) {
   b[data + 1] = b[data + 1] == 'B' ? 'C' : 'B';  // changes the byte count
   writeText(dir / "header.vtp", b);
   expectRefused(dir / "header.vtp", "bytes");
+  // Compressed files cut short, with a damaged block, an offset past the end.
+  const fs::path zipped = dir / "zipped.vtp";
+  writeVtp(zipped, samplePiece(), VtkEncoding::Compressed);
+  const std::string z = readText(zipped);
+  const std::size_t mark = z.find('_', z.find("<AppendedData"));
+  ASSERT_NE(mark, std::string::npos);
+  writeText(dir / "zcut.vtp", z.substr(0, mark + 40));
+  expectRefused(dir / "zcut.vtp", "past the end of the file");
+  std::string damaged = z;
+  damaged[mark + 1 + 4 * 8 + 2] ^= 0x5a;  // inside the first array's zlib stream
+  writeText(dir / "zdamaged.vtp", damaged);
+  expectRefused(dir / "zdamaged.vtp", "does not decompress");
+  std::string far = z;
+  const std::size_t offset = far.find("offset=\"0\"");
+  ASSERT_NE(offset, std::string::npos);
+  far.replace(offset, 10, "offset=\"99999999\"");
+  writeText(dir / "zfar.vtp", far);
+  expectRefused(dir / "zfar.vtp", "past the end of the appended data");
   // Missing file.
   expectRefused(dir / "absent.vtp", "cannot open");
 }

@@ -8,6 +8,7 @@
 #include "lsdem/breakage/Breakage.h"
 #include "lsdem/dynamics/World.h"
 #include "lsdem/geometry/Shape.h"
+#include "lsdem/io/Vtk.h"
 
 #include <cstdint>
 #include <map>
@@ -59,7 +60,7 @@ struct OutputDef {
   std::string dir = "lsdem-out";        ///< output folder (the command line's --out wins)
   std::uint64_t frames = 50;            ///< ParaView frames over the run (0: none), including the first and the last
   bool particles = true, surfaces = true, boundaries = true, contacts = false;  ///< ParaView series written
-  bool ascii = false;                   ///< ASCII instead of base64 binary VTP
+  VtkEncoding vtkFormat = VtkEncoding::Compressed;  ///< how VTP arrays are stored (`vtk_format`; io/Vtk.h)
   std::uint64_t historyRows = 500;      ///< rows of history.csv over the run
   std::uint64_t distributions = 5;      ///< PSD and shape-statistics snapshots over the run (including the first and last)
   std::vector<double> distributionTimes;  ///< instead: snapshots at these simulated times, s (ascending), plus the first and last

@@ -6,9 +6,19 @@
 ///
 /// File format. Every `.vtp` is `<VTKFile type="PolyData" version="1.0"
 /// byte_order="LittleEndian" header_type="UInt64">` with one Piece. Cells use
-/// the version-1.0 layout: an Int64 `connectivity` array and an Int64 `offsets`
-/// array holding the end of each cell. Arrays are written in one of two
+/// the version-1.0 layout: a `connectivity` array and an `offsets` array
+/// holding the end of each cell, Int32 where every value fits (else Int64). Arrays are written in one of four
 /// encodings (VtkEncoding):
+/// - Compressed (the default): the root also says
+///   `compressor="vtkZLibDataCompressor"`; every DataArray is
+///   `format="appended" offset="N"` and its bytes are in the file's
+///   `<AppendedData encoding="raw">` after the `_` mark, at byte N from it:
+///   a header of UInt64 words [blocks, block size, size of the last block
+///   (0: full), compressed size of each block], then each block of up to
+///   32 KiB of the raw little-endian values, compressed by zlib. What VTK's
+///   own writer (and ParaView's Save Data) produces by default.
+/// - Appended: the same without compression: at byte N, a UInt64 byte count
+///   then the raw values.
 /// - Binary: `format="binary"`, inline base64 (RFC 4648 alphabet, '=' padding)
 ///   of ONE byte stream made of an 8-byte little-endian unsigned byte count of
 ///   the data followed by the raw little-endian data (no compression). This is
@@ -34,6 +44,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <variant>
 #include <vector>
@@ -41,7 +52,12 @@
 namespace lsdem::io {
 
 /// How DataArray values are stored in a `.vtp` file (see the file comment).
-enum class VtkEncoding { Binary, Ascii };
+enum class VtkEncoding { Compressed, Appended, Binary, Ascii };
+
+/// @brief The scene's name of an encoding: "compressed", "appended", "binary", "ascii".
+const char* encodingName(VtkEncoding encoding);
+/// @brief The encoding of a scene's name, or nullopt.
+std::optional<VtkEncoding> encodingNamed(std::string_view name);
 
 /// One named DataArray: `components` values per tuple, tuples one after the
 /// other (x0 y0 z0 x1 y1 z1 ...). The vector's element type picks the VTK type:
@@ -77,6 +93,10 @@ struct VtpPiece {
   VtkCells polys;              ///< polygon cells
   std::vector<VtkArray> pointData;  ///< one tuple per point
   std::vector<VtkArray> cellData;   ///< one tuple per cell (verts + lines + polys)
+  /// Write the points as Float32: surfaces and boundaries, contours drawn at
+  /// their grid's resolution (7 significant digits: 0.1 um at 1 m), half the
+  /// bytes of the largest array. Particle frames keep Float64.
+  bool singlePrecisionPoints = false;
 
   /// @brief Number of points (points.size() / 3).
   std::size_t pointCount() const { return points.size() / 3; }
@@ -227,7 +247,7 @@ class PvdSeries {
 template <int D>
 struct FrameWriterDef {
   std::filesystem::path directory;           ///< output directory (created); frames go to directory/frames/
-  VtkEncoding encoding = VtkEncoding::Binary;
+  VtkEncoding encoding = VtkEncoding::Compressed;
   bool particles = true;                     ///< particles.pvd
   bool surfaces = true;                      ///< surfaces.pvd
   bool boundaries = true;                    ///< boundaries.pvd

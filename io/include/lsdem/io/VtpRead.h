@@ -5,11 +5,16 @@
 /// `lsdem render` and by tests that check what a run wrote.
 ///
 /// What is read. A `.vtp` is `<VTKFile type="PolyData">` with exactly one
-/// `<Piece>`; its DataArrays may be `format="ascii"` or `format="binary"`
+/// `<Piece>`; its DataArrays may be `format="ascii"`, `format="binary"`
 /// (inline base64 of a byte-count header, UInt64 or UInt32 as `header_type`
 /// says, then the raw little-endian values; the header and the data may be one
-/// base64 stream, as lsdem writes them, or two, as VTK writes them).
-/// Compressed data (`compressor=...`), `format="appended"`, big-endian files
+/// base64 stream, as lsdem writes them, or two, as VTK writes them) or
+/// `format="appended"` (at `offset` in the file's `<AppendedData
+/// encoding="raw">` after its `_` mark: the byte-count header and the values).
+/// With `compressor="vtkZLibDataCompressor"` (what lsdem and ParaView write by
+/// default) the byte-count header is VTK's compression header and the values
+/// are zlib blocks, inline (header and blocks as separate base64 streams) or
+/// appended. Other compressors, base64-encoded appended data, big-endian files
 /// and triangle strips are refused with a message. Cells may use VTK's 1.0
 /// layout (offsets hold the end of each cell) or start with a leading 0.
 /// Value types: Float64 and Float32 are read as double, Int64 as int64,
@@ -33,7 +38,8 @@ namespace lsdem::io {
 /// array whose value count does not match its tuple count, offsets that
 /// decrease or do not end at the connectivity size, a cell naming a missing
 /// point, a number that does not parse, a base64 stream whose byte count
-/// differs from its header.
+/// differs from its header, an appended offset or a compressed block past the
+/// end of the file, a block that does not decompress to its size.
 VtpPiece readVtp(const std::filesystem::path& file);
 
 /// @brief Reads the entries of a ParaView series (`.pvd`): one (time, file)
