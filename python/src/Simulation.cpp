@@ -28,6 +28,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #ifdef LSDEM_HAVE_OPENMP
@@ -628,6 +629,24 @@ handle for remove_callback.)doc")
   field("strengths", Field::Strength, "(n,) float64 view: breakage strengths, Pa (0: not yet drawn, inf: unbreakable).");
   field("birth_times", Field::BirthTime, "(n,) float64 view: simulated time each particle entered, s.");
 
+  c.def(
+      "state",
+      [](py::object self) {
+        const auto& sim = self.cast<const Simulation&>();
+        py::dict d;
+        const std::pair<const char*, Field> fields[] = {
+            {"positions", Field::Position},   {"velocities", Field::Velocity}, {"angular_velocities", Field::AngularVelocity},
+            {"orientations", Field::Orientation}, {"forces", Field::Force},  {"torques", Field::Torque},
+            {"masses", Field::Mass},           {"ids", Field::Id},            {"parent_ids", Field::ParentId},
+            {"generations", Field::Generation}, {"strengths", Field::Strength}, {"birth_times", Field::BirthTime}};
+        for (const auto& [name, f] : fields) d[name] = sim.view(f, self).attr("copy")();
+        d["rotations"] = sim.rotations();
+        d["time"] = sim.time();
+        d["steps"] = sim.stepCount();
+        return d;
+      },
+      "Copies of every particle array (the views' names, writable, owned), with rotations, time and steps: "
+      "values that stay as they are while the world goes on.");
   c.def("rotations", &Simulation::rotations, "(n, D, D) float64 copy: body-to-world rotation matrices.")
       .def("true_masses", &Simulation::trueMasses, "(n,) float64 copy: masses without density scaling, kg.")
       .def(

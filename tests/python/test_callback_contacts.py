@@ -122,6 +122,15 @@ def test_views_are_read_only_and_in_place(scene_path):
     np.testing.assert_array_equal(pos, sim.positions)
     assert sim.masses.sum() == pytest.approx(sim.true_masses().sum(), rel=1e-15)
     assert sim.summary()["particles"] == 3
+    # state(): copies that stay as they are.
+    state = sim.state()
+    assert state["positions"].flags.writeable and state["positions"].flags.owndata
+    assert state["steps"] == 100 and state["time"] == sim.time
+    kept = state["positions"].copy()
+    sim.step(10)
+    np.testing.assert_array_equal(state["positions"], kept)
+    assert not np.array_equal(state["positions"], sim.positions)
+    assert set(state) >= {"velocities", "angular_velocities", "orientations", "ids", "generations", "rotations"}
 
 
 def test_callbacks_stop_raise_and_refuse_reentry(scene_path):
