@@ -10,6 +10,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -17,6 +18,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace lsdem::apps {
 namespace {
@@ -73,12 +75,37 @@ void runCommand(const RunArgs& a) {
   const bool terminal = isatty(fileno(stderr)) != 0;
   if (!a.quiet) {
     o.progress = [terminal](const io::RunProgress& p) {
-      char line[256];
-      std::snprintf(line, sizeof(line),
-                    "step %llu  t = %.4g s (%.1f%%)  %.0f steps/s  %zu particles  %zu contacts  %zu breakages  %s %s",
-                    static_cast<unsigned long long>(p.steps), p.time, 100.0 * p.fraction, p.stepsPerSecond,
-                    p.particles, p.contacts, p.breakages, p.done ? "wall" : "ETA",
-                    duration(p.done ? p.wallSeconds : p.etaSeconds).c_str());
+      // Fields in display order, each with its rank (lower: dropped first)
+      // so the line fits 80 columns: the least needed go when it would not.
+      struct Field {
+        std::string text;
+        int rank;
+      };
+      char buf[64];
+      std::vector<Field> fields;
+      const auto add = [&](int rank, const char* format, auto... values) {
+        std::snprintf(buf, sizeof(buf), format, values...);
+        fields.push_back({buf, rank});
+      };
+      add(9, "%5.1f%%", 100.0 * p.fraction);
+      add(8, "t %.4g s", p.time);
+      add(5, "step %llu", static_cast<unsigned long long>(p.steps));
+      add(4, "%.0f/s", p.stepsPerSecond);
+      add(6, "%zu particles", p.particles);
+      add(2, "%zu contacts", p.contacts);
+      add(3, "%zu breakages", p.breakages);
+      add(7, "%s %s", p.done ? "wall" : "ETA", duration(p.done ? p.wallSeconds : p.etaSeconds).c_str());
+      const auto width = [&] {
+        std::size_t w = 0;
+        for (const Field& f : fields) w += f.text.size() + (w > 0 ? 2 : 0);
+        return w;
+      };
+      while (width() > 79 && fields.size() > 1) {
+        fields.erase(std::min_element(fields.begin(), fields.end(),
+                                      [](const Field& x, const Field& y) { return x.rank < y.rank; }));
+      }
+      std::string line;
+      for (const Field& f : fields) line += (line.empty() ? "" : "  ") + f.text;
       if (terminal) {
         std::cerr << '\r' << line << "\033[K" << (p.done ? "\n" : "") << std::flush;
       } else {

@@ -4,6 +4,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
-bash scripts/build.sh
+LSDEM_TARGETS=lsdem bash scripts/build.sh
 ./build/apps/lsdem run apps/scenes/three_grains/three_grains_2d.toml --out three_grains_2d-out --overwrite
 ./build/apps/lsdem plot three_grains_2d-out

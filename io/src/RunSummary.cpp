@@ -49,6 +49,7 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
   JsonWriter w(out);
   const auto& contacts = world.contacts();
   w.beginObject()
+      .field("lsdem_version", std::string(LSDEM_VERSION))
       .field("dimension", D)
       .field("steps", static_cast<long long>(world.steps()))
       .field("simulated_time", world.time())
