@@ -40,7 +40,12 @@ std::string tomlText(const py::dict& scene);
 /// @brief Reads a scene file (io::InputError for bad input).
 std::shared_ptr<SceneHandle> loadScene(const std::string& path);
 
-/// @brief A scene handle from `scene`: a Scene, or a path (str or os.PathLike).
+/// @brief A scene from a dict (Scene.from_dict): written as TOML to `path`,
+/// or when it is None to a temporary folder the handle removes.
+std::shared_ptr<SceneHandle> sceneFromDict(const py::dict& scene, const py::object& path);
+
+/// @brief A scene handle from `scene`: a Scene, a dict (sceneFromDict), or a
+/// path (str or os.PathLike).
 std::shared_ptr<SceneHandle> sceneOf(const py::handle& scene);
 
 void bindScene(py::module_& m);

@@ -66,7 +66,11 @@ py::dict progressDict(const io::RunProgress& p) {
 py::dict run(const py::object& scene, const py::object& out, const py::object& steps, const py::object& threads,
              bool overwrite, const py::object& resume, bool force, bool check, const py::object& progress) {
   io::RunOptions o;
-  if (!scene.is_none()) {
+  std::shared_ptr<SceneHandle> fromDict;  // a dict's scene file, kept for the run
+  if (PyDict_Check(scene.ptr())) {
+    fromDict = sceneFromDict(py::reinterpret_borrow<py::dict>(scene), py::none());
+    o.scene = fromDict->path;
+  } else if (!scene.is_none()) {
     o.scene = py::isinstance<SceneHandle>(scene) ? scene.cast<const SceneHandle&>().path : pathText(scene);
   }
   if (!out.is_none()) o.outDir = pathText(out);
@@ -195,7 +199,7 @@ PYBIND11_MODULE(lsdem, m) {
         R"doc(Runs (or resumes) a scene and writes every output `lsdem run` writes
 (docs/outputs.md): the same code as the command line. The GIL is released.
 
-scene: lsdem.Scene or path (None with resume=). out: output folder (None: the
+scene: lsdem.Scene, dict (as Scene.from_dict takes) or path (None with resume=). out: output folder (None: the
 scene's [output] dir). steps: run this many steps instead of the scene's end.
 threads: OpenMP threads (None: the scene's; 0: all cores). overwrite: replace
 another run's outputs. resume: continue the run in this folder. force: resume

@@ -114,11 +114,23 @@ std::shared_ptr<SceneHandle> loadScene(const std::string& path) {
   return s;
 }
 
+std::shared_ptr<SceneHandle> sceneFromDict(const py::dict& d, const py::object& path) {
+  const std::string text = tomlText(d);
+  auto s = std::make_shared<SceneHandle>();
+  if (path.is_none()) {
+    s->tempDir = py::module_::import("tempfile").attr("mkdtemp")("prefix"_a = "lsdem-scene-").cast<std::string>();
+    s->path = (fs::path(s->tempDir) / "scene.toml").string();
+  } else {
+    s->path = pathText(path);
+  }
+  writeText(s->path, text);
+  s->def = std::make_shared<const io::AnySceneDef>(io::readScene(s->path));
+  return s;
+}
+
 std::shared_ptr<SceneHandle> sceneOf(const py::handle& scene) {
   if (py::isinstance<SceneHandle>(scene)) return scene.cast<std::shared_ptr<SceneHandle>>();
-  if (PyDict_Check(scene.ptr())) {
-    throw py::type_error("a scene dict needs lsdem.Scene.from_dict(d) first (it is written as a TOML file)");
-  }
+  if (PyDict_Check(scene.ptr())) return sceneFromDict(py::reinterpret_borrow<py::dict>(scene), py::none());
   return loadScene(pathText(scene));
 }
 
@@ -132,24 +144,7 @@ same structure as TOML and reads that. Bad input raises lsdem.InputError
 )doc")
       .def(py::init([](const py::object& path) { return loadScene(pathText(path)); }), py::arg("path"),
            "Reads and checks the scene file `path` and builds its shapes.")
-      .def_static(
-          "from_dict",
-          [](const py::dict& d, const py::object& path) {
-            const std::string text = tomlText(d);
-            auto s = std::make_shared<SceneHandle>();
-            if (path.is_none()) {
-              const std::string dir = py::module_::import("tempfile").attr("mkdtemp")("prefix"_a = "lsdem-scene-")
-                                          .cast<std::string>();
-              s->tempDir = dir;
-              s->path = (fs::path(dir) / "scene.toml").string();
-            } else {
-              s->path = pathText(path);
-            }
-            writeText(s->path, text);
-            s->def = std::make_shared<const io::AnySceneDef>(io::readScene(s->path));
-            return s;
-          },
-          py::arg("scene"), py::arg("path") = py::none(),
+      .def_static("from_dict", &sceneFromDict, py::arg("scene"), py::arg("path") = py::none(),
           R"doc(A scene from a dict of the TOML file's structure (tables as dicts, [[arrays]] as
 lists of dicts). It is written as TOML to `path` (kept), or without a path to a
 temporary folder removed when the Scene is freed; relative file names inside

@@ -571,7 +571,8 @@ void bindSimulation(py::module_& m) {
 The world of a scene, built as `lsdem run` builds it (particles placed, planes,
 tools and the declared effects), stepped from Python.
 
-Simulation(scene, threads=None, check=False): scene is an lsdem.Scene or a path.
+Simulation(scene, threads=None, check=False): scene is an lsdem.Scene, a dict (as
+Scene.from_dict takes) or a path.
 threads: OpenMP threads for step() (None: the scene's; 0: all cores). check:
 the checks of `lsdem run --check`.
 
