@@ -327,15 +327,29 @@ void pushQuaternion(std::vector<double>& out, const dynamics::Orientation<D>& q)
   }
 }
 
-// Places a body contour at a pose and appends its points and cells.
+// Places a body contour at a pose and appends its points and cells (and its
+// normals, rotated, where `normals` is given and the contour has them).
 template <int D>
 void appendPlaced(VtpPiece& piece, VtkCells& cells, const BodyContour<D>& contour, const geometry::Mat<D>& rotation,
-                  const Vec<D>& position) {
+                  const Vec<D>& position, std::vector<float>* normals = nullptr) {
   const auto base = std::int64_t(piece.pointCount());
   for (const Vec<D>& xb : contour.vertices) push3<D>(piece.points, Vec<D>(rotation * xb + position));
   const auto connectivityBase = std::int64_t(cells.connectivity.size());
   for (std::int64_t i : contour.connectivity) cells.connectivity.push_back(base + i);
   for (std::int64_t o : contour.offsets) cells.offsets.push_back(connectivityBase + o);
+  if (normals != nullptr && !contour.normals.empty()) {
+    for (const Vec<D>& nb : contour.normals) {
+      const Vec<D> n = rotation * nb;
+      for (int a = 0; a < 3; ++a) normals->push_back(a < D ? float(n[a]) : 0.0f);
+    }
+  }
+}
+
+// A particle's criterion ratio: its stress over its strength (how close it
+// is to breaking, 1 at the criterion), 0 where it has no finite positive
+// strength (breakage off, or made unbreakable).
+double criterionRatio(double stress, double strength) {
+  return std::isfinite(strength) && strength > 0.0 ? stress / strength : 0.0;
 }
 
 // Orthonormal tangent basis of a 3D plane with unit normal n.
@@ -558,7 +572,14 @@ BodyContour<D> bodyContour(const geometry::Shape<D>& shape) {
     // Triangles with shared vertices.
     const geometry::TriangleMesh mesh = geometry::marchingCubes(shape.grid());
     c.vertices.reserve(mesh.vertices.size());
-    for (const Vec<3>& x : mesh.vertices) c.vertices.push_back(bodyToGrid.applyInverse(x));
+    c.normals.reserve(mesh.vertices.size());
+    for (const Vec<3>& x : mesh.vertices) {
+      c.vertices.push_back(bodyToGrid.applyInverse(x));
+      Vec<3> g;
+      shape.valueAndGradient(c.vertices.back(), g);
+      const double length = g.norm();
+      c.normals.push_back(length > 0.0 ? Vec<3>(g / length) : Vec<3>::UnitZ());
+    }
     c.connectivity.reserve(3 * mesh.faces.size());
     for (const auto& f : mesh.faces) {
       c.connectivity.insert(c.connectivity.end(), {f[0], f[1], f[2]});
@@ -599,7 +620,7 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
   std::vector<std::uint64_t> id(n);
   std::vector<std::int64_t> parent(n);
   std::vector<std::int32_t> generation(n);
-  std::vector<double> radius(n), diameter(n), mass(n), stress(n, 0.0), strength(n);
+  std::vector<double> radius(n), diameter(n), mass(n), stress(n, 0.0), strength(n), ratio(n);
   std::vector<double> velocity, spin, orientation;
   std::array<std::vector<double>, 3> axes;  // the body axes in the world (glyph orientation)
   velocity.reserve(3 * n);
@@ -619,6 +640,7 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
     mass[i] = p.mass[i];
     if (!stressMeasure.empty()) stress[i] = stressMeasure[i];
     strength[i] = std::isfinite(p.strength[i]) ? p.strength[i] : -1.0;  // -1: made unbreakable
+    ratio[i] = criterionRatio(stress[i], p.strength[i]);
     push3<D>(velocity, p.velocity[i]);
     pushSpin<D>(spin, p.angularVelocity[i]);
     pushQuaternion<D>(orientation, p.orientation[i]);
@@ -646,27 +668,45 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
   piece.pointData.push_back({"axis_z", 3, std::move(axes[2])});
   piece.pointData.push_back({"stress", 1, std::move(stress)});
   piece.pointData.push_back({"strength", 1, std::move(strength)});
+  piece.pointData.push_back({"criterion_ratio", 1, std::move(ratio)});
   writeVtp(file, piece, encoding);
 }
 
 template <int D>
 void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
-                       VtkEncoding encoding) {
+                       VtkEncoding encoding, std::span<const double> stressMeasure) {
   const dynamics::Particles<D>& p = world.particles();
+  if (!stressMeasure.empty() && stressMeasure.size() != p.size()) {
+    throw std::invalid_argument("surface frame: stress measure has " + std::to_string(stressMeasure.size()) +
+                                " values for " + std::to_string(p.size()) + " particles");
+  }
   cache.prune();
   VtpPiece piece;
   VtkCells& cells = D == 2 ? piece.lines : piece.polys;
   std::vector<std::uint64_t> id;
   std::vector<std::int32_t> generation;
-  // Each particle's body contour at its pose.
+  std::vector<double> velocity, stress, strength, ratio;
+  std::vector<float> normals;
+  // Each particle's body contour at its pose, with the particle's fields on its cells.
   for (std::size_t i = 0; i < p.size(); ++i) {
     const BodyContour<D>& contour = cache.contour(p.shape[i]);
-    appendPlaced<D>(piece, cells, contour, p.rotation(i), p.position[i]);
-    id.insert(id.end(), contour.cellCount(), p.id[i]);
-    generation.insert(generation.end(), contour.cellCount(), std::int32_t(p.generation[i]));
+    appendPlaced<D>(piece, cells, contour, p.rotation(i), p.position[i], &normals);
+    const std::size_t count = contour.cellCount();
+    const double s = stressMeasure.empty() ? 0.0 : stressMeasure[i];
+    id.insert(id.end(), count, p.id[i]);
+    generation.insert(generation.end(), count, std::int32_t(p.generation[i]));
+    for (std::size_t c = 0; c < count; ++c) push3<D>(velocity, p.velocity[i]);
+    stress.insert(stress.end(), count, s);
+    strength.insert(strength.end(), count, std::isfinite(p.strength[i]) ? p.strength[i] : -1.0);
+    ratio.insert(ratio.end(), count, criterionRatio(s, p.strength[i]));
   }
   piece.cellData.push_back({"id", 1, std::move(id)});
   piece.cellData.push_back({"generation", 1, std::move(generation)});
+  piece.cellData.push_back({"velocity", 3, std::move(velocity)});
+  piece.cellData.push_back({"stress", 1, std::move(stress)});
+  piece.cellData.push_back({"strength", 1, std::move(strength)});
+  piece.cellData.push_back({"criterion_ratio", 1, std::move(ratio)});
+  if (D == 3) piece.pointData.push_back({"Normals", 3, std::move(normals)});
   piece.singlePrecisionPoints = true;
   writeVtp(file, piece, encoding);
 }
@@ -910,7 +950,7 @@ void FrameWriter<D>::write(const dynamics::World<D>& world, std::span<const doub
     writeParticleFrame<D>(f, world, stressMeasure, def_.encoding);
   });
   frame(surfaces_, outputs::kSurfaces,
-        [&](const std::filesystem::path& f) { writeSurfaceFrame<D>(f, world, cache_, def_.encoding); });
+        [&](const std::filesystem::path& f) { writeSurfaceFrame<D>(f, world, cache_, def_.encoding, stressMeasure); });
   frame(boundaries_, outputs::kBoundaries, [&](const std::filesystem::path& f) {
     // The extent: given, or the particles' bounding spheres grown by 10%.
     geometry::Box<D> extent = def_.extent;
@@ -957,9 +997,9 @@ template void writeParticleFrame<2>(const std::filesystem::path&, const dynamics
 template void writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, std::span<const double>,
                                     VtkEncoding);
 template void writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
-                                   VtkEncoding);
+                                   VtkEncoding, std::span<const double>);
 template void writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
-                                   VtkEncoding);
+                                   VtkEncoding, std::span<const double>);
 template void writeBoundaryFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
                                     const geometry::Box<2>&, VtkEncoding);
 template void writeBoundaryFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,

@@ -244,6 +244,8 @@ void checkParticleFrame() {
       EXPECT_EQ(f->pointArray("mass").f64[i], p.mass[i]);
       EXPECT_EQ(f->pointArray("stress").f64[i], stress[i]);
       EXPECT_EQ(f->pointArray("strength").f64[i], p.strength[i]);
+      // Strengths 1, 2, 3 MPa: the ratios 0.15, 0, 1.083.
+      EXPECT_DOUBLE_EQ(f->pointArray("criterion_ratio").f64[i], stress[i] / (1e6 * double(i + 1)));
       const auto& spin = f->pointArray("angular_velocity").f64;
       if constexpr (D == 2) {
         EXPECT_EQ(spin[3 * i + 2], p.angularVelocity[i]);
@@ -286,8 +288,11 @@ void checkSurfaceFrame() {
   World<D> w = smallWorld<D>();
   const Particles<D>& p = w.particles();
   io::SurfaceCache<D> cache;
-  io::writeSurfaceFrame<D>(dir / "b.vtp", w, cache, VtkEncoding::Binary);
-  io::writeSurfaceFrame<D>(dir / "a.vtp", w, cache, VtkEncoding::Ascii);
+  const std::vector<double> stress{1.5e5, 0.0, 3.25e6};
+  io::writeSurfaceFrame<D>(dir / "b.vtp", w, cache, VtkEncoding::Binary, stress);
+  io::writeSurfaceFrame<D>(dir / "a.vtp", w, cache, VtkEncoding::Ascii, stress);
+  EXPECT_THROW(io::writeSurfaceFrame<D>(dir / "x.vtp", w, cache, VtkEncoding::Binary, std::vector<double>{1.0}),
+               std::invalid_argument);
   EXPECT_EQ(cache.size(), 2u);  // two shapes for three particles
   const test::VtpFile b = test::readVtp(dir / "b.vtp");
   const test::VtpFile a = test::readVtp(dir / "a.vtp");
@@ -322,6 +327,13 @@ void checkSurfaceFrame() {
   for (std::size_t c = 0; c < cells; ++c) {
     const std::size_t i = index.at(b.cellArray("id").u64[c]);
     EXPECT_EQ(b.cellArray("generation").i32[c], p.generation[i]);
+    // The particle's fields on each of its cells.
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(b.cellArray("velocity").f64[3 * c + std::size_t(a)], a < D ? p.velocity[i][a] : 0.0);
+    }
+    EXPECT_EQ(b.cellArray("stress").f64[c], stress[i]);
+    EXPECT_EQ(b.cellArray("strength").f64[c], p.strength[i]);
+    EXPECT_DOUBLE_EQ(b.cellArray("criterion_ratio").f64[c], stress[i] / p.strength[i]);
     const double h = p.shape[i]->grid().spacing();
     for (std::int64_t k : cellList.cell(c)) {
       const Vec<D> x = pointOf<D>(b, k);
@@ -332,6 +344,26 @@ void checkSurfaceFrame() {
     }
   }
   EXPECT_LT(worst, surfaceTolerance<D>());
+  // 3D: unit normals along the level set's gradient at each point (a step
+  // of a tenth of a cell along one raises phi by about that step).
+  if constexpr (D == 3) {
+    const auto& normals = b.pointArray("Normals");
+    ASSERT_EQ(normals.tuples(), b.points);
+    for (std::size_t c = 0; c < cells; ++c) {
+      const std::size_t i = index.at(b.cellArray("id").u64[c]);
+      const double h = p.shape[i]->grid().spacing();
+      for (std::int64_t k : cellList.cell(c)) {
+        const Vec<3> n(normals.f64[3 * std::size_t(k)], normals.f64[3 * std::size_t(k) + 1],
+                       normals.f64[3 * std::size_t(k) + 2]);
+        ASSERT_NEAR(n.norm(), 1.0, 1e-6);
+        const Vec<3> x = pointOf<3>(b, k);
+        const auto phi = [&](const Vec<3>& y) { return p.shape[i]->value(p.rotation(i).transpose() * (y - p.position[i])); };
+        EXPECT_NEAR(phi(x + 0.1 * h * n) - phi(x), 0.1 * h, 0.03 * h) << c;
+      }
+    }
+  } else {
+    EXPECT_THROW(b.pointArray("Normals"), std::runtime_error);
+  }
   // Particle 0's points are its grid-frame contour vertices, placed (to
   // Float32, as surfaces are written: 0.1 um here).
   std::vector<Vec<D>> gridVertices;

@@ -108,6 +108,7 @@ inline VtpArray toArray(const io::VtkArray& a, const std::string& text) {
         if constexpr (std::is_same_v<T, std::int64_t>) out.type = "Int64", out.i64 = v;
         if constexpr (std::is_same_v<T, std::uint64_t>) out.type = "UInt64", out.u64 = v;
         if constexpr (std::is_same_v<T, std::int32_t>) out.type = "Int32", out.i32 = v;
+        if constexpr (std::is_same_v<T, float>) out.type = "Float32", out.f64.assign(v.begin(), v.end());
       },
       a.values);
   return out;

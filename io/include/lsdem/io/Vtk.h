@@ -61,10 +61,11 @@ std::optional<VtkEncoding> encodingNamed(std::string_view name);
 
 /// One named DataArray: `components` values per tuple, tuples one after the
 /// other (x0 y0 z0 x1 y1 z1 ...). The vector's element type picks the VTK type:
-/// double -> Float64, int64 -> Int64, uint64 -> UInt64, int32 -> Int32.
+/// double -> Float64, int64 -> Int64, uint64 -> UInt64, int32 -> Int32,
+/// float -> Float32 (written only; io::readVtp reads Float32 as double).
 struct VtkArray {
   using Values = std::variant<std::vector<double>, std::vector<std::int64_t>, std::vector<std::uint64_t>,
-                              std::vector<std::int32_t>>;
+                              std::vector<std::int32_t>, std::vector<float>>;
   std::string name;    ///< array name shown in ParaView
   int components = 1;  ///< values per tuple, >= 1
   Values values;       ///< tuples x components values
@@ -121,6 +122,7 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
 template <int D>
 struct BodyContour {
   std::vector<geometry::Vec<D>> vertices;  ///< body frame, m
+  std::vector<geometry::Vec<D>> normals;   ///< 3D: outward unit normal at each vertex (the level set's gradient), body frame; 2D: empty
   std::vector<std::int64_t> connectivity;  ///< vertex indices of all cells
   std::vector<std::int64_t> offsets;       ///< end of each cell (exclusive)
 
@@ -176,11 +178,16 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
 
 /// @brief Surface frame: every particle's surface in world coordinates (body
 /// contour placed at the particle's pose: x = R x_body + position), as closed
-/// polylines in 2D and triangles in 3D. Cell data: id (UInt64), generation (Int32).
+/// polylines in 2D and triangles in 3D. Cell data, the particle's: id
+/// (UInt64), generation (Int32), velocity (3), stress, strength and
+/// criterion_ratio (as in the particle frame). 3D point data: Normals
+/// (Float32, outward unit normals from the level set's gradient, rotated with
+/// the particle), so ParaView shades the surfaces smoothly.
 /// @param cache body contours, reused across frames (pruned here).
+/// @param stressMeasure per particle criterion value (Pa), or empty (0).
 template <int D>
 void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
-                       VtkEncoding encoding);
+                       VtkEncoding encoding, std::span<const double> stressMeasure = {});
 
 /// @brief Boundary frame: planes clipped to `extent` (a segment in 2D, a
 /// polygon in 3D; a plane that misses the box is drawn as a segment / square
@@ -298,9 +305,9 @@ extern template void writeParticleFrame<2>(const std::filesystem::path&, const d
 extern template void writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&,
                                            std::span<const double>, VtkEncoding);
 extern template void writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
-                                          VtkEncoding);
+                                          VtkEncoding, std::span<const double>);
 extern template void writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
-                                          VtkEncoding);
+                                          VtkEncoding, std::span<const double>);
 extern template void writeBoundaryFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
                                            const geometry::Box<2>&, VtkEncoding);
 extern template void writeBoundaryFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
