@@ -507,6 +507,13 @@ void writeVtp(const std::filesystem::path& file, const VtpPiece& piece, VtkEncod
   if (encoding == VtkEncoding::Compressed) out += " compressor=\"vtkZLibDataCompressor\"";
   out += ">\n";
   out += "  <PolyData>\n";
+  if (piece.time) {
+    out += "    <FieldData>\n";
+    out += "      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">";
+    appendNumber(out, *piece.time);
+    out += "</DataArray>\n";
+    out += "    </FieldData>\n";
+  }
   out += "    <Piece NumberOfPoints=\"" + std::to_string(points) + "\" NumberOfVerts=\"" +
          std::to_string(piece.verts.size()) + "\" NumberOfLines=\"" + std::to_string(piece.lines.size()) +
          "\" NumberOfStrips=\"0\" NumberOfPolys=\"" + std::to_string(piece.polys.size()) + "\">\n";
@@ -669,6 +676,7 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
   piece.pointData.push_back({"stress", 1, std::move(stress)});
   piece.pointData.push_back({"strength", 1, std::move(strength)});
   piece.pointData.push_back({"criterion_ratio", 1, std::move(ratio)});
+  piece.time = world.time();
   writeVtp(file, piece, encoding);
 }
 
@@ -708,6 +716,7 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
   piece.cellData.push_back({"criterion_ratio", 1, std::move(ratio)});
   if (D == 3) piece.pointData.push_back({"Normals", 3, std::move(normals)});
   piece.singlePrecisionPoints = true;
+  piece.time = world.time();
   writeVtp(file, piece, encoding);
 }
 
@@ -755,6 +764,7 @@ void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World
   piece.cellData.push_back({"index", 1, std::move(index)});
   piece.cellData.push_back({"force", 3, std::move(force)});
   piece.singlePrecisionPoints = true;
+  piece.time = world.time();
   writeVtp(file, piece, encoding);
 }
 
@@ -813,6 +823,7 @@ void writeContactFrame(const std::filesystem::path& file, const dynamics::World<
   piece.cellData.push_back({"node_contacts", 1, std::move(nodeCount)});
   piece.cellData.push_back({"id_a", 1, std::move(idA)});
   piece.cellData.push_back({"id_b", 1, std::move(idB)});
+  piece.time = world.time();
   writeVtp(file, piece, encoding);
 }
 

@@ -596,7 +596,7 @@ VtpPiece readVtp(const std::filesystem::path& file) {
   CellBlock verts{&piece.verts, 0, 0, false, "Verts"}, lines{&piece.lines, 0, 0, false, "Lines"},
       polys{&piece.polys, 0, 0, false, "Polys"};
   // Where the DataArrays being read go.
-  enum class Section { None, PointData, CellData, Points, Cells, Skip } section = Section::None;
+  enum class Section { None, PointData, CellData, Points, Cells, FieldData, Skip } section = Section::None;
   CellBlock* block = nullptr;
   bool closed = false;
 
@@ -636,12 +636,13 @@ VtpPiece readVtp(const std::filesystem::path& file) {
       closed = true;
       break;
     }
-    if (pieces == 0 && name != "DataArray") scan.fail(tag->begin, name, "outside a <Piece>");
-    // Sections of the piece.
+    if (pieces == 0 && name != "DataArray" && name != "FieldData") scan.fail(tag->begin, name, "outside a <Piece>");
+    // Sections of the piece (field data: of the data set, before the piece, or of the piece).
     if (name == "PointData" || name == "CellData" || name == "Points" || name == "FieldData" || name == "Strips") {
       section = name == "PointData" ? Section::PointData
                 : name == "CellData" ? Section::CellData
                 : name == "Points"   ? Section::Points
+                : name == "FieldData" ? Section::FieldData
                                      : Section::Skip;
       if (tag->selfClosing) section = Section::None;
       continue;
@@ -666,6 +667,15 @@ VtpPiece readVtp(const std::filesystem::path& file) {
       continue;
     }
     VtkArray array = readDataArray(scan, *tag, encoding);
+    if (section == Section::FieldData) {
+      // The simulated time (VTK's TimeValue); other field data is not kept.
+      if (array.name == "TimeValue") {
+        const std::vector<double> t = arrayAsDoubles(array);
+        if (t.size() != 1 || !std::isfinite(t[0])) scan.fail(tag->begin, "FieldData.TimeValue", "must be one finite number");
+        piece.time = t[0];
+      }
+      continue;
+    }
     switch (section) {
       case Section::PointData: piece.pointData.push_back(std::move(array)); break;
       case Section::CellData: piece.cellData.push_back(std::move(array)); break;

@@ -226,6 +226,9 @@ void checkParticleFrame() {
                std::invalid_argument);
   const test::VtpFile b = test::readVtp(dir / "b.vtp");
   const test::VtpFile a = test::readVtp(dir / "a.vtp");
+  // The frame's simulated time, as field data.
+  EXPECT_EQ(io::readVtp(dir / "b.vtp").time, std::optional<double>(w.time()));
+  EXPECT_EQ(io::readVtp(dir / "a.vtp").time, std::optional<double>(w.time()));
   ASSERT_EQ(b.points, p.size());
   ASSERT_EQ(b.verts, p.size());
   EXPECT_EQ(b.lines + b.polys, 0u);

@@ -176,6 +176,23 @@ TEST(VtpRead, VtkStyleInlineCompressedData) {
   EXPECT_EQ(readVtp(f).points, (std::vector<double>{1, 2, 3, 4, 5, 6}));
 }
 
+TEST(VtpRead, TimeValueRoundTrips) {
+  VtpPiece written = samplePiece();
+  written.time = 0.1 + 1.0 / 3.0;
+  for (VtkEncoding e : {VtkEncoding::Compressed, VtkEncoding::Binary, VtkEncoding::Ascii}) {
+    const fs::path f = tempDir() / (std::string("time-") + encodingName(e) + ".vtp");
+    writeVtp(f, written, e);
+    const VtpPiece read = readVtp(f);
+    EXPECT_EQ(read.time, written.time);
+    expectSamePiece(read, written);
+  }
+  EXPECT_FALSE(readVtp(tempDir() / "time-ascii.vtp").points.empty());
+  // No time written, none read.
+  const fs::path plain = tempDir() / "no-time.vtp";
+  writeVtp(plain, samplePiece(), VtkEncoding::Compressed);
+  EXPECT_FALSE(readVtp(plain).time.has_value());
+}
+
 TEST(VtpRead, AsciiRoundTripIsExact) {
   const fs::path f = tempDir() / "ascii.vtp";
   const VtpPiece written = samplePiece();

@@ -98,6 +98,9 @@ struct VtpPiece {
   /// their grid's resolution (7 significant digits: 0.1 um at 1 m), half the
   /// bytes of the largest array. Particle frames keep Float64.
   bool singlePrecisionPoints = false;
+  /// The simulated time of the frame, s: written as the data set's field
+  /// data `TimeValue` (what ParaView shows for a file opened on its own).
+  std::optional<double> time;
 
   /// @brief Number of points (points.size() / 3).
   std::size_t pointCount() const { return points.size() / 3; }
