@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   lsdem::apps::addMesh2lsCommand(app);
   lsdem::apps::addPlotCommand(app);
   lsdem::apps::addRenderCommand(app);
+  lsdem::apps::addParaviewCommand(app);
   CLI::App* bench = app.add_subcommand("bench", "measured studies: accuracy and cost, stability");
   bench->require_subcommand(1);
   lsdem::apps::addStabilityBench(*bench);
