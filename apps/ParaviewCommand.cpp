@@ -12,11 +12,11 @@
 ///  3. the source tree lsdem was built from, `<source>/scripts/paraview_view.py`
 ///     (a binary run from its build folder).
 /// pvpython: the first `pvpython` on PATH, else /usr/bin/pvpython. With
-/// `--screenshot` and no display ($DISPLAY and $WAYLAND_DISPLAY unset),
+/// `--screenshot` or `--state` and no display ($DISPLAY and $WAYLAND_DISPLAY unset),
 /// pvpython runs under `xvfb-run -a` when that is installed (Debian's
 /// ParaView renders through X even offscreen).
 ///
-/// A screenshot run that pvpython aborts (SIGABRT: Debian's 5.11 under Xvfb
+/// A screenshot or state run that pvpython aborts (SIGABRT: Debian's 5.11 under Xvfb
 /// now and then fails to connect at start) is tried again, three runs at most.
 ///
 /// Exit codes: 2 when DIR is not a run folder, an option is bad, pvpython
@@ -187,7 +187,8 @@ void addParaviewCommand(CLI::App& app) {
     }
 
     std::vector<std::string> argv;
-    if (!opts->screenshot.empty() && !hasDisplay()) {
+    const bool offscreen = !opts->screenshot.empty() || !opts->state.empty();
+    if (offscreen && !hasDisplay()) {
       if (const auto xvfb = onPath("xvfb-run")) argv = {xvfb->string(), "-a"};
     }
     argv.push_back(pvpython->string());
@@ -209,7 +210,7 @@ void addParaviewCommand(CLI::App& app) {
     int code = 0;
     for (int attempt = 1; attempt <= 3; ++attempt) {
       code = runAndWait(argv);
-      if (opts->screenshot.empty() || code != 128 + SIGABRT || attempt == 3) break;
+      if (!offscreen || code != 128 + SIGABRT || attempt == 3) break;
       std::cerr << "lsdem paraview: pvpython aborted (exit " << code << "), trying again\n";
     }
     if (code != 0) throw CLI::RuntimeError(code);

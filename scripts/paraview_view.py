@@ -27,7 +27,7 @@ contacts.pvd, those that exist) and shows:
 With --screenshot it renders offscreen and writes a PNG (no window; under
 Debian's ParaView an X server is still needed: run it under `xvfb-run -a`
 when there is no display, as `lsdem paraview` does). With --state it writes a
-ParaView state file (open it with `paraview --state=FILE.pvsm`). With neither
+ParaView state file (it too needs an X server to build the view) (open it with `paraview --state=FILE.pvsm`). With neither
 it writes the state to a temporary file and starts the ParaView GUI on it.
 
 Exit codes: 0 done, 1 failed, 2 bad input (not a run folder, bad option).
@@ -138,6 +138,13 @@ def main(argv):
     files = {s: os.path.join(folder, s + ".pvd") for s in SERIES if os.path.isfile(os.path.join(folder, s + ".pvd"))}
     if not files:
         fail("%s: not a run folder (none of particles.pvd, surfaces.pvd, boundaries.pvd, contacts.pvd)" % a.dir)
+    gui = None
+    if not a.screenshot and not a.state:
+        gui = shutil.which("paraview") or ("/usr/bin/paraview" if os.access("/usr/bin/paraview", os.X_OK) else None)
+        if not gui:
+            fail("the ParaView GUI is not installed (apt-get install paraview); give --screenshot or --state")
+        if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+            fail("no display for the ParaView GUI: give --screenshot FILE.png or --state FILE.pvsm")
 
     # Imported here so that --help and bad input answer at once.
     import paraview
@@ -470,12 +477,9 @@ def main(argv):
         out = os.path.abspath(a.state)
         pv.SaveState(out)
         print("wrote %s: open it with paraview --state=%s" % (out, out))
-        return 0
-    gui = shutil.which("paraview") or ("/usr/bin/paraview" if os.access("/usr/bin/paraview", os.X_OK) else None)
-    if not gui:
-        fail("the ParaView GUI is not installed (apt-get install paraview); give --screenshot or --state")
-    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        fail("no display for the ParaView GUI: give --screenshot FILE.png or --state FILE.pvsm")
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)
     fd, state = tempfile.mkstemp(prefix="lsdem-", suffix=".pvsm")
     os.close(fd)
     pv.SaveState(state)

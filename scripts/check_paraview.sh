@@ -1,0 +1,189 @@
+#!/usr/bin/env bash
+# Checks that ParaView's own readers load every VTK file lsdem writes, and
+# that `lsdem paraview` makes a screenshot (docs/paraview.md). Needs pvpython
+# (Debian: apt-get install paraview python3-paraview xvfb); without it, says
+# so in one line and exits 0.
+#
+# Runs short 3D and 2D three-grains scenes in every frame encoding
+# ([output] vtk_format: compressed, the default, appended, binary, ascii;
+# scene copies with the key added sit beside the scene while they run and are
+# removed afterwards), then with pvpython opens every .pvd (PVDReader: one
+# time step per listed frame) and every .vtp (XMLPolyDataReader: the points
+# and cells the file's header declares, > 0 where lsdem always writes some,
+# and the arrays docs/paraview.md lists), checks that the particles' points
+# are the same in every encoding, and makes one offscreen screenshot of each
+# dimension with `lsdem paraview DIR --screenshot`.
+#
+#   bash scripts/check_paraview.sh            # build/apps/lsdem
+#   LSDEM=/path/to/lsdem bash scripts/check_paraview.sh
+set -euo pipefail
+cd "$(dirname "$0")/.."
+pvpython=$(command -v pvpython || true)
+[[ -z $pvpython && -x /usr/bin/pvpython ]] && pvpython=/usr/bin/pvpython
+if [[ -z $pvpython ]]; then
+  echo "check_paraview: pvpython is not installed (apt-get install paraview python3-paraview); skipped"
+  exit 0
+fi
+lsdem=${LSDEM:-${LSDEM_BUILD_DIR:-build}/apps/lsdem}
+[[ -x $lsdem ]] || { echo "check_paraview: $lsdem not built (cmake --build build --target lsdem)" >&2; exit 1; }
+start=$SECONDS
+
+scenes=apps/scenes/three_grains
+work=$(mktemp -d)
+copies=()
+cleanup() {
+  rm -rf "$work"
+  for c in "${copies[@]}"; do rm -f "$c"; done
+}
+trap cleanup EXIT
+
+# run NAME DIM FORMAT STEPS: the scene, with vtk_format = FORMAT under [output], into $work/NAME.
+run() {
+  local name=$1 dim=$2 format=$3 steps=$4
+  local scene=$scenes/three_grains_${dim}.toml
+  if [[ $format != compressed ]]; then
+    local copy=$scenes/.check_paraview_$$_${name}.toml
+    copies+=("$copy")
+    awk -v f="$format" '{ print } /^\[output\][[:space:]]*$/ { print "vtk_format = \"" f "\"" }' "$scene" >"$copy"
+    grep -q "^vtk_format = \"$format\"" "$copy" || { echo "check_paraview: no [output] in $scene" >&2; exit 1; }
+    scene=$copy
+  fi
+  local args=(run "$scene" --out "$work/$name" --threads 1 -q)
+  [[ $steps == all ]] || args+=(--steps "$steps")
+  "$lsdem" "${args[@]}"
+}
+run 3d-compressed 3d compressed 3000
+run 3d-ascii 3d ascii 3000
+run 2d-compressed 2d compressed all
+run 2d-binary 2d binary 6000
+run 2d-appended 2d appended 6000
+run 2d-ascii 2d ascii 6000
+for c in "${copies[@]}"; do rm -f "$c"; done
+copies=()
+echo "check_paraview: runs done ($((SECONDS - start)) s)"
+
+status=0
+"$pvpython" - "$work" >"$work/read.log" 2>&1 <<'PY' || status=$?
+import glob, os, re, sys
+from paraview import servermanager as sm
+import paraview.simple as pv
+
+work = sys.argv[1]
+# The arrays docs/paraview.md lists, per series: (point data, cell data).
+ARRAYS = {
+    "particles": (["id", "parent_id", "generation", "radius", "equivalent_diameter", "mass", "velocity",
+                   "angular_velocity", "orientation", "axis_x", "axis_y", "axis_z", "stress", "strength"], []),
+    "surfaces": ([], ["id", "generation"]),
+    "boundaries": ([], ["kind", "index", "force"]),
+    "contacts": (["id", "force_magnitude", "normal_force"],
+                 ["force", "force_magnitude", "normal_force", "tangential_force", "node_contacts", "id_a", "id_b"]),
+}
+COMPONENTS = {"velocity": 3, "angular_velocity": 3, "orientation": 4, "axis_x": 3, "axis_y": 3, "axis_z": 3,
+              "force": 3}
+failures = []
+
+
+def check(ok, what):
+    if not ok:
+        failures.append(what)
+    return ok
+
+
+def header_counts(path):
+    with open(path, "rb") as f:
+        head = f.read(4096).decode("latin-1")
+    m = re.search(r'<Piece NumberOfPoints="(\d+)" NumberOfVerts="(\d+)" NumberOfLines="(\d+)" '
+                  r'NumberOfStrips="(\d+)" NumberOfPolys="(\d+)"', head)
+    return tuple(int(v) for v in m.groups()) if m else None
+
+
+totals = {}
+last_points = {}
+for run in sorted(os.listdir(work)):
+    folder = os.path.join(work, run)
+    nfiles = 0
+    contacts_cells = 0
+    for series, (pnames, cnames) in ARRAYS.items():
+        pvd = os.path.join(folder, series + ".pvd")
+        if not check(os.path.isfile(pvd), "%s: %s.pvd missing" % (run, series)):
+            continue
+        listed = re.findall(r'file="([^"]+)"', open(pvd).read())
+        r = pv.PVDReader(FileName=pvd)
+        steps = r.TimestepValues
+        steps = list(steps) if hasattr(steps, "__len__") else [steps]
+        check(len(steps) == len(listed) > 0, "%s: %s.pvd: %d time steps for %d frames" % (run, series, len(steps), len(listed)))
+        r.UpdatePipeline(steps[-1])
+        info = r.GetDataInformation()
+        last = header_counts(os.path.join(folder, listed[-1]))
+        check(last is not None and info.GetNumberOfPoints() == last[0],
+              "%s: %s.pvd at the last time: %d points, the frame says %s" % (run, series, info.GetNumberOfPoints(), last))
+        frames = sorted(glob.glob(os.path.join(folder, "frames", series + "_*.vtp")))
+        check(len(frames) == len(listed), "%s: %d %s frames on disk, %d listed" % (run, len(frames), series, len(listed)))
+        for path in frames:
+            nfiles += 1
+            name = "%s/%s" % (run, os.path.relpath(path, folder))
+            counts = header_counts(path)
+            if not check(counts is not None, name + ": no <Piece> header"):
+                continue
+            npts, nverts, nlines, nstrips, npolys = counts
+            reader = pv.XMLPolyDataReader(FileName=[path])
+            reader.UpdatePipeline()
+            data = sm.Fetch(reader)
+            check(data.GetNumberOfPoints() == npts, "%s: %d points read, %d declared" % (name, data.GetNumberOfPoints(), npts))
+            check(data.GetNumberOfCells() == nverts + nlines + nstrips + npolys,
+                  "%s: %d cells read, %d declared" % (name, data.GetNumberOfCells(), nverts + nlines + nstrips + npolys))
+            check(data.GetNumberOfVerts() == nverts and data.GetNumberOfLines() == nlines and
+                  data.GetNumberOfPolys() == npolys, "%s: cell kinds differ from the header" % name)
+            if series != "contacts":
+                check(npts > 0 and data.GetNumberOfCells() > 0, "%s: empty" % name)
+            else:
+                contacts_cells += data.GetNumberOfCells()
+            for assoc, names, fd in (("point", pnames, data.GetPointData()), ("cell", cnames, data.GetCellData())):
+                for a in names:
+                    arr = fd.GetArray(a)
+                    if not check(arr is not None, "%s: %s array %s missing" % (name, assoc, a)):
+                        continue
+                    n = npts if assoc == "point" else data.GetNumberOfCells()
+                    check(arr.GetNumberOfTuples() == n and arr.GetNumberOfComponents() == COMPONENTS.get(a, 1),
+                          "%s: %s has %d x %d values, expected %d x %d" % (name, a, arr.GetNumberOfTuples(),
+                                                                         arr.GetNumberOfComponents(), n, COMPONENTS.get(a, 1)))
+            if series == "particles" and path == frames[-1]:
+                pts = data.GetPoints()
+                last_points[run] = [pts.GetPoint(i) for i in range(npts)]
+            pv.Delete(reader)
+        pv.Delete(r)
+    if run.startswith("2d-compressed"):
+        check(contacts_cells > 0, run + ": no contact in any contacts frame")
+    totals[run] = nfiles
+    print("check_paraview: %s: %d .vtp files and 4 .pvd series read by ParaView" % (run, nfiles))
+
+# The same run in every encoding: the same particles (positions are Float64 in all).
+for dim in ("2d", "3d"):
+    runs = [r for r in last_points if r.startswith(dim) and r != dim + "-compressed"]
+    ref = dim + "-compressed" if dim == "3d" else None
+    if ref is None:  # the 2D compressed run went to the end; the others stopped at 6000 steps
+        runs = sorted(runs)
+        ref = runs.pop(0) if runs else None
+    for r in runs:
+        check(last_points[r] == last_points[ref], "%s and %s: particles' last frames differ" % (r, ref))
+
+if failures:
+    for f in failures[:30]:
+        print("check_paraview: FAIL " + f)
+    print("check_paraview: %d failures" % len(failures))
+    sys.exit(1)
+print("check_paraview: ParaView %s read all %d frames" % (sm.vtkSMProxyManager.GetParaViewSourceVersion().split()[-1],
+                                                         sum(totals.values())))
+PY
+grep -v '^[[:space:]]*$' "$work/read.log" || true
+[[ $status -eq 0 ]] || { echo "check_paraview: ParaView could not read lsdem's files (pvpython exit $status)" >&2; exit 1; }
+
+# One screenshot per dimension through `lsdem paraview` (offscreen).
+for run in 3d-compressed 2d-compressed; do
+  png=$work/$run.png
+  "$lsdem" paraview "$work/$run" --screenshot "$png" --size 600x400 2>&1 | grep -E '^(wrote|lsdem)' || true
+  [[ -s $png ]] || { echo "check_paraview: lsdem paraview wrote no screenshot of $run" >&2; exit 1; }
+  size=$(python3 -c 'import struct,sys; d=open(sys.argv[1],"rb").read(24); assert d[:8]==b"\x89PNG\r\n\x1a\n"; print("%dx%d" % struct.unpack(">II", d[16:24]))' "$png")
+  [[ $size == 600x400 ]] || { echo "check_paraview: $run screenshot is $size, not 600x400" >&2; exit 1; }
+done
+echo "check_paraview: passed in $((SECONDS - start)) s"
