@@ -17,7 +17,7 @@
 /// ParaView renders through X even offscreen).
 ///
 /// A screenshot or state run that pvpython aborts (SIGABRT: Debian's 5.11 under Xvfb
-/// now and then fails to connect at start) is tried again, three runs at most.
+/// now and then fails to connect at start) is tried again, five runs at most.
 ///
 /// Exit codes: 2 when DIR is not a run folder, an option is bad, pvpython
 /// (or the script) is not installed; otherwise pvpython's own exit code
@@ -206,11 +206,11 @@ void addParaviewCommand(CLI::App& app) {
     if (!opts->color.empty()) argv.insert(argv.end(), {"--color", opts->color});
     // Debian's ParaView 5.11 under Xvfb now and then aborts at start ("bad X
     // server connection", SIGABRT; about one run in eight on the machine it was
-    // checked on) before it has done anything: a screenshot is tried up to three times.
+    // checked on) before it has done anything: a screenshot or state is tried up to five times.
     int code = 0;
-    for (int attempt = 1; attempt <= 3; ++attempt) {
+    for (int attempt = 1; attempt <= 5; ++attempt) {
       code = runAndWait(argv);
-      if (!offscreen || code != 128 + SIGABRT || attempt == 3) break;
+      if (!offscreen || code != 128 + SIGABRT || attempt == 5) break;
       std::cerr << "lsdem paraview: pvpython aborted (exit " << code << "), trying again\n";
     }
     if (code != 0) throw CLI::RuntimeError(code);

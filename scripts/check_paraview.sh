@@ -99,7 +99,7 @@ def header_counts(path):
 
 totals = {}
 last_points = {}
-for run in sorted(os.listdir(work)):
+for run in sorted(d for d in os.listdir(work) if os.path.isdir(os.path.join(work, d))):
     folder = os.path.join(work, run)
     nfiles = 0
     contacts_cells = 0
