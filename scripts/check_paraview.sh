@@ -19,8 +19,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 pvpython=$(command -v pvpython || true)
-[[ -z $pvpython && -x /usr/bin/pvpython ]] && pvpython=/usr/bin/pvpython
-if [[ -z $pvpython ]]; then
+[[ -f $pvpython && -x $pvpython ]] || pvpython=/usr/bin/pvpython
+if ! [[ -f $pvpython && -x $pvpython ]]; then
   echo "check_paraview: pvpython is not installed (apt-get install paraview python3-paraview); skipped"
   exit 0
 fi
