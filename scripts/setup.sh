@@ -11,6 +11,9 @@ packages=(
   gnuplot-nox
   python3-dev pybind11-dev python3-numpy python3-pytest
 )
+# LSDEM_PARAVIEW=1: also ParaView with its Python and a virtual display
+# (`lsdem paraview`, scripts/check_paraview.sh; about 800 MB).
+if [[ ${LSDEM_PARAVIEW:-0} == 1 ]]; then packages+=(paraview python3-paraview xvfb xauth); fi
 
 missing=()
 for p in "${packages[@]}"; do
