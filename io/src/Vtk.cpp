@@ -693,7 +693,10 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
   VtkCells& cells = D == 2 ? piece.lines : piece.polys;
   std::vector<std::uint64_t> id;
   std::vector<std::int32_t> generation;
-  std::vector<double> velocity, stress, strength, ratio;
+  // The particles' fields on their cells as Float32: for colouring (the
+  // particle frame has them in full precision), half the bytes to build and
+  // compress on surfaces of a million triangles.
+  std::vector<float> velocity, stress, strength, ratio;
   std::vector<float> normals;
   // Each particle's body contour at its pose, with the particle's fields on its cells.
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -703,10 +706,12 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
     const double s = stressMeasure.empty() ? 0.0 : stressMeasure[i];
     id.insert(id.end(), count, p.id[i]);
     generation.insert(generation.end(), count, std::int32_t(p.generation[i]));
-    for (std::size_t c = 0; c < count; ++c) push3<D>(velocity, p.velocity[i]);
-    stress.insert(stress.end(), count, s);
-    strength.insert(strength.end(), count, std::isfinite(p.strength[i]) ? p.strength[i] : -1.0);
-    ratio.insert(ratio.end(), count, criterionRatio(s, p.strength[i]));
+    const Vec<D>& v = p.velocity[i];
+    const std::array<float, 3> v3{float(v[0]), float(v[1]), D == 3 ? float(v[D - 1]) : 0.0f};
+    for (std::size_t c = 0; c < count; ++c) velocity.insert(velocity.end(), v3.begin(), v3.end());
+    stress.insert(stress.end(), count, float(s));
+    strength.insert(strength.end(), count, float(std::isfinite(p.strength[i]) ? p.strength[i] : -1.0));
+    ratio.insert(ratio.end(), count, float(criterionRatio(s, p.strength[i])));
   }
   piece.cellData.push_back({"id", 1, std::move(id)});
   piece.cellData.push_back({"generation", 1, std::move(generation)});
