@@ -182,7 +182,12 @@ void appendCompressed(std::string& out, const unsigned char* data, std::size_t b
   }
   if (failed) throw std::runtime_error("zlib could not compress a VTP array");
   std::vector<std::uint64_t> header{blocks, kCompressionBlock, bytes % kCompressionBlock};
-  for (const std::string& z : compressed) header.push_back(z.size());
+  std::size_t total = 0;
+  for (const std::string& z : compressed) {
+    header.push_back(z.size());
+    total += z.size();
+  }
+  out.reserve(out.size() + header.size() * sizeof(std::uint64_t) + total);
   out.append(reinterpret_cast<const char*>(header.data()), header.size() * sizeof(std::uint64_t));
   for (const std::string& z : compressed) out += z;
 }
@@ -447,6 +452,11 @@ void VtkCells::add(std::span<const std::int64_t> points) {
 }
 
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content) {
+  const std::string_view part(content);
+  writeFileAtomically(file, std::span<const std::string_view>(&part, 1));
+}
+
+void writeFileAtomically(const std::filesystem::path& file, std::span<const std::string_view> parts) {
   // Write the whole content to a temporary file beside the target.
   std::filesystem::path tmp = file;
   tmp += ".tmp";
@@ -459,7 +469,7 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
     // A failed write, flush or close (a full disk, a file size limit, a
     // network file system reporting late) leaves the target as it was.
     errno = 0;
-    out.write(content.data(), std::streamsize(content.size()));
+    for (const std::string_view part : parts) out.write(part.data(), std::streamsize(part.size()));
     out.flush();
     if (out) out.close();
     if (!out) {
@@ -539,9 +549,11 @@ void writeVtp(const std::filesystem::path& file, const VtpPiece& piece, VtkEncod
   out += "    </Piece>\n";
   out += "  </PolyData>\n";
   if (appended) {
+    // The XML, the appended bytes, the end: written in turn, not joined.
     out += "  <AppendedData encoding=\"raw\">\n   _";
-    out += doc.appended;
-    out += "\n  </AppendedData>\n";
+    const std::string_view parts[] = {out, doc.appended, "\n  </AppendedData>\n</VTKFile>\n"};
+    writeFileAtomically(file, parts);
+    return;
   }
   out += "</VTKFile>\n";
   writeFileAtomically(file, out);
@@ -698,6 +710,24 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
   // compress on surfaces of a million triangles.
   std::vector<float> velocity, stress, strength, ratio;
   std::vector<float> normals;
+  // Room for every point, cell and field first (a frame can hold millions).
+  std::size_t totalPoints = 0, totalCells = 0, totalIndices = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const BodyContour<D>& contour = cache.contour(p.shape[i]);
+    totalPoints += contour.vertices.size();
+    totalCells += contour.cellCount();
+    totalIndices += contour.connectivity.size();
+  }
+  piece.points.reserve(3 * totalPoints);
+  normals.reserve(D == 3 ? 3 * totalPoints : 0);
+  cells.connectivity.reserve(totalIndices);
+  cells.offsets.reserve(totalCells);
+  id.reserve(totalCells);
+  generation.reserve(totalCells);
+  velocity.reserve(3 * totalCells);
+  stress.reserve(totalCells);
+  strength.reserve(totalCells);
+  ratio.reserve(totalCells);
   // Each particle's body contour at its pose, with the particle's fields on its cells.
   for (std::size_t i = 0; i < p.size(); ++i) {
     const BodyContour<D>& contour = cache.contour(p.shape[i]);

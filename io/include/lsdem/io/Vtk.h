@@ -118,6 +118,8 @@ void writeVtp(const std::filesystem::path& file, const VtpPiece& piece, VtkEncod
 /// @brief Writes `content` to `file` atomically: to `file.tmp`, then renamed over `file`.
 /// @note Throws std::runtime_error naming the path when it cannot be written.
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content);
+/// @brief The same for content in parts, written one after the other.
+void writeFileAtomically(const std::filesystem::path& file, std::span<const std::string_view> parts);
 
 /// The zero level set of one shape in its BODY frame (origin at the centroid,
 /// principal axes), world units: closed polylines in 2D (each loop one cell
