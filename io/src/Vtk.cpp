@@ -357,6 +357,19 @@ double criterionRatio(double stress, double strength) {
   return std::isfinite(strength) && strength > 0.0 ? stress / strength : 0.0;
 }
 
+// A particle's strength as the frames show it: -1 for a grain made
+// unbreakable (infinite strength).
+double shownStrength(double strength) { return std::isfinite(strength) ? strength : -1.0; }
+
+// The frames' per-particle stress measure: empty, or one value per particle.
+void checkStressMeasure(const char* frame, std::span<const double> stressMeasure, std::size_t particles) {
+  if (!stressMeasure.empty() && stressMeasure.size() != particles) {
+    throw std::invalid_argument(std::string(frame) + " frame: stress measure has " +
+                                std::to_string(stressMeasure.size()) + " values for " + std::to_string(particles) +
+                                " particles");
+  }
+}
+
 // Orthonormal tangent basis of a 3D plane with unit normal n.
 void tangentBasis(const Vec<3>& n, Vec<3>& u, Vec<3>& v) {
   const Vec<3> helper = std::abs(n[0]) < 0.9 ? Vec<3>::UnitX() : Vec<3>::UnitY();
@@ -630,10 +643,7 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
                         std::span<const double> stressMeasure, VtkEncoding encoding) {
   const dynamics::Particles<D>& p = world.particles();
   const std::size_t n = p.size();
-  if (!stressMeasure.empty() && stressMeasure.size() != n) {
-    throw std::invalid_argument("particle frame: stress measure has " + std::to_string(stressMeasure.size()) +
-                                " values for " + std::to_string(n) + " particles");
-  }
+  checkStressMeasure("particle", stressMeasure, n);
   // Per-particle columns.
   VtpPiece piece;
   std::vector<std::uint64_t> id(n);
@@ -658,7 +668,7 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
     diameter[i] = p.shape[i]->descriptors().equivalentDiameter;
     mass[i] = p.mass[i];
     if (!stressMeasure.empty()) stress[i] = stressMeasure[i];
-    strength[i] = std::isfinite(p.strength[i]) ? p.strength[i] : -1.0;  // -1: made unbreakable
+    strength[i] = shownStrength(p.strength[i]);
     ratio[i] = criterionRatio(stress[i], p.strength[i]);
     push3<D>(velocity, p.velocity[i]);
     pushSpin<D>(spin, p.angularVelocity[i]);
@@ -696,10 +706,7 @@ template <int D>
 void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
                        VtkEncoding encoding, std::span<const double> stressMeasure) {
   const dynamics::Particles<D>& p = world.particles();
-  if (!stressMeasure.empty() && stressMeasure.size() != p.size()) {
-    throw std::invalid_argument("surface frame: stress measure has " + std::to_string(stressMeasure.size()) +
-                                " values for " + std::to_string(p.size()) + " particles");
-  }
+  checkStressMeasure("surface", stressMeasure, p.size());
   cache.prune();
   VtpPiece piece;
   VtkCells& cells = D == 2 ? piece.lines : piece.polys;
@@ -740,7 +747,7 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
     const std::array<float, 3> v3{float(v[0]), float(v[1]), D == 3 ? float(v[D - 1]) : 0.0f};
     for (std::size_t c = 0; c < count; ++c) velocity.insert(velocity.end(), v3.begin(), v3.end());
     stress.insert(stress.end(), count, float(s));
-    strength.insert(strength.end(), count, float(std::isfinite(p.strength[i]) ? p.strength[i] : -1.0));
+    strength.insert(strength.end(), count, float(shownStrength(p.strength[i])));
     ratio.insert(ratio.end(), count, float(criterionRatio(s, p.strength[i])));
   }
   piece.cellData.push_back({"id", 1, std::move(id)});

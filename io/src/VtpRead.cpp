@@ -315,9 +315,9 @@ std::uint64_t headerWord(std::string_view bytes, std::size_t at, bool header64) 
 
 // The raw bytes of a compressed array at the start of `bytes` (VTK's layout:
 // header [blocks, block size, last block's size (0: full), compressed size
-// of each block], then the zlib streams); sets `used` to the bytes it took.
-// nullopt and `problem` when the data is inconsistent.
-std::optional<std::string> decompress(std::string_view bytes, bool header64, std::size_t& used, std::string& problem) {
+// of each block], then the zlib streams). nullopt and `problem` when the
+// data is inconsistent.
+std::optional<std::string> decompress(std::string_view bytes, bool header64, std::string& problem) {
   const std::size_t word = header64 ? 8 : 4;
   if (bytes.size() < 3 * word) {
     problem = "the compressed data has no header";
@@ -352,7 +352,6 @@ std::optional<std::string> decompress(std::string_view bytes, bool header64, std
     }
     at += std::size_t(size);
   }
-  used = at;
   return out;
 }
 
@@ -386,9 +385,9 @@ VtkArray readDataArray(TagScanner& scan, const Tag& tag, const Encoding& encodin
     }
     return std::string(data.substr(headerSize, std::size_t(count)));
   };
-  const auto compressed = [&](std::string_view data, std::size_t& used) {
+  const auto compressed = [&](std::string_view data) {
     std::string problem;
-    std::optional<std::string> raw = decompress(data, encoding.header64, used, problem);
+    std::optional<std::string> raw = decompress(data, encoding.header64, problem);
     if (!raw) scan.fail(tag.begin, key, problem);
     return std::move(*raw);
   };
@@ -400,8 +399,7 @@ VtkArray readDataArray(TagScanner& scan, const Tag& tag, const Encoding& encodin
       scan.fail(tag.begin, key + ".offset", std::to_string(offset) + " is past the end of the appended data");
     }
     const std::string_view data = encoding.appended.substr(std::size_t(offset));
-    std::size_t used = 0;
-    bytes = encoding.compressed ? compressed(data, used) : counted(data);
+    bytes = encoding.compressed ? compressed(data) : counted(data);
     if (!tag.selfClosing) {
       // <DataArray ...></DataArray> with nothing between.
       scan.content();
@@ -447,8 +445,7 @@ VtkArray readDataArray(TagScanner& scan, const Tag& tag, const Encoding& encodin
       if (symbols.size() < headerSymbols) scan.fail(tag.begin, key, "the compressed data has no header");
       std::string all = decoded(std::string_view(symbols).substr(0, headerSymbols));
       all += decoded(std::string_view(symbols).substr(headerSymbols));
-      std::size_t used = 0;
-      bytes = compressed(all, used);
+      bytes = compressed(all);
     }
   }
   if (format != "ascii") {
@@ -659,7 +656,7 @@ VtpPiece readVtp(const std::filesystem::path& file) {
     // One DataArray, filed by its section.
     if (section == Section::None) scan.fail(tag->begin, "DataArray", "outside PointData, CellData, Points or cells");
     if (section == Section::Skip) {
-      // Field data and strips: skip the content and the closing tag.
+      // Strips: skip the content and the closing tag.
       if (!tag->selfClosing) {
         scan.content();
         scan.next();
