@@ -98,6 +98,14 @@ auto visitDef(const SceneHandle& s, F&& f) {
   return std::visit(std::forward<F>(f), *s.def);
 }
 
+// The names of a scene's planes or tools, in order.
+template <class Range>
+std::vector<std::string> namesOf(const Range& items) {
+  std::vector<std::string> names;
+  for (const auto& item : items) names.push_back(item.name);
+  return names;
+}
+
 }  // namespace
 
 std::string tomlText(const py::dict& scene) {
@@ -177,23 +185,11 @@ ones or a `path` beside them. Errors name that file's lines.)doc")
           "Material names; a particle's material is its index here.")
       .def_property_readonly(
           "planes",
-          [](const SceneHandle& s) {
-            return visitDef(s, [](const auto& d) {
-              std::vector<std::string> names;
-              for (const auto& p : d.planes) names.push_back(p.name);
-              return names;
-            });
-          },
+          [](const SceneHandle& s) { return visitDef(s, [](const auto& d) { return namesOf(d.planes); }); },
           "Names of the planes, in order.")
       .def_property_readonly(
           "tools",
-          [](const SceneHandle& s) {
-            return visitDef(s, [](const auto& d) {
-              std::vector<std::string> names;
-              for (const auto& t : d.tools) names.push_back(t.name);
-              return names;
-            });
-          },
+          [](const SceneHandle& s) { return visitDef(s, [](const auto& d) { return namesOf(d.tools); }); },
           "Names of the tools, in order.")
       .def_property_readonly(
           "has_breakage",

@@ -87,6 +87,12 @@ void putVec(double* out, const Vec<D>& v) {
   for (int k = 0; k < D; ++k) out[k] = v[k];
 }
 
+// A vector as a Python list of its D components.
+template <int D>
+std::vector<double> listOf(const Vec<D>& v) {
+  return std::vector<double>(v.data(), v.data() + D);
+}
+
 template <int D>
 constexpr int spinSize() {
   return D == 2 ? 1 : 3;
@@ -419,14 +425,14 @@ class SimulationOf final : public Simulation {
       d["strength"] = e.strength;
       d["manual"] = e.manual;
       d["buckling"] = e.buckling;
-      d["plane_normal"] = std::vector<double>(e.planeNormal.data(), e.planeNormal.data() + D);
+      d["plane_normal"] = listOf<D>(e.planeNormal);
       d["plane_offset"] = e.planeOffset;
       d["child_volumes"] = e.childVolumes;
       d["fines_volumes"] = e.finesVolumes;
       d["parent_mass"] = e.parentMass;
       d["fragment_mass"] = e.fragmentMass;
-      d["parent_momentum"] = std::vector<double>(e.parentMomentum.data(), e.parentMomentum.data() + D);
-      d["fragment_momentum"] = std::vector<double>(e.fragmentMomentum.data(), e.fragmentMomentum.data() + D);
+      d["parent_momentum"] = listOf<D>(e.parentMomentum);
+      d["fragment_momentum"] = listOf<D>(e.fragmentMomentum);
       d["parent_kinetic_energy"] = e.parentKineticEnergy;
       d["fragment_kinetic_energy"] = e.fragmentKineticEnergy;
       d["parent_spring_energy"] = e.parentSpringEnergy;
