@@ -1,0 +1,217 @@
+/// @file Checkpoint.cpp
+/// @brief The checkpoint file (Checkpoint.h).
+
+#include "run/Checkpoint.h"
+
+#include "Checksum.h"
+#include "OutputNames.h"
+
+#include "lsdem/io/GrainFile.h"
+#include "lsdem/io/InputError.h"
+#include "lsdem/io/Vtk.h"
+
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+
+namespace lsdem::io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char kMagic[8] = {'L', 'S', 'D', 'E', 'M', 'C', 'K', 'P'};
+// 2: a CRC-32 of everything before it closes the file.
+// 3: the run's state is its basis and one section per recorder.
+constexpr std::uint32_t kVersion = 3;
+
+// A checkpoint's bytes, its magic, format version and CRC-32 checked, the
+// checksum removed.
+std::string readCheckpointFile(const std::string& path) {
+  std::string bytes = readWholeFile(path);
+  if (bytes.size() < 8 || std::memcmp(bytes.data(), kMagic, 8) != 0) {
+    throw InputError(path, 0, "", "not an lsdem checkpoint");
+  }
+  if (bytes.size() < 8 + 4 + 4) throw InputError(path, 0, "", "truncated checkpoint");
+  std::uint32_t version = 0;
+  std::memcpy(&version, bytes.data() + 8, 4);
+  if (version != kVersion) {
+    throw InputError(path, 0, "", "checkpoint of another lsdem version (format " + std::to_string(version) +
+                                      ", this lsdem reads " + std::to_string(kVersion) + ")");
+  }
+  std::uint32_t stored = 0;
+  std::memcpy(&stored, bytes.data() + bytes.size() - 4, 4);
+  if (crc32Of(bytes.data(), bytes.size() - 4) != stored) {
+    throw InputError(path, 0, "",
+                     "damaged checkpoint: its checksum does not match its contents (a partial copy, a bit flip or an edit)");
+  }
+  bytes.resize(bytes.size() - 4);
+  return bytes;
+}
+
+// Reads a checkpoint's fields in order; a field past the end is an InputError.
+class Fields {
+ public:
+  Fields(const std::string& bytes, std::string path) : bytes_(bytes), path_(std::move(path)) {}
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(path_, 0, "", what); }
+  const char* take(std::size_t n) {
+    if (n > bytes_.size() - pos_) fail("truncated checkpoint");
+    const char* p = bytes_.data() + pos_;
+    pos_ += n;
+    return p;
+  }
+  template <class T>
+  T get() {
+    T v;
+    std::memcpy(&v, take(sizeof(T)), sizeof(T));
+    return v;
+  }
+  std::string getBytes() {
+    const std::uint64_t n = get<std::uint64_t>();
+    if (n > bytes_.size() - pos_) fail("truncated checkpoint");
+    const char* p = take(std::size_t(n));
+    return std::string(p, std::size_t(n));
+  }
+
+ private:
+  const std::string& bytes_;
+  std::string path_;
+  std::size_t pos_ = 0;
+};
+
+}  // namespace
+
+std::uint64_t sceneHash(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;  // FNV-1a
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+  return h;
+}
+
+std::string readWholeFile(const std::string& path, bool mustExist) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in && !mustExist) return {};
+  if (!in) throw InputError(path, 0, "", "cannot read the file");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+template <int D>
+void writeCheckpoint(const fs::path& file, const std::string& scenePath, std::uint64_t hash,
+                     const dynamics::World<D>& world, const std::string& runState) {
+  // World state, numbering the particles' shapes as they come.
+  std::map<const geometry::Shape<D>*, std::uint32_t> index;
+  std::vector<const geometry::Shape<D>*> shapes;
+  dynamics::StateWriter state;
+  world.saveState(state, [&](const std::shared_ptr<const geometry::Shape<D>>& s) {
+    const auto [it, added] = index.emplace(s.get(), std::uint32_t(shapes.size()));
+    if (added) shapes.push_back(s.get());
+    return it->second;
+  });
+  std::ostringstream out(std::ios::binary);
+  out.write(kMagic, 8);
+  const auto put = [&](const auto& v) { out.write(reinterpret_cast<const char*>(&v), sizeof(v)); };
+  const auto putBytes = [&](std::string_view b) {
+    put(std::uint64_t(b.size()));
+    out.write(b.data(), std::streamsize(b.size()));
+  };
+  put(kVersion);
+  put(std::int32_t(D));
+  putBytes(fs::absolute(scenePath).string());
+  put(hash);
+  put(std::uint64_t(shapes.size()));
+  for (const geometry::Shape<D>* s : shapes) {
+    std::ostringstream g(std::ios::binary);
+    writeGrain<D>(g, *s, GrainFormat::Binary);
+    putBytes(g.str());
+  }
+  putBytes(std::string_view(state.bytes().data(), state.bytes().size()));
+  putBytes(runState);
+  std::string bytes = out.str();
+  const std::uint32_t crc = crc32Of(bytes.data(), bytes.size());
+  bytes.append(reinterpret_cast<const char*>(&crc), 4);
+  writeFileAtomically(file, bytes);
+}
+
+template <int D>
+std::string loadCheckpoint(const fs::path& file, dynamics::World<D>& world) {
+  const std::string path = file.string();
+  const std::string bytes = readCheckpointFile(path);
+  Fields in(bytes, path);
+  in.take(8);
+  in.get<std::uint32_t>();  // the version, checked by readCheckpointFile
+  if (in.get<std::int32_t>() != D) in.fail("checkpoint of another dimension");
+  in.getBytes();  // scene path, read by resumeScene
+  in.get<std::uint64_t>();
+  std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes(std::size_t(in.get<std::uint64_t>()));
+  for (auto& s : shapes) {
+    std::istringstream g(in.getBytes(), std::ios::binary);
+    s = readGrain<D>(g, path);
+  }
+  const std::string state = in.getBytes();
+  std::string runState = in.getBytes();
+  try {
+    dynamics::StateReader r(state.data(), state.size());
+    world.loadState(r, [&](std::uint32_t k) {
+      if (k >= shapes.size()) throw std::runtime_error("shape " + std::to_string(k) + " is not in the checkpoint");
+      return shapes[k];
+    });
+  } catch (const std::runtime_error& e) {
+    if (dynamic_cast<const InputError*>(&e)) throw;
+    in.fail(e.what());
+  }
+  return runState;
+}
+
+std::string resumeScene(const RunOptions& options) {
+  const std::string& dir = options.resumeDir;
+  const std::string path = (fs::path(dir) / outputs::kCheckpoint).string();
+  if (!fs::exists(path)) throw InputError(path, 0, "", "no checkpoint to resume from (is this a run's output folder?)");
+  const std::string bytes = readCheckpointFile(path);
+  Fields in(bytes, path);
+  in.take(8 + 4 + 4);
+  const std::string named = in.getBytes();
+  const std::uint64_t hash = in.get<std::uint64_t>();
+
+  const fs::path copy = fs::path(dir) / "scene.toml";
+  const bool haveCopy = fs::exists(copy);
+  const bool copyMatches = haveCopy && sceneHash(readWholeFile(copy.string())) == hash;
+  std::string scene = options.scene;
+  if (scene.empty()) {
+    if (fs::exists(named)) {
+      scene = named;
+    } else if (haveCopy) {
+      scene = copy.string();
+    } else {
+      throw InputError(path, 0, "", "its scene file " + named + " no longer exists (nor does a copy in " + dir + ")");
+    }
+  }
+  std::optional<InputError> mismatch;
+  if (haveCopy && !copyMatches) {
+    mismatch.emplace(path, 0, "",
+                     "written by a run of another scene than " + copy.string() +
+                         " (a checkpoint copied from another run, or an edited copy)");
+  } else if (sceneHash(readWholeFile(scene)) != hash) {
+    mismatch.emplace(scene, 0, "",
+                     options.scene.empty()
+                         ? "the scene file changed since the checkpoint in " + dir + " was written"
+                         : "not the scene of the run in " + dir + " (its checkpoint names " + named + ")");
+  }
+  if (!mismatch) return scene;
+  if (!options.force) {
+    throw InputError(mismatch->file(), 0, "", mismatch->problem() + "; give --force to resume with it anyway");
+  }
+  if (options.note) options.note(std::string(mismatch->what()) + ": resumed with " + scene + " anyway (--force)");
+  return scene;
+}
+
+template void writeCheckpoint<2>(const fs::path&, const std::string&, std::uint64_t, const dynamics::World<2>&,
+                                 const std::string&);
+template void writeCheckpoint<3>(const fs::path&, const std::string&, std::uint64_t, const dynamics::World<3>&,
+                                 const std::string&);
+template std::string loadCheckpoint<2>(const fs::path&, dynamics::World<2>&);
+template std::string loadCheckpoint<3>(const fs::path&, dynamics::World<3>&);
+
+}  // namespace lsdem::io

@@ -1,0 +1,51 @@
+#pragma once
+/// @file Checkpoint.h
+/// @brief The checkpoint file of a run, `checkpoint.lsc` (internal to io;
+/// docs/reliability.md): magic, format version, dimension, the scene's path
+/// and hash, the particles' shapes (binary grain files), the world's state,
+/// the run's own state (its basis, every recorder's and schedule's), and a
+/// CRC-32 of all of it.
+
+#include "lsdem/dynamics/World.h"
+#include "lsdem/io/Run.h"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace lsdem::io {
+
+/// @brief A hash of a scene file's text: the run's identity in its checkpoints.
+std::uint64_t sceneHash(const std::string& text);
+
+/// @brief A file's bytes; a file that cannot be read is an InputError, or
+/// empty when it need not exist.
+std::string readWholeFile(const std::string& path, bool mustExist = true);
+
+/// @brief Writes the checkpoint of `world` and the run's state `runState` to
+/// `file`, atomically.
+template <int D>
+void writeCheckpoint(const std::filesystem::path& file, const std::string& scenePath, std::uint64_t hash,
+                     const dynamics::World<D>& world, const std::string& runState);
+
+/// @brief Restores `world` from the checkpoint `file` and returns the run's
+/// state as writeCheckpoint took it.
+/// @note Throws InputError naming the file when it is not a checkpoint of
+/// this lsdem and dimension, or is damaged.
+template <int D>
+std::string loadCheckpoint(const std::filesystem::path& file, dynamics::World<D>& world);
+
+/// @brief The scene a resumed run uses: the one given, else the one the
+/// checkpoint names, else (it moved) the copy in the output folder. It must be
+/// the checkpoint's scene, and the folder's copy too (a checkpoint copied in
+/// from another run is not this folder's), unless `options.force`.
+std::string resumeScene(const RunOptions& options);
+
+extern template void writeCheckpoint<2>(const std::filesystem::path&, const std::string&, std::uint64_t,
+                                        const dynamics::World<2>&, const std::string&);
+extern template void writeCheckpoint<3>(const std::filesystem::path&, const std::string&, std::uint64_t,
+                                        const dynamics::World<3>&, const std::string&);
+extern template std::string loadCheckpoint<2>(const std::filesystem::path&, dynamics::World<2>&);
+extern template std::string loadCheckpoint<3>(const std::filesystem::path&, dynamics::World<3>&);
+
+}  // namespace lsdem::io
