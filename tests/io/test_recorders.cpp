@@ -1,0 +1,272 @@
+// The run's parts one at a time (io/src/run): the Schedule every recorder and
+// the checkpoints share, and each recorder's file, record, checkpointed state
+// and resume.
+
+#include "support/Files.h"
+#include "lsdem/io/InputError.h"
+#include "lsdem/io/Scene.h"
+#include "run/BreakageLogRecorder.h"
+#include "run/DistributionRecorder.h"
+#include "run/FrameRecorder.h"
+#include "run/HistoryRecorder.h"
+#include "run/RemovedLog.h"
+#include "run/Schedule.h"
+#include "run/SummaryRecorder.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+using namespace lsdem;
+using namespace lsdem::io;
+namespace fs = std::filesystem;
+using lsdem::test::readFile;
+
+namespace {
+
+// Four discs on a floor between walls, pressed by a platen: a specimen.
+const char* kScene = R"(
+[simulation]
+dimension = 2
+steps = 400
+dt = 2e-6
+
+[contact]
+kn = 2e5
+
+[materials.rock]
+density = 2650.0
+
+[shapes.disc]
+kind = "circle"
+radius = 0.001
+cells_across = 12
+
+[[particles]]
+shape = "disc"
+material = "rock"
+positions = [[0.001, 0.001], [0.003, 0.001], [0.005, 0.001], [0.007, 0.001]]
+
+[[planes]]
+name = "floor"
+point = [0.0, 0.0]
+normal = [0.0, 1.0]
+
+[[planes]]
+name = "platen"
+point = [0.0, 0.0021]
+normal = [0.0, -1.0]
+velocity = [0.0, -0.5]
+
+[output]
+frames = 4
+
+[output.specimen]
+top = "platen"
+bottom = "floor"
+width = 0.008
+)";
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream s(text);
+  for (std::string l; std::getline(s, l);) out.push_back(l);
+  return out;
+}
+
+std::size_t cells(const std::string& line) { return std::size_t(std::count(line.begin(), line.end(), ',')) + 1; }
+
+// A scene, its world and a run context writing into a scratch folder.
+struct Run2 {
+  fs::path dir;
+  SceneDef<2> scene;
+  SceneWorld<2> sw;
+  RunContext<2> context;
+
+  explicit Run2(const std::string& name)
+      : dir(lsdem::test::tempPath("recorders_" + name)),
+        scene(read(dir)),
+        sw(buildWorld(scene)),
+        context{scene, sw, dir, {sw.initialMass, 0.0021}, std::chrono::steady_clock::now(), false, {}} {}
+
+  static SceneDef<2> read(const fs::path& dir) {
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::ofstream(dir / "scene.toml") << kScene;
+    return std::get<SceneDef<2>>(readScene((dir / "scene.toml").string()));
+  }
+  Instant now() const { return {sw.world->time(), sw.world->steps(), double(sw.world->steps())}; }
+  void steps(int n) {
+    for (int k = 0; k < n; ++k) sw.world->step();
+  }
+};
+
+// The state a recorder saves, read back as a checkpoint would.
+template <class R>
+std::vector<char> saved(R& r) {
+  dynamics::StateWriter w;
+  r.save(w);
+  return w.bytes();
+}
+
+}  // namespace
+
+TEST(Schedule, EveryIntervalIsDueOnceAtEachMultiple) {
+  Schedule s = Schedule::every(10.0);
+  int served = 0;
+  for (std::uint64_t step = 0; step <= 100; ++step) {
+    const Instant now{0.0, step, double(step)};
+    if (s.due(now)) ++served;
+    s.advance(now);
+  }
+  EXPECT_EQ(served, 11);  // 0, 10, ..., 100
+  EXPECT_FALSE(Schedule().due({1.0, 1, 1.0}));
+  EXPECT_TRUE(Schedule::everyStep().due({1.0, 1, 1.0}));
+}
+
+TEST(Schedule, IntervalsFarBelowTheClockStepStayBounded) {
+  Schedule s = Schedule::every(1e-30);
+  const Instant now{1.0, 1, 1.0};
+  EXPECT_TRUE(s.due(now));
+  s.advance(now);  // returns at once, past the clock
+  EXPECT_FALSE(s.due(now));
+  EXPECT_TRUE(s.due({1.0 + 1e-9, 2, 1.0 + 1e-9}));
+}
+
+TEST(Schedule, ListedTimesAreDueOnceEachAndResumeWhereTheyWere) {
+  Schedule s = Schedule::at({0.5, 1.0, 1.0000001, 2.0});
+  EXPECT_FALSE(s.due({0.4, 4, 0.4}));
+  EXPECT_TRUE(s.due({0.5, 5, 0.5}));
+  s.advance({0.5, 5, 0.5});
+  EXPECT_FALSE(s.due({0.6, 6, 0.6}));
+  // Two times within one step: one record, both served.
+  EXPECT_TRUE(s.due({1.1, 11, 1.1}));
+  s.advance({1.1, 11, 1.1});
+  dynamics::StateWriter w;
+  s.save(w);
+  Schedule r = Schedule::at({0.5, 1.0, 1.0000001, 2.0});
+  dynamics::StateReader in(w.bytes().data(), w.bytes().size());
+  r.load(in);
+  EXPECT_FALSE(r.due({1.9, 19, 1.9}));
+  EXPECT_TRUE(r.due({2.0, 20, 2.0}));
+}
+
+TEST(Recorders, HistoryRowsMatchTheHeaderAndTheSpecimen) {
+  Run2 run("history");
+  HistoryRecorder<2> h(Schedule::every(100.0), run.context);
+  h.create();
+  h.record(*run.sw.world, run.now());
+  run.steps(200);
+  h.record(*run.sw.world, run.now());
+  const std::vector<std::string> rows = lines(readFile(run.dir / "history.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_NE(rows[0].find("floor_force_y_N"), std::string::npos);
+  EXPECT_NE(rows[0].find(",height_m,stress_Pa,strain,void_ratio"), std::string::npos);
+  for (const std::string& r : rows) EXPECT_EQ(cells(r), cells(rows[0])) << r;
+  EXPECT_EQ(rows[2].substr(0, 4), "200,");
+  // The platen moved 200 steps x 2e-6 s x 0.5 m/s = 0.2 mm down from 2.1 mm.
+  std::vector<std::string> c;
+  std::stringstream s(rows[2]);
+  for (std::string x; std::getline(s, x, ',');) c.push_back(x);
+  const double height = std::stod(c[c.size() - 4]), strain = std::stod(c[c.size() - 2]);
+  EXPECT_NEAR(height, 0.0021 - 2e-4, 1e-12);
+  EXPECT_NEAR(strain, 2e-4 / 0.0021, 1e-9);
+}
+
+TEST(Recorders, DistributionsEndAtAllTheMassAndWriteNoProductWithoutOutflow) {
+  Run2 run("distributions");
+  DistributionRecorder<2> d(Schedule(), run.context);
+  d.create();
+  d.record(*run.sw.world, run.now());
+  d.finish(*run.sw.world, run.now());  // at the same instant: no second record
+  const std::vector<std::string> psd = lines(readFile(run.dir / "psd.csv"));
+  ASSERT_EQ(psd.size(), 5u);  // the header, four discs
+  EXPECT_EQ(psd.back().substr(psd.back().rfind(',') + 1), "100");
+  const std::vector<std::string> stats = lines(readFile(run.dir / "shape_stats.csv"));
+  ASSERT_EQ(stats.size(), 2u);
+  EXPECT_EQ(stats[1].substr(0, 4), "0,0,");  // time 0, strain 0
+  EXPECT_EQ(lines(readFile(run.dir / "shape_histograms.csv")).size(), 21u);
+  EXPECT_FALSE(fs::exists(run.dir / "product_psd.csv"));
+}
+
+TEST(Recorders, RemovedLogWritesEachRemovalOnceAcrossAResume) {
+  Run2 run("removed");
+  RemovedLog<2> log(run.context);
+  log.create();
+  run.sw.world->removeParticle(0, "outflow");
+  log.record(*run.sw.world, run.now());
+  log.record(*run.sw.world, run.now());
+  const std::vector<char> state = saved(log);  // a checkpoint after one removal
+  run.sw.world->removeParticle(0, "outflow");
+  log.record(*run.sw.world, run.now());
+  EXPECT_EQ(lines(readFile(run.dir / "removed.csv")).size(), 3u);
+  // Resumed from the checkpoint: the second row is cut, written again once.
+  RemovedLog<2> resumed(run.context);
+  dynamics::StateReader in(state.data(), state.size());
+  resumed.load(in);
+  EXPECT_EQ(lines(readFile(run.dir / "removed.csv")).size(), 3u);  // load changes nothing
+  resumed.reopen();
+  EXPECT_EQ(lines(readFile(run.dir / "removed.csv")).size(), 2u);
+  resumed.record(*run.sw.world, run.now());
+  const std::vector<std::string> rows = lines(readFile(run.dir / "removed.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[1].substr(rows[1].rfind(',') + 1), "outflow");
+  EXPECT_NE(rows[1].substr(0, rows[1].find(',')), rows[2].substr(0, rows[2].find(',')));
+}
+
+TEST(Recorders, AResumeRefusesADamagedFileBeforeChangingAny) {
+  Run2 run("damaged");
+  RemovedLog<2> log(run.context);
+  log.create();
+  const std::vector<char> state = saved(log);
+  std::ofstream(run.dir / "removed.csv") << "another,header\n";
+  RemovedLog<2> resumed(run.context);
+  dynamics::StateReader in(state.data(), state.size());
+  EXPECT_THROW(resumed.load(in), InputError);
+  EXPECT_EQ(readFile(run.dir / "removed.csv"), "another,header\n");
+}
+
+TEST(Recorders, BreakageLogWithoutBreakageHoldsItsHeaderOnly) {
+  Run2 run("breakage_log");
+  BreakageLogRecorder<2> log(run.context);
+  log.create();
+  run.steps(10);
+  log.record(*run.sw.world, run.now());
+  const std::vector<std::string> rows = lines(readFile(run.dir / "breakage_log.csv"));
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_GT(cells(rows[0]), 10u);
+}
+
+TEST(Recorders, FramesAfterTheCheckpointAreDroppedOnResume) {
+  Run2 run("frames");
+  FrameRecorder<2> frames(Schedule(), run.context);
+  frames.create();
+  frames.record(*run.sw.world, run.now());
+  run.steps(50);
+  frames.record(*run.sw.world, run.now());
+  const std::vector<char> state = saved(frames);
+  const std::string atCheckpoint = readFile(run.dir / "particles.pvd");
+  run.steps(50);
+  frames.record(*run.sw.world, run.now());
+  ASSERT_TRUE(fs::exists(run.dir / "frames/particles_000002.vtp"));
+  FrameRecorder<2> resumed(Schedule(), run.context);
+  dynamics::StateReader in(state.data(), state.size());
+  resumed.load(in);
+  resumed.reopen();
+  EXPECT_EQ(readFile(run.dir / "particles.pvd"), atCheckpoint);
+}
+
+TEST(Recorders, SummarySaysWhetherTheRunStoppedOnlyAtTheEnd) {
+  Run2 run("summary");
+  SummaryRecorder<2> summary(Schedule(), run.context);
+  summary.create();
+  run.context.stopped = true;
+  summary.record(*run.sw.world, run.now());
+  EXPECT_NE(readFile(run.dir / "summary.json").find("\"stopped_early\": false"), std::string::npos);
+  summary.finish(*run.sw.world, run.now());
+  const std::string text = readFile(run.dir / "summary.json");
+  EXPECT_NE(text.find("\"stopped_early\": true"), std::string::npos);
+  EXPECT_NE(text.find("\"relative_error\": 0"), std::string::npos);
+}
