@@ -84,6 +84,7 @@ const char* stageName(Stage s) {
     case Stage::Accumulate: return "accumulate";
     case Stage::Effects: return "effects";
     case Stage::AfterStep: return "after_step";
+    case Stage::Energy: return "energy";
     case Stage::Count: break;
   }
   return "unknown";
@@ -555,6 +556,7 @@ void World<D>::computeForces(double dtClosing) {
   // Sliding friction: capping a shear spring at the Coulomb limit took
   // energy out of it at this evaluation, booked whole (power x the solver's
   // step). At a re-evaluation between steps that drop is part of splitRelease.
+  t0 = Clock::now();
   if (dtClosing > 0.0) {
     double dashpotPower = 0.0;
     for (const PairDashpot<D>& d : contacts_.pairDashpots()) dashpotPower += d.power;
@@ -574,6 +576,7 @@ void World<D>::computeForces(double dtClosing) {
 
   // The closing half kick: velocities go from v(n+1/2) on by dt/2 a.
   if (dtClosing > 0.0) bookHalfKick(0.5 * dtClosing, 0.25 * dtClosing);
+  stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
   forcesValid_ = true;
 }
 
@@ -612,10 +615,12 @@ void World<D>::step() {
   refreshContacts();
 
   // The opening half kick books the work of the forces it applies.
+  auto t0 = Clock::now();
   bookHalfKick(0.5 * dt_, 0.25 * dt_);
+  stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
 
   // Half kick and drift.
-  auto t0 = Clock::now();
+  t0 = Clock::now();
   kickDrift(particles_, dt_);
   stageSeconds_[std::size_t(Stage::Integrate)] += secondsSince(t0);
 
@@ -643,7 +648,9 @@ void World<D>::step() {
   }
   stageSeconds_[std::size_t(Stage::AfterStep)] += secondsSince(t0);
 
+  t0 = Clock::now();
   refreshEnergy();
+  stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
   if (def_.checkFinite) checkFinite();
 }
 

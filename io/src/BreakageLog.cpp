@@ -1,18 +1,13 @@
 #include "lsdem/io/BreakageLog.h"
 
+#include "NumberText.h"
+
 #include <charconv>
 #include <cmath>
 #include <string>
 
 namespace lsdem::io {
 namespace {
-
-// Shortest round-trip text of a double.
-std::string number(double v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
-  return std::string(buf, r.ptr);
-}
 
 // Values joined by ';' in one CSV cell.
 template <class T>
@@ -21,7 +16,7 @@ std::string joined(const std::vector<T>& values) {
   for (std::size_t k = 0; k < values.size(); ++k) {
     if (k) s += ';';
     if constexpr (std::is_floating_point_v<T>) {
-      s += number(values[k]);
+      s += numberText(values[k]);
     } else {
       s += std::to_string(values[k]);
     }
@@ -43,17 +38,17 @@ void writeBreakageLogHeader(std::ostream& out) {
 template <int D>
 void writeBreakageLogRows(std::span<const breakage::BreakageEvent<D>> events, std::ostream& out) {
   for (const breakage::BreakageEvent<D>& e : events) {
-    out << number(e.time) << ',' << e.parent << ',' << joined(e.children) << ',' << number(e.criterionValue) << ','
-        << number(e.strength) << ',' << int(e.manual) << ',' << int(e.buckling);
-    for (int a = 0; a < D; ++a) out << ',' << number(e.planeNormal[a]);
-    out << ',' << number(e.planeOffset) << ',' << joined(e.childVolumes) << ',' << joined(e.finesVolumes) << ','
-        << number(e.rawVolumeError) << ',' << number(e.parentMass) << ',' << number(e.fragmentMass);
+    out << numberText(e.time) << ',' << e.parent << ',' << joined(e.children) << ',' << numberText(e.criterionValue) << ','
+        << numberText(e.strength) << ',' << int(e.manual) << ',' << int(e.buckling);
+    for (int a = 0; a < D; ++a) out << ',' << numberText(e.planeNormal[a]);
+    out << ',' << numberText(e.planeOffset) << ',' << joined(e.childVolumes) << ',' << joined(e.finesVolumes) << ','
+        << numberText(e.rawVolumeError) << ',' << numberText(e.parentMass) << ',' << numberText(e.fragmentMass);
     // The energy check (BreakageEvent::energyGain): empty cells when it was not made.
     if (std::isnan(e.parentSpringEnergy)) {
       out << ",,,\n";
     } else {
-      out << ',' << number(e.parentKineticEnergy + e.parentSpringEnergy) << ','
-          << number(e.fragmentKineticEnergy + e.fragmentSpringEnergy) << ',' << number(e.energyGain()) << '\n';
+      out << ',' << numberText(e.parentKineticEnergy + e.parentSpringEnergy) << ','
+          << numberText(e.fragmentKineticEnergy + e.fragmentSpringEnergy) << ',' << numberText(e.energyGain()) << '\n';
     }
   }
 }

@@ -7,6 +7,7 @@
 #include "lsdem/io/InputError.h"
 
 #include "Checksum.h"
+#include "NumberText.h"
 
 #include <algorithm>
 #include <bit>
@@ -58,10 +59,7 @@ std::string dimsText(const Index<D>& dims) {
 }
 
 /// The shortest text that reads back as v.
-std::string shortest(double v) {
-  char buf[64];
-  return std::string(buf, std::to_chars(buf, buf + sizeof(buf), v).ptr);
-}
+std::string shortest(double v) { return numberText(v); }
 
 // ============================================================================
 // Text form: writing
@@ -70,16 +68,8 @@ std::string shortest(double v) {
 /// Appends numbers in their shortest round-trip form.
 class TextOut {
  public:
-  void number(double v) {
-    char buf[64];
-    const auto r = std::to_chars(buf, buf + sizeof(buf), v);
-    s_.append(buf, r.ptr);
-  }
-  void number(float v) {
-    char buf[64];
-    const auto r = std::to_chars(buf, buf + sizeof(buf), v);
-    s_.append(buf, r.ptr);
-  }
+  void number(double v) { appendNumber(s_, v); }
+  void number(float v) { appendNumber(s_, v); }
   void text(std::string_view t) { s_.append(t); }
   /// A line "key n0 n1 ..." of doubles.
   template <class Range>

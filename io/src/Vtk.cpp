@@ -1,5 +1,7 @@
 #include "lsdem/io/Vtk.h"
 
+#include "NumberText.h"
+
 #include "lsdem/geometry/Contours.h"
 #include "lsdem/io/InputError.h"
 
@@ -33,21 +35,6 @@ using geometry::Vec;
 
 // ---------------------------------------------------------------------------
 // Text helpers
-
-// Shortest round-trip text of a number.
-template <class T>
-void appendNumber(std::string& out, T v) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof(buf), v);
-  out.append(buf, r.ptr);
-}
-
-template <class T>
-std::string numberText(T v) {
-  std::string s;
-  appendNumber(s, v);
-  return s;
-}
 
 // A string safe inside a double-quoted XML attribute.
 std::string xmlEscape(const std::string& s) {

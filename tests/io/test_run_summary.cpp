@@ -39,7 +39,7 @@ TEST(RunSummary, ListsDeclaredEffectsStagesAndBudget) {
   EXPECT_NE(json.find(leafOnly), std::string::npos) << json;
   EXPECT_NE(json.find("\"name\": \"gravity\""), std::string::npos);
   EXPECT_EQ(json.find("damping\""), std::string::npos);  // not declared, not listed
-  for (const char* stage : {"integrate", "broad_phase", "narrow_phase", "accumulate", "effects", "after_step"}) {
+  for (const char* stage : {"integrate", "broad_phase", "narrow_phase", "accumulate", "effects", "after_step", "energy"}) {
     EXPECT_NE(json.find(std::string("\"") + stage + "\":"), std::string::npos) << stage;
   }
   EXPECT_NE(json.find("\"relative_balance_error\""), std::string::npos);

@@ -188,8 +188,10 @@ struct Replacement {
   std::vector<std::pair<RemovedParticle, double>> fines;
 };
 
-/// Stages of the step whose wall-clock time is reported.
-enum class Stage { Integrate, Kinematics, BroadPhase, NarrowPhase, Accumulate, Effects, AfterStep, Count };
+/// Stages of the step whose wall-clock time is reported. Energy: the energy
+/// ledger's sums (work of the half kicks, dashpot and friction losses, kinetic
+/// and elastic energy), which every step books.
+enum class Stage { Integrate, Kinematics, BroadPhase, NarrowPhase, Accumulate, Effects, AfterStep, Energy, Count };
 const char* stageName(Stage s);
 
 template <int D>
