@@ -77,6 +77,8 @@ def variants(text):
             out.append((f"effect `{key}`", without_key(text, "effects", key)))
     if has_section(text, "effects.breakage"):
         out.append(("effect `breakage`", without_section(text, "effects.breakage")))
+    if has_section(text, "effects"):
+        out.append(("the energy ledger (`energy_ledger = false`)", with_key(text, "effects", "energy_ledger", "false")))
     if has_key(text, "output", "frames"):
         out.append(("ParaView frames (`frames = 0`)", with_key(text, "output", "frames", "0")))
     out.append(("history rows between first and last (`history_rows = 0`)",
@@ -90,10 +92,11 @@ def variants(text):
     for key in ("global_damping", "local_damping"):
         bare = without_key(bare, "effects", key)
     bare = without_section(bare, "effects.breakage")
+    bare = with_key(bare, "effects", "energy_ledger", "false")
     for key, value in (("frames", "0"), ("history_rows", "0"), ("distributions", "0")):
         bare = with_key(bare, "output", key, value)
     bare = without_key(without_key(bare, "output", "distribution_times"), "output", "checkpoint_every")
-    out.append(("all of the above but gravity and outflow", bare))
+    out.append(("all of the above (gravity and outflow kept)", bare))
     return out
 
 

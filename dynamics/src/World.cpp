@@ -553,10 +553,17 @@ void World<D>::computeForces(double dtClosing) {
     stageSeconds_[std::size_t(Stage::Effects)] += s;
   }
 
+  t0 = Clock::now();
+  if (def_.energyLedger) bookClosing(dtClosing);
+  stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
+  forcesValid_ = true;
+}
+
+template <int D>
+void World<D>::bookClosing(double dtClosing) {
   // Sliding friction: capping a shear spring at the Coulomb limit took
   // energy out of it at this evaluation, booked whole (power x the solver's
   // step). At a re-evaluation between steps that drop is part of splitRelease.
-  t0 = Clock::now();
   if (dtClosing > 0.0) {
     double dashpotPower = 0.0;
     for (const PairDashpot<D>& d : contacts_.pairDashpots()) dashpotPower += d.power;
@@ -576,8 +583,6 @@ void World<D>::computeForces(double dtClosing) {
 
   // The closing half kick: velocities go from v(n+1/2) on by dt/2 a.
   if (dtClosing > 0.0) bookHalfKick(0.5 * dtClosing, 0.25 * dtClosing);
-  stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
-  forcesValid_ = true;
 }
 
 template <int D>
@@ -616,7 +621,7 @@ void World<D>::step() {
 
   // The opening half kick books the work of the forces it applies.
   auto t0 = Clock::now();
-  bookHalfKick(0.5 * dt_, 0.25 * dt_);
+  if (def_.energyLedger) bookHalfKick(0.5 * dt_, 0.25 * dt_);
   stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
 
   // Half kick and drift.
@@ -649,7 +654,7 @@ void World<D>::step() {
   stageSeconds_[std::size_t(Stage::AfterStep)] += secondsSince(t0);
 
   t0 = Clock::now();
-  refreshEnergy();
+  if (def_.energyLedger) refreshEnergy();
   stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
   if (def_.checkFinite) checkFinite();
 }
@@ -796,7 +801,7 @@ void World<D>::loadState(StateReader& in,
 }
 
 template <int D>
-void World<D>::refreshEnergy() {
+void World<D>::refreshEnergy() const {
   double kt = 0.0, kr = 0.0;
   for (std::size_t i = 0; i < particles_.size(); ++i) {
     const double t = 0.5 * particles_.mass[i] * particles_.velocity[i].squaredNorm();

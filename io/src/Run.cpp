@@ -39,7 +39,10 @@ class Runner {
         context_{scene_, sw_, out, {}, Clock::now(), false, options.note} {}
 
   RunResult run(bool resume) {
-    if (options_.check) scene_.world.checkFinite = true;
+    if (options_.check) {
+      scene_.world.checkFinite = true;
+      scene_.world.energyLedger = true;  // the splits' energy check measures against the run's energy scale
+    }
     sw_ = buildWorld(scene_);
     if (options_.check && sw_.breakage) sw_.breakage->setSplitEnergyLimit(options_.splitEnergyLimit);
     World& world = *sw_.world;

@@ -73,22 +73,25 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
       .endObject();
 
   // Energy budget, J.
+  // Without the ledger ([effects] energy_ledger = false) only the energy now.
   const dynamics::EnergyLedger& e = world.energy();
   w.key("energy").beginObject()
       .field("kinetic_translational", e.kineticTranslational)
       .field("kinetic_rotational", e.kineticRotational)
-      .field("elastic", e.elastic)
-      .field("gravity_work", e.gravityWork)
-      .field("boundary_work", e.boundaryWork)
-      .field("damping_loss", e.dampingLoss)
-      .field("contact_loss", e.contactLoss)
-      .field("removed", e.removedEnergy)
-      .field("added", e.addedEnergy)
-      .field("split_release", e.splitRelease)
-      .field("initial", e.initial)
-      .field("balance_error", e.balanceError())
-      .field("relative_balance_error", e.relativeBalanceError())
-      .endObject();
+      .field("elastic", e.elastic);
+  if (world.def().energyLedger) {
+    w.field("gravity_work", e.gravityWork)
+        .field("boundary_work", e.boundaryWork)
+        .field("damping_loss", e.dampingLoss)
+        .field("contact_loss", e.contactLoss)
+        .field("removed", e.removedEnergy)
+        .field("added", e.addedEnergy)
+        .field("split_release", e.splitRelease)
+        .field("initial", e.initial)
+        .field("balance_error", e.balanceError())
+        .field("relative_balance_error", e.relativeBalanceError());
+  }
+  w.endObject();
 
   // The time step over the run and what limited it.
   const auto& changes = world.timeStepChanges();

@@ -527,6 +527,7 @@ class SceneReader {
     }
     if (r.has("local_damping")) scene_.world.localDamping = r.inRange("local_damping", 0.0, 0.999999, 0.0);
     if (r.has("outflow")) scene_.world.outflow = box<D>(r, "outflow");
+    scene_.world.energyLedger = r.boolean("energy_ledger", true);
     if (r.has("discharge")) {
       if (!scene_.world.outflow) r.fail("discharge", "needs an outflow box (the discharge classifies what leaves it)");
       scene_.world.discharge = box<D>(r, "discharge");

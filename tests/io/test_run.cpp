@@ -275,6 +275,53 @@ TEST(Run, ResumeFromAPeriodicCheckpointEqualsUninterruptedRun) {
   }
 }
 
+// Without the energy ledger the motion is the same bit for bit: every
+// output but the budget's columns is equal; the budget is left out.
+TEST(Run, TheEnergyLedgerLeftOutChangesNothingButTheBudget) {
+  TempDir dir("no_ledger");
+  std::string text = kCrushScene;
+  fs::create_directories(dir.path / "a");
+  const std::string withLedger = writeScene(dir.path / "a", text).string();
+  text.replace(text.find("[effects]\n"), 10, "[effects]\nenergy_ledger = false\n");
+  fs::create_directories(dir.path / "b");
+  const std::string without = writeScene(dir.path / "b", text).string();
+  io::RunOptions a, b;
+  a.scene = withLedger;
+  a.outDir = (dir.path / "a" / "out").string();
+  b.scene = without;
+  b.outDir = (dir.path / "b" / "out").string();
+  const io::RunResult ra = io::runScene(a), rb = io::runScene(b);
+  ASSERT_GT(ra.breakages, 0u);
+  EXPECT_EQ(ra.breakages, rb.breakages);
+  for (const char* file : {"psd.csv", "breakage_log.csv", "removed.csv", "frames/particles_000006.vtp",
+                           "frames/surfaces_000006.vtp"}) {
+    EXPECT_EQ(readFile(dir.path / "a" / "out" / file), readFile(dir.path / "b" / "out" / file)) << file;
+  }
+  const std::vector<std::string> ha = lines(readFile(dir.path / "a" / "out" / "history.csv"));
+  const std::vector<std::string> hb = lines(readFile(dir.path / "b" / "out" / "history.csv"));
+  ASSERT_EQ(ha.size(), hb.size());
+  const std::vector<std::string> header = split(ha[0]);
+  const auto column = [&](const std::string& name) {
+    return std::size_t(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  for (std::size_t r = 1; r < ha.size(); ++r) {
+    const std::vector<std::string> ca = split(ha[r]), cb = split(hb[r]);
+    ASSERT_EQ(ca.size(), cb.size());
+    for (std::size_t c = 0; c < ca.size(); ++c) {
+      const bool budget = c >= column("gravity_work_J") && c <= column("energy_error_J");
+      if (budget) {
+        EXPECT_EQ(cb[c], "") << header[c];
+      } else {
+        EXPECT_EQ(ca[c], cb[c]) << header[c] << " row " << r;
+      }
+    }
+  }
+  const std::string summary = readFile(dir.path / "b" / "out" / "summary.json");
+  EXPECT_NE(summary.find("\"kinetic_translational\""), std::string::npos);
+  EXPECT_EQ(summary.find("\"gravity_work\""), std::string::npos);
+  EXPECT_NE(readFile(dir.path / "a" / "out" / "summary.json").find("\"gravity_work\""), std::string::npos);
+}
+
 TEST(Run, ResumeRefusesAChangedSceneAndAMissingCheckpoint) {
   TempDir dir("resume_bad");
   io::RunOptions o;

@@ -56,9 +56,14 @@ void HistoryRecorder<D>::write(const World& w) {
                     std::to_string(w.contacts().pairContacts().size()) + "," +
                     std::to_string(this->context_.sw.breakage ? this->context_.sw.breakage->breakages() : 0) + "," +
                     num(w.removedMass()) + "," + num(e.kineticTranslational + e.kineticRotational) + "," +
-                    num(e.elastic) + "," + num(e.gravityWork) + "," + num(e.boundaryWork) + "," +
-                    num(e.dampingLoss) + "," + num(e.contactLoss) + "," + num(e.splitRelease) + "," +
-                    num(e.balanceError());
+                    num(e.elastic);
+  // The budget's other terms need the ledger ([effects] energy_ledger): empty cells without it.
+  if (w.def().energyLedger) {
+    row += "," + num(e.gravityWork) + "," + num(e.boundaryWork) + "," + num(e.dampingLoss) + "," +
+           num(e.contactLoss) + "," + num(e.splitRelease) + "," + num(e.balanceError());
+  } else {
+    row += ",,,,,,";
+  }
   const auto& loads = w.boundaryLoads();
   for (std::size_t k = 0; k < w.planes().size(); ++k) {
     for (int a = 0; a < D; ++a) row += "," + num(k < loads.planeForce.size() ? loads.planeForce[k][a] : 0.0);

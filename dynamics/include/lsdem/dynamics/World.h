@@ -126,6 +126,11 @@ struct WorldDef {
   /// through the discharge (reason "discharge"); the others are "outflow".
   std::optional<geometry::Box<D>> discharge;
   bool checkFinite = false;                 ///< check every state value for NaN/Inf each step (debug)
+  /// The energy ledger's per-step booking (EnergyLedger): the work of
+  /// gravity, boundaries and damping, and the contact losses. Off: only
+  /// the kinetic and elastic energy are known (computed when read), the
+  /// budget's other terms stay 0; the trajectory is the same bit for bit.
+  bool energyLedger = true;
   std::optional<DensityScalingDef> densityScaling;  ///< opt-in; absent: no particle is scaled
 };
 
@@ -283,7 +288,9 @@ class World {
   std::span<Vec<D>> forces() { return particles_.force; }
   std::span<Spin<D>> torques() { return particles_.torque; }
   /// @brief Books work done on the particles by a field force (gravity), J.
-  void addGravityWork(double joules) { energy_.gravityWork += joules; }
+  void addGravityWork(double joules) {
+    if (def_.energyLedger) energy_.gravityWork += joules;
+  }
   double time() const { return time_; }
   double dt() const { return dt_; }
   /// @brief The critical time step of the current particles (s).
@@ -314,7 +321,12 @@ class World {
   const std::vector<std::string>& planeNames() const { return planeNames_; }
   /// @brief Loads of the particles on planes and tools from the last step.
   const BoundaryLoads<D>& boundaryLoads() const { return loads_; }
-  const EnergyLedger& energy() const { return energy_; }
+  /// @brief The energy budget. Without the ledger (WorldDef::energyLedger)
+  /// its kinetic and elastic energy are computed now, its other terms are 0.
+  const EnergyLedger& energy() const {
+    if (!def_.energyLedger) refreshEnergy();
+    return energy_;
+  }
   const std::vector<RemovedParticle>& removed() const { return removed_; }
   /// @brief Names of the effects that run, in order.
   std::vector<std::string> effectNames() const;
@@ -357,7 +369,7 @@ class World {
   void scaleDensity(std::size_t i);
   /// The TimeStepLimit of particle i (its stiffness must be current).
   TimeStepLimit limitOf(std::size_t i) const;
-  void refreshEnergy();
+  void refreshEnergy() const;
 
   WorldDef<D> def_;
   Particles<D> particles_;
@@ -397,7 +409,7 @@ class World {
   double time_ = 0.0;
   std::uint64_t steps_ = 0;
   bool forcesValid_ = false;
-  EnergyLedger energy_;
+  mutable EnergyLedger energy_;  // without the ledger, a cache refreshed when read
   // The ledger's damping, dashpot and boundary work follow the trapezoid rule in
   // time. Forces evaluated at the end of a step act through the closing half
   // kick of that step and the opening half kick of the next, so each half kick
@@ -412,6 +424,8 @@ class World {
   // boundaries (on the particles).
   std::array<double, 2> lastPower_{};
   void bookHalfKick(double halfDt, double lead);
+  // The closing half of the ledger's booking after a force evaluation.
+  void bookClosing(double dtClosing);
   std::vector<RemovedParticle> removed_;
 };
 
