@@ -5,6 +5,7 @@
 #include "support/Files.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/Scene.h"
+#include "NumberText.h"
 #include "run/BreakageLogRecorder.h"
 #include "run/DistributionRecorder.h"
 #include "run/FrameRecorder.h"
@@ -110,6 +111,26 @@ std::vector<char> saved(R& r) {
   r.save(w);
   return w.bytes();
 }
+
+// The example of docs/design.md "Adding a recorder", as it stands there.
+// contacts.csv: step, time and the contacts (particle pairs, and particles on
+// planes and tools) at each record.
+template <int D>
+class ContactCount final : public Recorder<D> {
+ public:
+  using typename Recorder<D>::World;
+  ContactCount(Schedule schedule, const RunContext<D>& context)
+      : Recorder<D>("contact_count", std::move(schedule), context) {
+    file_ = this->addCsv("contacts.csv", "step,time_s,contacts");
+  }
+
+ private:
+  void write(const World& w) override {
+    this->csv(file_).row(std::to_string(w.steps()) + "," + numberText(w.time()) + "," +
+                         std::to_string(w.contacts().pairContacts().size()));
+  }
+  std::size_t file_ = 0;
+};
 
 }  // namespace
 
@@ -269,4 +290,26 @@ TEST(Recorders, SummarySaysWhetherTheRunStoppedOnlyAtTheEnd) {
   const std::string text = readFile(run.dir / "summary.json");
   EXPECT_NE(text.find("\"stopped_early\": true"), std::string::npos);
   EXPECT_NE(text.find("\"relative_error\": 0"), std::string::npos);
+}
+
+// The design page's example recorder, run the way the run loop runs it: the
+// first instant, the due ones, the last; by the end the platen presses the
+// four discs onto the floor.
+TEST(Recorders, TheDesignPagesExampleRecordsOnItsSchedule) {
+  Run2 run("example");
+  ContactCount<2> count(Schedule::every(100.0), run.context);
+  count.create();
+  count.record(*run.sw.world, run.now());
+  count.schedule().advance(run.now());
+  for (int k = 0; k < 400; ++k) {
+    run.steps(1);
+    if (count.schedule().due(run.now())) count.record(*run.sw.world, run.now());
+    count.schedule().advance(run.now());
+  }
+  count.finish(*run.sw.world, run.now());  // step 400 was recorded: no second row
+  const std::vector<std::string> rows = lines(readFile(run.dir / "contacts.csv"));
+  ASSERT_EQ(rows.size(), 6u);  // the header, steps 0, 100, 200, 300, 400
+  EXPECT_EQ(rows[1], "0,0,0");
+  EXPECT_EQ(rows[5].substr(0, 4), "400,");
+  EXPECT_EQ(rows[5].substr(rows[5].rfind(',') + 1), "8");  // four discs on the floor and under the platen
 }
