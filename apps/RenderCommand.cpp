@@ -271,31 +271,39 @@ std::optional<Frame> readFrame(const fs::path& dir, const std::string& series, c
                              "' series in [output] vtk?)");
   }
   const std::vector<io::PvdSeries::Entry> entries = io::readPvd(pvd);
-  if (entries.empty()) {
+  const std::size_t frames = io::frameCount(entries);
+  if (frames == 0) {
     if (!required) return std::nullopt;
     throw io::InputError(pvd.string(), 0, "", "lists no frames");
   }
   // The frame number: "last" or an index into the series.
-  std::size_t index = entries.size() - 1;
+  std::size_t index = frames - 1;
   if (frameText != "last") {
     std::uint64_t n = 0;
     const auto r = std::from_chars(frameText.data(), frameText.data() + frameText.size(), n);
     if (frameText.empty() || r.ec != std::errc() || r.ptr != frameText.data() + frameText.size()) {
       throw io::InputError("--frame", 0, "", "expected a frame number or 'last', got '" + frameText + "'");
     }
-    if (n >= entries.size()) {
+    if (n >= frames) {
       if (!required) return std::nullopt;
       throw io::InputError("--frame", 0, "",
                            "frame " + frameText + " does not exist; " + pvd.string() + " lists frames 0 to " +
-                               std::to_string(entries.size() - 1));
+                               std::to_string(frames - 1));
     }
     index = std::size_t(n);
   }
-  const fs::path file = dir / entries[index].file;
-  if (!fs::is_regular_file(file, ec)) {
-    throw io::InputError(pvd.string(), 0, "", "lists frame file '" + entries[index].file + "', which does not exist");
+  // The frame's parts (boundaries: the planes and each tool), joined.
+  const std::vector<io::PvdSeries::Entry> parts = io::frameEntries(entries, index);
+  std::vector<io::VtpPiece> pieces;
+  for (const io::PvdSeries::Entry& e : parts) {
+    const fs::path file = dir / e.file;
+    if (!fs::is_regular_file(file, ec)) {
+      throw io::InputError(pvd.string(), 0, "", "lists frame file '" + e.file + "', which does not exist");
+    }
+    pieces.push_back(io::readVtp(file));
   }
-  return Frame{io::readVtp(file), entries[index].time, index, entries.size()};
+  io::VtpPiece piece = pieces.size() == 1 ? std::move(pieces[0]) : io::joinPieces(pieces);
+  return Frame{std::move(piece), parts.front().time, index, frames};
 }
 
 // ---------------------------------------------------------------------------
@@ -316,8 +324,10 @@ void build2d(Picture& pic, const io::VtpPiece& surfaces, const std::string& seri
   // Boundaries: planes as thick segments, tools as grey regions.
   if (boundaries) {
     const std::vector<std::int64_t> kind = cellInts(boundaries->cellData, "kind");
+    // Planes are line cells, tools polygons (closed polylines in frames of
+    // earlier releases): cell data in VTK's order, lines before polygons.
     std::size_t c = boundaries->verts.size();
-    forEachCell(boundaries->lines, [&](std::span<const std::int64_t> ids) {
+    const auto add = [&](std::span<const std::int64_t> ids) {
       Face f;
       for (std::int64_t i : ids) f.points.push_back(xy(*boundaries, i));
       const bool plane = c < kind.size() && kind[c] == 0;
@@ -325,7 +335,9 @@ void build2d(Picture& pic, const io::VtpPiece& surfaces, const std::string& seri
       f.line = plane ? kPlaneColour : scaled(kToolColour, 0.55);
       (plane ? pic.planes : pic.faces).push_back(std::move(f));
       ++c;
-    });
+    };
+    forEachCell(boundaries->lines, add);
+    forEachCell(boundaries->polys, add);
   }
   if (series == "particles") {
     // Circles of the particles' equivalent diameters.
@@ -345,17 +357,20 @@ void build2d(Picture& pic, const io::VtpPiece& surfaces, const std::string& seri
     }
     return;
   }
-  // Surfaces: one closed loop per line cell.
+  // Surfaces: one closed loop per polygon cell (per closed line cell in
+  // frames of earlier releases).
   const std::vector<std::int64_t> id = cellInts(surfaces.cellData, "id"), gen = cellInts(surfaces.cellData, "generation");
   std::size_t c = surfaces.verts.size();
-  forEachCell(surfaces.lines, [&](std::span<const std::int64_t> ids) {
+  const auto add = [&](std::span<const std::int64_t> ids) {
     Face f;
     for (std::int64_t i : ids) f.points.push_back(xy(surfaces, i));
     f.fill = colouring.of(c < id.size() ? std::uint64_t(id[c]) : c, c < gen.size() ? gen[c] : 0);
     f.line = scaled(f.fill, 0.5);
     pic.faces.push_back(std::move(f));
     ++c;
-  });
+  };
+  forEachCell(surfaces.lines, add);
+  forEachCell(surfaces.polys, add);
 }
 
 // 3D: shaded triangles of particles and tools, plane outlines, back to front.
@@ -569,15 +584,14 @@ void render(const RenderOptions& o) {
     throw CLI::RuntimeError(3);
   }
 
-  // Dimension: 2D runs are written in z = 0 with lines for outlines.
+  // Dimension: 2D runs are written in z = 0 (3D surfaces carry normals).
   const io::VtpPiece& piece = frame.piece;
   bool flat = true;
   for (const io::VtpPiece* p : {&piece, bounds}) {
     if (!p) continue;
     for (std::size_t i = 2; i < p->points.size(); i += 3) flat = flat && p->points[i] == 0.0;
   }
-  const bool is2d = piece.polys.size() == 0 && (piece.lines.size() > 0 || flat) &&
-                    (!bounds || bounds->polys.size() == 0);
+  const bool is2d = flat && io::findArray(piece.pointData, "Normals") == nullptr;
 
   // Particles in the frame (distinct ids).
   std::set<std::int64_t> ids;

@@ -37,10 +37,11 @@ cleanup() {
 }
 trap cleanup EXIT
 
-# run NAME DIM FORMAT STEPS: the scene, with vtk_format = FORMAT under [output], into $work/NAME.
+# run NAME DIM FORMAT STEPS [SCENE]: the scene (default three grains of that
+# dimension), with vtk_format = FORMAT under [output], into $work/NAME.
 run() {
   local name=$1 dim=$2 format=$3 steps=$4
-  local scene=$scenes/three_grains_${dim}.toml
+  local scene=${5:-$scenes/three_grains_${dim}.toml}
   if [[ $format != compressed ]]; then
     local copy=$scenes/.check_paraview_$$_${name}.toml
     copies+=("$copy")
@@ -58,6 +59,9 @@ run 2d-compressed 2d compressed all
 run 2d-binary 2d binary 6000
 run 2d-appended 2d appended 6000
 run 2d-ascii 2d ascii 6000
+# Tools: the jaw crusher's moving jaw (a file per frame) beside its fixed jaw
+# (written once): boundaries.pvd frames of several parts.
+run 2d-tools 2d compressed 400 apps/scenes/jaw_crusher/jaw_crusher_css100.toml
 for c in "${copies[@]}"; do rm -f "$c"; done
 copies=()
 echo "check_paraview: runs done ($((SECONDS - start)) s)"
@@ -72,14 +76,15 @@ work = sys.argv[1]
 # The arrays docs/paraview.md lists, per series: (point data, cell data).
 ARRAYS = {
     "particles": (["id", "parent_id", "generation", "radius", "equivalent_diameter", "mass", "velocity",
-                   "angular_velocity", "orientation", "axis_x", "axis_y", "axis_z", "stress", "strength"], []),
+                   "angular_velocity", "orientation", "axis_x", "axis_y", "axis_z", "stress", "strength",
+                   "criterion_ratio", "mean_stress", "von_mises_stress", "principal_stress"], []),
     "surfaces": ([], ["id", "generation"]),
-    "boundaries": ([], ["kind", "index", "force"]),
+    "boundaries": ([], ["kind", "index"]),
     "contacts": (["id", "force_magnitude", "normal_force"],
                  ["force", "force_magnitude", "normal_force", "tangential_force", "node_contacts", "id_a", "id_b"]),
 }
 COMPONENTS = {"velocity": 3, "angular_velocity": 3, "orientation": 4, "axis_x": 3, "axis_y": 3, "axis_z": 3,
-              "force": 3}
+              "force": 3, "principal_stress": 3}
 failures = []
 
 
@@ -105,20 +110,26 @@ for run in sorted(d for d in os.listdir(work) if os.path.isdir(os.path.join(work
     contacts_cells = 0
     for series, (pnames, cnames) in ARRAYS.items():
         pvd = os.path.join(folder, series + ".pvd")
-        if not check(os.path.isfile(pvd), "%s: %s.pvd missing" % (run, series)):
-            continue
-        listed = re.findall(r'file="([^"]+)"', open(pvd).read())
+        if not os.path.isfile(pvd):
+            check(run == "2d-tools" and series == "contacts", "%s: %s.pvd missing" % (run, series))
+            continue  # the jaw crusher scene writes no contacts
+        # Entries (part, file); a part-0 entry starts a frame (boundaries: the
+        # planes, then one part per tool; a file can be named by many frames).
+        entries = [(int(p), f) for p, f in re.findall(r'part="(\d+)" file="([^"]+)"', open(pvd).read())]
+        listed = [f for _, f in entries]
+        nframes = sum(1 for p, _ in entries if p == 0)
+        last_frame = entries[max(k for k, (p, _) in enumerate(entries) if p == 0):] if nframes else []
         r = pv.PVDReader(FileName=pvd)
         steps = r.TimestepValues
         steps = list(steps) if hasattr(steps, "__len__") else [steps]
-        check(len(steps) == len(listed) > 0, "%s: %s.pvd: %d time steps for %d frames" % (run, series, len(steps), len(listed)))
+        check(len(steps) == nframes > 0, "%s: %s.pvd: %d time steps for %d frames" % (run, series, len(steps), nframes))
         r.UpdatePipeline(steps[-1])
         info = r.GetDataInformation()
-        last = header_counts(os.path.join(folder, listed[-1]))
-        check(last is not None and info.GetNumberOfPoints() == last[0],
-              "%s: %s.pvd at the last time: %d points, the frame says %s" % (run, series, info.GetNumberOfPoints(), last))
+        last = [header_counts(os.path.join(folder, f)) for _, f in last_frame]
+        check(None not in last and info.GetNumberOfPoints() == sum(c[0] for c in last),
+              "%s: %s.pvd at the last time: %d points, the frame's parts say %s" % (run, series, info.GetNumberOfPoints(), last))
         frames = sorted(glob.glob(os.path.join(folder, "frames", series + "_*.vtp")))
-        check(len(frames) == len(listed), "%s: %d %s frames on disk, %d listed" % (run, len(frames), series, len(listed)))
+        check(len(frames) == len(set(listed)), "%s: %d %s frames on disk, %d listed" % (run, len(frames), series, len(set(listed))))
         for path in frames:
             nfiles += 1
             name = "%s/%s" % (run, os.path.relpath(path, folder))
@@ -134,11 +145,18 @@ for run in sorted(d for d in os.listdir(work) if os.path.isdir(os.path.join(work
                   "%s: %d cells read, %d declared" % (name, data.GetNumberOfCells(), nverts + nlines + nstrips + npolys))
             check(data.GetNumberOfVerts() == nverts and data.GetNumberOfLines() == nlines and
                   data.GetNumberOfPolys() == npolys, "%s: cell kinds differ from the header" % name)
-            if series != "contacts":
+            if series == "boundaries" and path.endswith("_planes.vtp") and run.startswith("2d-tools"):
+                pass  # the jaw crusher has no planes
+            elif series != "contacts":
                 check(npts > 0 and data.GetNumberOfCells() > 0, "%s: empty" % name)
             else:
                 contacts_cells += data.GetNumberOfCells()
+            # 2D surfaces and tools: polygons (ParaView fills them); 2D planes: segments.
+            if series == "surfaces" or (series == "boundaries" and "_tool" in path):
+                check(nlines == 0 and npolys == data.GetNumberOfCells(), "%s: %d lines, %d polygons" % (name, nlines, npolys))
             for assoc, names, fd in (("point", pnames, data.GetPointData()), ("cell", cnames, data.GetCellData())):
+                if npts == 0:
+                    continue
                 for a in names:
                     arr = fd.GetArray(a)
                     if not check(arr is not None, "%s: %s array %s missing" % (name, assoc, a)):
@@ -154,12 +172,20 @@ for run in sorted(d for d in os.listdir(work) if os.path.isdir(os.path.join(work
         pv.Delete(r)
     if run.startswith("2d-compressed"):
         check(contacts_cells > 0, run + ": no contact in any contacts frame")
+    if run == "2d-tools":
+        # The fixed jaw written once, the moving jaw in every frame.
+        tools = re.findall(r'file="(frames/boundaries_\d+_tool(\d+)\.vtp)"', open(os.path.join(folder, "boundaries.pvd")).read())
+        per_tool = {}
+        for f, k in tools:
+            per_tool.setdefault(k, set()).add(f)
+        check(sorted(len(v) for v in per_tool.values())[0] == 1 and sorted(len(v) for v in per_tool.values())[-1] > 1,
+              "%s: tool files per tool %s: expected one tool written once and one per frame" % (run, {k: len(v) for k, v in per_tool.items()}))
     totals[run] = nfiles
-    print("check_paraview: %s: %d .vtp files and 4 .pvd series read by ParaView" % (run, nfiles))
+    print("check_paraview: %s: %d .vtp files and their .pvd series read by ParaView" % (run, nfiles))
 
 # The same run in every encoding: the same particles (positions are Float64 in all).
 for dim in ("2d", "3d"):
-    runs = [r for r in last_points if r.startswith(dim) and r != dim + "-compressed"]
+    runs = [r for r in last_points if r.startswith(dim) and r not in (dim + "-compressed", dim + "-tools")]
     ref = dim + "-compressed" if dim == "3d" else None
     if ref is None:  # the 2D compressed run went to the end; the others stopped at 6000 steps
         runs = sorted(runs)

@@ -12,14 +12,16 @@ contacts.pvd, those that exist) and shows:
 - surfaces coloured by particle `generation` once a grain has broken at the
   shown time, else by particle `id` (`--color` to choose), with a legend;
   3D surfaces are slightly transparent when force chains are drawn, so the
-  chains inside touching grains show; 2D outlines are drawn as thick lines;
+  chains inside touching grains show; 2D grains (polygons) are filled in a
+  pale colour under a dark outline;
 - particles as sphere glyphs at their centroids: with surfaces, small white
   markers (0.2 x `equivalent_diameter`) that the force chains join; without
   surfaces, spheres of the grain's volume (`equivalent_diameter`, or twice
   `radius` when that is all there is);
 - force chains (contacts.pvd) as tubes whose radius and colour follow
   `force_magnitude`, with a legend;
-- boundaries (planes and tools) in grey, semi-transparent in 3D;
+- boundaries (planes and tools; one block per plane set and tool) in grey,
+  semi-transparent in 3D, tools filled in 2D;
 - the simulated time (AnnotateTimeFilter, in ms) and the particle count;
 - the camera fitted to the scene: 3D from an oblique view, 2D from +z with a
   parallel projection.
@@ -44,40 +46,6 @@ import sys
 import tempfile
 
 SERIES = ("particles", "surfaces", "boundaries", "contacts")
-
-# ProgrammableFilter script (2D): each closed polyline of surfaces.pvd (its last
-# point repeats its first) made a polygon with the loop's cell data, moved
-# down in z by the given distance.
-FILL_LOOPS = """
-import vtk
-src = self.GetPolyDataInput()
-out = vtk.vtkPolyData()
-from vtk.util.numpy_support import vtk_to_numpy
-points = vtk.vtkPoints()
-if src.GetPoints() is not None:
-    points.DeepCopy(src.GetPoints())
-    vtk_to_numpy(points.GetData())[:, 2] -= %r
-polys = vtk.vtkCellArray()
-out.GetCellData().CopyAllocate(src.GetCellData())
-ids = vtk.vtkIdList()
-for c in range(src.GetNumberOfCells()):
-    if src.GetCellType(c) not in (vtk.VTK_LINE, vtk.VTK_POLY_LINE):
-        continue
-    src.GetCellPoints(c, ids)
-    n = ids.GetNumberOfIds()
-    if n >= 2 and ids.GetId(0) == ids.GetId(n - 1):
-        n -= 1
-    if n < 3:
-        continue
-    polys.InsertNextCell(n)
-    for k in range(n):
-        polys.InsertCellPoint(ids.GetId(k))
-    out.GetCellData().CopyData(src.GetCellData(), c, polys.GetNumberOfCells() - 1)
-out.SetPoints(points)
-out.SetPolys(polys)
-self.GetPolyDataOutput().ShallowCopy(out)
-"""
-
 
 def fail(message, code=2):
     sys.stderr.write("paraview_view: %s\n" % message)
@@ -277,18 +245,18 @@ def main(argv):
     if "surfaces" in readers:
         r = readers["surfaces"]
         if dim == 2:
-            # The outlines (closed polylines) as dark lines, over the grains filled:
-            # each loop made a polygon (a little below z = 0, so lines and tubes
-            # stay on top) and cut into triangles (concave outlines included).
+            # The outlines (each a polygon) as dark lines, over the grains filled:
+            # the polygons cut into triangles (concave outlines included) and
+            # moved a little below z = 0, so lines and tubes stay on top.
             outline = pv.Show(r, view)
+            outline.Representation = "Wireframe"
             outline.ColorArrayName = ["POINTS", ""]
             outline.AmbientColor = outline.DiffuseColor = [0.15, 0.15, 0.15]
             outline.LineWidth = 1.5
-            loops = pv.ProgrammableFilter(registrationName="filled outlines", Input=r)
-            loops.OutputDataSetType = "vtkPolyData"
-            loops.Script = FILL_LOOPS % (0.002 * extent)
-            loops.CopyArrays = 0
-            fill = pv.Triangulate(registrationName="filled grains", Input=loops)
+            triangles = pv.Triangulate(registrationName="grain triangles", Input=r)
+            fill = pv.Transform(registrationName="filled grains", Input=triangles)
+            fill.Transform = "Transform"
+            fill.Transform.Translate = [0.0, 0.0, -0.002 * extent]
             d = pv.Show(fill, view)
         else:
             d = pv.Show(r, view)

@@ -2,8 +2,10 @@
 
 #include "NumberText.h"
 
+#include "lsdem/breakage/GrainStress.h"
 #include "lsdem/geometry/Contours.h"
 #include "lsdem/io/InputError.h"
+#include "lsdem/io/VtpRead.h"
 
 #include "OutputNames.h"
 
@@ -451,6 +453,97 @@ void VtkCells::add(std::span<const std::int64_t> points) {
   offsets.push_back(std::int64_t(connectivity.size()));
 }
 
+namespace {
+
+// Values [first, first + count) tuples of `components` of an array, appended.
+template <class T>
+void appendTuples(std::vector<T>& out, const std::vector<T>& values, std::size_t first, std::size_t count,
+                  std::size_t components) {
+  const auto begin = values.begin() + std::ptrdiff_t(first * components);
+  out.insert(out.end(), begin, begin + std::ptrdiff_t(count * components));
+}
+
+// The array `a` of pieces[0] joined over every piece, tuples [first(p),
+// first(p) + count(p)) of each piece's array by that name in turn (`ranges`:
+// per pass, per piece, first and count); nullopt when a piece lacks it.
+std::optional<VtkArray> joinArray(std::span<const VtpPiece> pieces, std::vector<VtkArray> VtpPiece::*data,
+                                  const VtkArray& a,
+                                  const std::vector<std::vector<std::pair<std::size_t, std::size_t>>>& ranges) {
+  std::vector<const VtkArray*> arrays;
+  bool sameType = true;
+  for (const VtpPiece& p : pieces) {
+    const auto it = std::find_if((p.*data).begin(), (p.*data).end(), [&](const VtkArray& b) { return b.name == a.name; });
+    if (it == (p.*data).end() || it->components != a.components) return std::nullopt;
+    sameType = sameType && it->values.index() == a.values.index();
+    arrays.push_back(&*it);
+  }
+  const auto c = std::size_t(a.components);
+  VtkArray out{a.name, a.components, std::vector<double>()};
+  if (sameType) {
+    std::visit(
+        [&](const auto& first) {
+          using Vector = std::decay_t<decltype(first)>;
+          Vector joined;
+          for (const auto& pass : ranges) {
+            for (std::size_t k = 0; k < pieces.size(); ++k) {
+              appendTuples(joined, std::get<Vector>(arrays[k]->values), pass[k].first, pass[k].second, c);
+            }
+          }
+          out.values = std::move(joined);
+        },
+        a.values);
+  } else {
+    std::vector<double> joined;
+    for (const auto& pass : ranges) {
+      for (std::size_t k = 0; k < pieces.size(); ++k) {
+        std::vector<double> v;
+        std::visit([&](const auto& values) { v.assign(values.begin(), values.end()); }, arrays[k]->values);
+        appendTuples(joined, v, pass[k].first, pass[k].second, c);
+      }
+    }
+    out.values = std::move(joined);
+  }
+  return out;
+}
+
+}  // namespace
+
+VtpPiece joinPieces(std::span<const VtpPiece> pieces) {
+  VtpPiece out;
+  if (pieces.empty()) return out;
+  // Points, then each cell kind in piece order.
+  std::vector<std::int64_t> base;
+  for (const VtpPiece& p : pieces) {
+    base.push_back(std::int64_t(out.pointCount()));
+    out.points.insert(out.points.end(), p.points.begin(), p.points.end());
+  }
+  for (VtkCells VtpPiece::*kind : {&VtpPiece::verts, &VtpPiece::lines, &VtpPiece::polys}) {
+    VtkCells& to = out.*kind;
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+      const VtkCells& from = pieces[k].*kind;
+      const auto connectivityBase = std::int64_t(to.connectivity.size());
+      for (std::int64_t i : from.connectivity) to.connectivity.push_back(base[k] + i);
+      for (std::int64_t o : from.offsets) to.offsets.push_back(connectivityBase + o);
+    }
+  }
+  // Point data: each piece's points in turn. Cell data: verts of every
+  // piece, then lines, then polygons.
+  std::vector<std::vector<std::pair<std::size_t, std::size_t>>> pointRanges(1), cellRanges(3);
+  for (const VtpPiece& p : pieces) {
+    pointRanges[0].emplace_back(0, p.pointCount());
+    cellRanges[0].emplace_back(0, p.verts.size());
+    cellRanges[1].emplace_back(p.verts.size(), p.lines.size());
+    cellRanges[2].emplace_back(p.verts.size() + p.lines.size(), p.polys.size());
+  }
+  for (const VtkArray& a : pieces[0].pointData) {
+    if (auto joined = joinArray(pieces, &VtpPiece::pointData, a, pointRanges)) out.pointData.push_back(std::move(*joined));
+  }
+  for (const VtkArray& a : pieces[0].cellData) {
+    if (auto joined = joinArray(pieces, &VtpPiece::cellData, a, cellRanges)) out.cellData.push_back(std::move(*joined));
+  }
+  return out;
+}
+
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content) {
   const std::string_view part(content);
   writeFileAtomically(file, std::span<const std::string_view>(&part, 1));
@@ -567,8 +660,8 @@ std::size_t BodyContour<D>::pieceCount() const {
   if constexpr (D == 3) {
     return offsets.size();
   } else {
-    // A closed loop of n vertices has n + 1 indices and n edges.
-    return connectivity.size() - offsets.size();
+    // A closed loop of n vertices has n edges.
+    return connectivity.size();
   }
 }
 
@@ -577,14 +670,12 @@ BodyContour<D> bodyContour(const geometry::Shape<D>& shape) {
   BodyContour<D> c;
   const geometry::Rigid<D>& bodyToGrid = shape.bodyToGrid();
   if constexpr (D == 2) {
-    // Closed loops: each a polyline whose last index repeats its first.
+    // Closed loops: each a polygon, its vertices in order around it.
     for (const std::vector<Vec<2>>& loop : geometry::marchingSquares(shape.grid())) {
-      const auto first = std::int64_t(c.vertices.size());
       for (const Vec<2>& x : loop) {
         c.connectivity.push_back(std::int64_t(c.vertices.size()));
         c.vertices.push_back(bodyToGrid.applyInverse(x));
       }
-      c.connectivity.push_back(first);
       c.offsets.push_back(std::int64_t(c.connectivity.size()));
     }
   } else {
@@ -626,17 +717,34 @@ void SurfaceCache<D>::prune() {
 // Frames
 
 template <int D>
+StressInvariants stressInvariants(const geometry::Mat<D>& sigma) {
+  StressInvariants out;
+  const Vec<3> s = breakage::principalStressTriple<D>(sigma);
+  out.principal = {s[0], s[1], s[2]};
+  out.mean = (s[0] + s[1] + s[2]) / 3.0;
+  out.vonMises = std::sqrt(0.5 * ((s[0] - s[1]) * (s[0] - s[1]) + (s[1] - s[2]) * (s[1] - s[2]) +
+                                  (s[2] - s[0]) * (s[2] - s[0])));
+  return out;
+}
+
+template <int D>
 void writeParticleFrame(const std::filesystem::path& file, const dynamics::World<D>& world,
-                        std::span<const double> stressMeasure, VtkEncoding encoding) {
+                        std::span<const double> stressMeasure, VtkEncoding encoding,
+                        std::span<const geometry::Mat<D>> stressTensors) {
   const dynamics::Particles<D>& p = world.particles();
   const std::size_t n = p.size();
   checkStressMeasure("particle", stressMeasure, n);
+  if (!stressTensors.empty() && stressTensors.size() != n) {
+    throw std::invalid_argument("particle frame: " + std::to_string(stressTensors.size()) + " stress tensors for " +
+                                std::to_string(n) + " particles");
+  }
   // Per-particle columns.
   VtpPiece piece;
   std::vector<std::uint64_t> id(n);
   std::vector<std::int64_t> parent(n);
   std::vector<std::int32_t> generation(n);
   std::vector<double> radius(n), diameter(n), mass(n), stress(n, 0.0), strength(n), ratio(n);
+  std::vector<double> meanStress(n, 0.0), vonMises(n, 0.0), principal(3 * n, 0.0);
   std::vector<double> velocity, spin, orientation;
   std::array<std::vector<double>, 3> axes;  // the body axes in the world (glyph orientation)
   velocity.reserve(3 * n);
@@ -657,6 +765,12 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
     if (!stressMeasure.empty()) stress[i] = stressMeasure[i];
     strength[i] = shownStrength(p.strength[i]);
     ratio[i] = criterionRatio(stress[i], p.strength[i]);
+    if (!stressTensors.empty()) {
+      const StressInvariants s = stressInvariants<D>(stressTensors[i]);
+      meanStress[i] = s.mean;
+      vonMises[i] = s.vonMises;
+      std::copy(s.principal.begin(), s.principal.end(), principal.begin() + std::ptrdiff_t(3 * i));
+    }
     push3<D>(velocity, p.velocity[i]);
     pushSpin<D>(spin, p.angularVelocity[i]);
     pushQuaternion<D>(orientation, p.orientation[i]);
@@ -685,6 +799,9 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
   piece.pointData.push_back({"stress", 1, std::move(stress)});
   piece.pointData.push_back({"strength", 1, std::move(strength)});
   piece.pointData.push_back({"criterion_ratio", 1, std::move(ratio)});
+  piece.pointData.push_back({"mean_stress", 1, std::move(meanStress)});
+  piece.pointData.push_back({"von_mises_stress", 1, std::move(vonMises)});
+  piece.pointData.push_back({"principal_stress", 3, std::move(principal)});
   piece.time = world.time();
   writeVtp(file, piece, encoding);
 }
@@ -696,7 +813,7 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
   checkStressMeasure("surface", stressMeasure, p.size());
   cache.prune();
   VtpPiece piece;
-  VtkCells& cells = D == 2 ? piece.lines : piece.polys;
+  VtkCells& cells = piece.polys;
   std::vector<std::uint64_t> id;
   std::vector<std::int32_t> generation;
   // The particles' fields on their cells as Float32: for colouring (the
@@ -750,8 +867,8 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
 }
 
 template <int D>
-void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
-                        const geometry::Box<D>& extent, VtkEncoding encoding) {
+std::vector<VtpPiece> boundaryPieces(const dynamics::World<D>& world, SurfaceCache<D>& cache,
+                                     const geometry::Box<D>& extent) {
   if (!((extent.upper - extent.lower).array() > 0.0).all() || !extent.lower.allFinite() ||
       !extent.upper.allFinite()) {
     std::ostringstream msg;
@@ -759,42 +876,45 @@ void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World
         << ") upper (" << extent.upper.transpose() << ")";
     throw std::invalid_argument(msg.str());
   }
-  VtpPiece piece;
-  VtkCells& cells = D == 2 ? piece.lines : piece.polys;
-  std::vector<std::int32_t> kind, index;
-  std::vector<double> force;
-  const dynamics::BoundaryLoads<D>& loads = world.boundaryLoads();
-  // Planes clipped to the extent.
-  for (std::size_t k = 0; k < world.planes().size(); ++k) {
-    const std::vector<Vec<D>> corners = clipPlane<D>(world.planes()[k], extent);
-    std::vector<std::int64_t> ids;
-    for (const Vec<D>& x : corners) {
-      ids.push_back(std::int64_t(piece.pointCount()));
-      push3<D>(piece.points, x);
+  std::vector<VtpPiece> pieces(1 + world.tools().size());
+  // Piece 0: the planes clipped to the extent (segments in 2D, polygons in 3D).
+  {
+    VtpPiece& piece = pieces[0];
+    VtkCells& cells = D == 2 ? piece.lines : piece.polys;
+    std::vector<std::int32_t> kind, index;
+    for (std::size_t k = 0; k < world.planes().size(); ++k) {
+      std::vector<std::int64_t> ids;
+      for (const Vec<D>& x : clipPlane<D>(world.planes()[k], extent)) {
+        ids.push_back(std::int64_t(piece.pointCount()));
+        push3<D>(piece.points, x);
+      }
+      cells.add(ids);
+      kind.push_back(0);
+      index.push_back(std::int32_t(k));
     }
-    cells.add(ids);
-    kind.push_back(0);
-    index.push_back(std::int32_t(k));
-    push3<D>(force, k < loads.planeForce.size() ? loads.planeForce[k] : Vec<D>::Zero().eval());
+    piece.cellData.push_back({"kind", 1, std::move(kind)});
+    piece.cellData.push_back({"index", 1, std::move(index)});
   }
-  // Tools at their pose.
+  // Piece 1 + k: tool k at its pose (polygons in 2D, triangles in 3D).
   for (std::size_t k = 0; k < world.tools().size(); ++k) {
+    VtpPiece& piece = pieces[1 + k];
     const BodyContour<D>& contour = cache.contour(world.tools()[k].shape);
     const dynamics::ToolPose<D>& pose = world.toolPoses()[k];
-    appendPlaced<D>(piece, cells, contour, dynamics::Rotation<D>::matrix(pose.orientation), pose.position);
-    const Vec<D> f = k < loads.toolForce.size() ? loads.toolForce[k] : Vec<D>::Zero().eval();
-    for (std::size_t c = 0; c < contour.cellCount(); ++c) {
-      kind.push_back(1);
-      index.push_back(std::int32_t(k));
-      push3<D>(force, f);
-    }
+    appendPlaced<D>(piece, piece.polys, contour, dynamics::Rotation<D>::matrix(pose.orientation), pose.position);
+    piece.cellData.push_back({"kind", 1, std::vector<std::int32_t>(contour.cellCount(), 1)});
+    piece.cellData.push_back({"index", 1, std::vector<std::int32_t>(contour.cellCount(), std::int32_t(k))});
   }
-  piece.cellData.push_back({"kind", 1, std::move(kind)});
-  piece.cellData.push_back({"index", 1, std::move(index)});
-  piece.cellData.push_back({"force", 3, std::move(force)});
-  piece.singlePrecisionPoints = true;
-  piece.time = world.time();
-  writeVtp(file, piece, encoding);
+  for (VtpPiece& piece : pieces) piece.singlePrecisionPoints = true;
+  return pieces;
+}
+
+template <int D>
+void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
+                        const geometry::Box<D>& extent, VtkEncoding encoding) {
+  VtpPiece all = joinPieces(boundaryPieces<D>(world, cache, extent));
+  all.singlePrecisionPoints = true;
+  all.time = world.time();
+  writeVtp(file, all, encoding);
 }
 
 template <int D>
@@ -914,6 +1034,12 @@ PvdSeries::PvdSeries(std::filesystem::path pvdFile, bool resume) : path_(std::mo
         throw InputError(path_.string(), lineOf(text, at), "timestep", "not a number: '" + *time + "'");
       }
       e.file = *file;
+      if (const auto part = attribute(tag, "part"); part && !part->empty()) {
+        const auto rp = std::from_chars(part->data(), part->data() + part->size(), e.part);
+        if (rp.ec != std::errc() || rp.ptr != part->data() + part->size() || e.part < 0) {
+          throw InputError(path_.string(), lineOf(text, at), "part", "not a part number: '" + *part + "'");
+        }
+      }
       entries_.push_back(std::move(e));
       at = end;
     }
@@ -922,8 +1048,17 @@ PvdSeries::PvdSeries(std::filesystem::path pvdFile, bool resume) : path_(std::mo
 }
 
 void PvdSeries::add(double time, const std::string& relativeFile) {
-  entries_.push_back({time, relativeFile});
+  entries_.push_back({time, relativeFile, 0});
   save();
+}
+
+void PvdSeries::add(double time, std::span<const std::string> partFiles) {
+  for (std::size_t k = 0; k < partFiles.size(); ++k) entries_.push_back({time, partFiles[k], int(k)});
+  save();
+}
+
+std::size_t PvdSeries::frameCount() const {
+  return std::size_t(std::count_if(entries_.begin(), entries_.end(), [](const Entry& e) { return e.part == 0; }));
 }
 
 void PvdSeries::truncateAfter(double time) {
@@ -936,8 +1071,8 @@ void PvdSeries::save() const {
   out += "<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n";
   out += "  <Collection>\n";
   for (const Entry& e : entries_) {
-    out += "    <DataSet timestep=\"" + numberText(e.time) + "\" group=\"\" part=\"0\" file=\"" + xmlEscape(e.file) +
-           "\"/>\n";
+    out += "    <DataSet timestep=\"" + numberText(e.time) + "\" group=\"\" part=\"" + std::to_string(e.part) +
+           "\" file=\"" + xmlEscape(e.file) + "\"/>\n";
   }
   out += "  </Collection>\n";
   out += "</VTKFile>\n";
@@ -970,12 +1105,13 @@ template <int D>
 void FrameWriter<D>::updateNextFrame() {
   nextFrame_ = 0;
   for (const auto* s : {&particles_, &surfaces_, &boundaries_, &contacts_}) {
-    if (*s) nextFrame_ = std::max(nextFrame_, (*s)->entries().size());
+    if (*s) nextFrame_ = std::max(nextFrame_, (*s)->frameCount());
   }
 }
 
 template <int D>
-void FrameWriter<D>::write(const dynamics::World<D>& world, std::span<const double> stressMeasure) {
+void FrameWriter<D>::write(const dynamics::World<D>& world, std::span<const double> stressMeasure,
+                           std::span<const geometry::Mat<D>> stress) {
   char number[32];
   std::snprintf(number, sizeof(number), "%06zu", nextFrame_);
   const double time = world.time();
@@ -987,32 +1123,86 @@ void FrameWriter<D>::write(const dynamics::World<D>& world, std::span<const doub
     series->add(time, relative);
   };
   frame(particles_, outputs::kParticles, [&](const std::filesystem::path& f) {
-    writeParticleFrame<D>(f, world, stressMeasure, def_.encoding);
+    // The grains' stress tensors (eq. 5), while the contact records describe the particles.
+    if (stress.size() != world.particles().size()) {
+      stress_.clear();
+      if (world.contactsCurrent()) breakage::grainStresses(world.particles(), world.contacts(), stress_);
+      if (stress_.size() != world.particles().size()) stress_.assign(world.particles().size(), geometry::Mat<D>::Zero());
+      stress = stress_;
+    }
+    writeParticleFrame<D>(f, world, stressMeasure, def_.encoding, stress);
   });
   frame(surfaces_, outputs::kSurfaces,
         [&](const std::filesystem::path& f) { writeSurfaceFrame<D>(f, world, cache_, def_.encoding, stressMeasure); });
-  frame(boundaries_, outputs::kBoundaries, [&](const std::filesystem::path& f) {
-    // The extent: given, or the particles' bounding spheres grown by 10%.
-    geometry::Box<D> extent = def_.extent;
-    if (!((extent.upper - extent.lower).array() > 0.0).all()) {
-      const auto& p = world.particles();
-      extent.lower = Vec<D>::Constant(-0.5);
-      extent.upper = Vec<D>::Constant(0.5);
-      for (std::size_t i = 0; i < p.size(); ++i) {
-        const Vec<D> r = Vec<D>::Constant(p.shape[i]->boundingRadius());
-        const Vec<D> lo = p.position[i] - r, hi = p.position[i] + r;
-        extent.lower = i == 0 ? lo : extent.lower.cwiseMin(lo).eval();
-        extent.upper = i == 0 ? hi : extent.upper.cwiseMax(hi).eval();
-      }
-      const Vec<D> grow = 0.1 * (extent.upper - extent.lower);
-      extent.lower -= grow;
-      extent.upper += grow;
-    }
-    writeBoundaryFrame<D>(f, world, cache_, extent, def_.encoding);
-  });
+  if (boundaries_) writeBoundaries(world, number);
   frame(contacts_, outputs::kContacts,
         [&](const std::filesystem::path& f) { writeContactFrame<D>(f, world, def_.encoding); });
   ++nextFrame_;
+}
+
+template <int D>
+void FrameWriter<D>::writeBoundaries(const dynamics::World<D>& world, const std::string& number) {
+  // The extent: given, or the particles' bounding spheres grown by 10%.
+  geometry::Box<D> extent = def_.extent;
+  if (!((extent.upper - extent.lower).array() > 0.0).all()) {
+    const auto& p = world.particles();
+    extent.lower = Vec<D>::Constant(-0.5);
+    extent.upper = Vec<D>::Constant(0.5);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const Vec<D> r = Vec<D>::Constant(p.shape[i]->boundingRadius());
+      const Vec<D> lo = p.position[i] - r, hi = p.position[i] + r;
+      extent.lower = i == 0 ? lo : extent.lower.cwiseMin(lo).eval();
+      extent.upper = i == 0 ? hi : extent.upper.cwiseMax(hi).eval();
+    }
+    const Vec<D> grow = 0.1 * (extent.upper - extent.lower);
+    extent.lower -= grow;
+    extent.upper += grow;
+  }
+  const std::vector<VtpPiece> pieces = boundaryPieces<D>(world, cache_, extent);
+  recallBoundaries(pieces.size());
+  // Each piece: its last file again when nothing in it moved, else a new file.
+  std::vector<std::string> files(pieces.size());
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    const VtpPiece& piece = pieces[k];
+    WrittenPiece& last = boundaryFiles_[k];
+    std::vector<float> points(piece.points.begin(), piece.points.end());
+    const bool same = !last.file.empty() && points == last.points &&
+                      piece.lines.connectivity == last.lines.connectivity &&
+                      piece.lines.offsets == last.lines.offsets &&
+                      piece.polys.connectivity == last.polys.connectivity && piece.polys.offsets == last.polys.offsets;
+    if (!same) {
+      const std::string relative = std::string("frames/") + outputs::kBoundaries + "_" + number +
+                                   (k == 0 ? std::string("_planes") : "_tool" + std::to_string(k - 1)) + ".vtp";
+      writeVtp(def_.directory / relative, piece, def_.encoding);
+      last = {relative, std::move(points), piece.lines, piece.polys};
+    }
+    files[k] = last.file;
+  }
+  boundaries_->add(world.time(), files);
+}
+
+template <int D>
+void FrameWriter<D>::recallBoundaries(std::size_t pieces) {
+  if (boundariesRecalled_) return;
+  boundariesRecalled_ = true;
+  boundaryFiles_.assign(pieces, WrittenPiece{});
+  // A resumed series: the files its last frame names, as they were written
+  // (a file that cannot be read is written again).
+  const std::vector<PvdSeries::Entry>& entries = boundaries_->entries();
+  std::size_t first = entries.size();
+  while (first > 0 && entries[first - 1].part != 0) --first;
+  if (first == 0) return;
+  for (std::size_t e = first - 1; e < entries.size(); ++e) {
+    const std::size_t k = std::size_t(entries[e].part);
+    if (k >= pieces) continue;
+    try {
+      const VtpPiece piece = readVtp(def_.directory / entries[e].file);
+      boundaryFiles_[k] = {entries[e].file, std::vector<float>(piece.points.begin(), piece.points.end()), piece.lines,
+                           piece.polys};
+    } catch (const std::exception&) {
+      boundaryFiles_[k] = WrittenPiece{};
+    }
+  }
 }
 
 template <int D>
@@ -1020,6 +1210,8 @@ void FrameWriter<D>::truncateAfter(double time) {
   for (auto* s : {&particles_, &surfaces_, &boundaries_, &contacts_}) {
     if (*s) (*s)->truncateAfter(time);
   }
+  // The boundaries' last files are read again from what the series keeps.
+  boundariesRecalled_ = false;
   updateNextFrame();
 }
 
@@ -1033,9 +1225,13 @@ template BodyContour<3> bodyContour<3>(const geometry::Shape<3>&);
 template class SurfaceCache<2>;
 template class SurfaceCache<3>;
 template void writeParticleFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, std::span<const double>,
-                                    VtkEncoding);
+                                    VtkEncoding, std::span<const geometry::Mat<2>>);
 template void writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, std::span<const double>,
-                                    VtkEncoding);
+                                    VtkEncoding, std::span<const geometry::Mat<3>>);
+template StressInvariants stressInvariants<2>(const geometry::Mat<2>&);
+template StressInvariants stressInvariants<3>(const geometry::Mat<3>&);
+template std::vector<VtpPiece> boundaryPieces<2>(const dynamics::World<2>&, SurfaceCache<2>&, const geometry::Box<2>&);
+template std::vector<VtpPiece> boundaryPieces<3>(const dynamics::World<3>&, SurfaceCache<3>&, const geometry::Box<3>&);
 template void writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
                                    VtkEncoding, std::span<const double>);
 template void writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,

@@ -775,10 +775,31 @@ std::vector<PvdSeries::Entry> readPvd(const std::filesystem::path& file) {
       scan.fail(tag->begin, "DataSet.timestep", "not a finite number: '" + *time + "'");
     }
     e.file = *name;
+    if (const auto part = tag->attribute("part"); part && !part->empty()) {
+      const auto rp = std::from_chars(part->data(), part->data() + part->size(), e.part);
+      if (rp.ec != std::errc() || rp.ptr != part->data() + part->size() || e.part < 0) {
+        scan.fail(tag->begin, "DataSet.part", "not a part number: '" + *part + "'");
+      }
+    }
     entries.push_back(std::move(e));
   }
   if (!closed) scan.fail(text.size(), "VTKFile", "the series ends before </VTKFile>");
   return entries;
+}
+
+std::vector<PvdSeries::Entry> frameEntries(const std::vector<PvdSeries::Entry>& entries, std::size_t frame) {
+  std::vector<PvdSeries::Entry> out;
+  std::size_t seen = 0;
+  for (const PvdSeries::Entry& e : entries) {
+    if (e.part == 0) ++seen;
+    if (seen == frame + 1) out.push_back(e);
+    if (seen > frame + 1) break;
+  }
+  return out;
+}
+
+std::size_t frameCount(const std::vector<PvdSeries::Entry>& entries) {
+  return std::size_t(std::count_if(entries.begin(), entries.end(), [](const PvdSeries::Entry& e) { return e.part == 0; }));
 }
 
 }  // namespace lsdem::io

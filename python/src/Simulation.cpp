@@ -517,8 +517,9 @@ class SimulationOf final : public Simulation {
   }
 
   void writeParticles(const std::filesystem::path& path, bool ascii) override {
-    stresses();  // into stressMeasure_
-    io::writeParticleFrame<D>(path, world(), stressMeasure_, ascii ? io::VtkEncoding::Ascii : io::VtkEncoding::Binary);
+    stresses();  // into stressMeasure_ and stress_
+    io::writeParticleFrame<D>(path, world(), stressMeasure_, ascii ? io::VtkEncoding::Ascii : io::VtkEncoding::Binary,
+                              stress_);
   }
   void writeContacts(const std::filesystem::path& path, bool ascii) override {
     current();

@@ -6,6 +6,7 @@
 #include "lsdem/geometry/ShapeDef.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/Vtk.h"
+#include "lsdem/io/VtpRead.h"
 
 #include <gtest/gtest.h>
 
@@ -14,6 +15,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <unistd.h>
 
 using namespace lsdem;
@@ -307,14 +309,30 @@ void checkSurfaceFrame() {
     pieces += c.pieceCount();
     vertices += c.vertices.size();
   }
-  const test::VtpCells& cellList = D == 2 ? b.lineCells : b.polyCells;
-  EXPECT_EQ(D == 2 ? b.lines : b.polys, cells);
+  // Polygons in both dimensions (2D: one closed loop each, filled in ParaView).
+  const test::VtpCells& cellList = b.polyCells;
+  EXPECT_EQ(b.polys, cells);
+  EXPECT_EQ(b.lines, 0u);
   EXPECT_EQ(b.points, vertices);
   std::size_t counted = 0;
-  for (std::size_t c = 0; c < cells; ++c) counted += cellList.cell(c).size() - (D == 2 ? 1 : 0);
+  for (std::size_t c = 0; c < cells; ++c) counted += cellList.cell(c).size();
   EXPECT_EQ(counted, D == 2 ? pieces : 3 * pieces);
   if constexpr (D == 2) {
     EXPECT_EQ(cells, 3u);  // one loop per grain
+    // Each loop's vertices are distinct (a polygon does not repeat its first
+    // point) and run counter-clockwise: positive shoelace area, near the
+    // grain's own area.
+    for (std::size_t c = 0; c < cells; ++c) {
+      const std::vector<std::int64_t> loop = cellList.cell(c);
+      EXPECT_NE(loop.front(), loop.back());
+      double area = 0.0;
+      for (std::size_t k = 0; k < loop.size(); ++k) {
+        const Vec<2> x = pointOf<2>(b, loop[k]), y = pointOf<2>(b, loop[(k + 1) % loop.size()]);
+        area += 0.5 * (x[0] * y[1] - y[0] * x[1]);
+      }
+      const std::size_t i = std::size_t(b.cellArray("id").u64[c]) == p.id[0] ? 0 : std::size_t(b.cellArray("id").u64[c]) == p.id[1] ? 1 : 2;
+      EXPECT_NEAR(area, p.shape[i]->volume(), 0.03 * p.shape[i]->volume()) << c;
+    }
   } else {
     EXPECT_GT(cells, 300u);
   }
@@ -391,7 +409,7 @@ void checkSurfaceFrame() {
   const Particles<D>& q = shifted.particles();
   io::writeSurfaceFrame<D>(dir / "moved.vtp", shifted, cache, VtkEncoding::Binary);
   const test::VtpFile m = test::readVtp(dir / "moved.vtp");
-  const Vec<D> moved = pointOf<D>(m, (D == 2 ? m.lineCells : m.polyCells).cell(0)[0]);
+  const Vec<D> moved = pointOf<D>(m, m.polyCells.cell(0)[0]);
   EXPECT_GT((moved - old).norm(), 0.005);
   const Vec<D> body = q.rotation(0).transpose() * (moved - q.position[0]);
   EXPECT_LT(std::abs(q.shape[0]->value(body)), surfaceTolerance<D>() * q.shape[0]->grid().spacing());
@@ -422,9 +440,13 @@ void checkBoundaryFrame() {
   const test::VtpFile b = test::readVtp(dir / "b.vtp");
   const io::BodyContour<D> toolContour = io::bodyContour(*tool.shape);
   const std::size_t cells = 2 + toolContour.cellCount();
-  EXPECT_EQ(D == 2 ? b.lines : b.polys, cells);
+  // Planes are segments (line cells) in 2D and polygons in 3D; a tool's
+  // surface is polygons in both (2D: closed loops, filled in ParaView).
+  EXPECT_EQ(b.lines + b.polys, cells);
+  EXPECT_EQ(b.lines, D == 2 ? 2u : 0u);
   EXPECT_EQ(b.points, (D == 2 ? 4u : 4u + 6u) + toolContour.vertices.size());
   const test::VtpCells& list = D == 2 ? b.lineCells : b.polyCells;
+  const auto toolCell = [&](std::size_t c) { return b.polyCells.cell(D == 2 ? c - 2 : c); };
   // The floor (y = 0) clipped to the unit box: its edge (2D) or face (3D).
   const std::vector<std::int64_t> floor = list.cell(0);
   ASSERT_EQ(floor.size(), D == 2 ? 2u : 4u);
@@ -452,7 +474,11 @@ void checkBoundaryFrame() {
   for (std::size_t c = 2; c < cells; ++c) {
     EXPECT_EQ(b.cellArray("kind").i32[c], 1);
     EXPECT_EQ(b.cellArray("index").i32[c], 0);
-    for (std::int64_t k : list.cell(c)) {
+    const std::vector<std::int64_t> cell = toolCell(c);
+    if (D == 2) {
+      EXPECT_NE(cell.front(), cell.back());
+    }
+    for (std::int64_t k : cell) {
       const Vec<D> body = Rotation<D>::matrix(pose.orientation).transpose() * (pointOf<D>(b, k) - pose.position);
       worst = std::max(worst, std::abs(tool.shape->value(body)));
     }
@@ -460,7 +486,17 @@ void checkBoundaryFrame() {
   EXPECT_LT(worst, surfaceTolerance<D>() * tool.shape->grid().spacing());
   EXPECT_EQ(b.cellArray("kind").i32[0], 0);
   EXPECT_EQ(b.cellArray("index").i32[1], 1);
-  for (double f : b.cellArray("force").f64) EXPECT_EQ(f, 0.0);  // no step yet
+  // Geometry only: the loads are in history.csv (a file can stand for many frames).
+  EXPECT_THROW(b.cellArray("force"), std::runtime_error);
+  // The same boundaries as pieces: the planes, then the tool.
+  const std::vector<io::VtpPiece> pieces = io::boundaryPieces<D>(w, cache, extent);
+  ASSERT_EQ(pieces.size(), 2u);
+  EXPECT_EQ(pieces[0].cellCount(), 2u);
+  EXPECT_EQ(pieces[0].pointCount(), D == 2 ? 4u : 10u);
+  EXPECT_EQ(pieces[1].polys.size(), toolContour.cellCount());
+  EXPECT_EQ(pieces[1].pointCount(), toolContour.vertices.size());
+  EXPECT_EQ(std::get<std::vector<std::int32_t>>(pieces[1].cellData[0].values),
+            std::vector<std::int32_t>(toolContour.cellCount(), 1));
   // A degenerate extent is refused.
   extent.upper[0] = 0.0;
   EXPECT_THROW(io::writeBoundaryFrame<D>(dir / "x.vtp", w, cache, extent, VtkEncoding::Binary), std::invalid_argument);
@@ -606,6 +642,8 @@ TEST(Vtk, FrameWriterSeriesAndResume) {
   World<3> w = smallWorld<3>();
   io::FrameWriterDef<3> def;
   def.directory = dir.path() / "out";
+  def.extent.lower = Vec<3>::Constant(-1.0);  // a fixed domain: the floor does not change
+  def.extent.upper = Vec<3>::Constant(1.0);
   {
     io::FrameWriter<3> writer(def);
     for (int k = 0; k < 3; ++k) {
@@ -621,7 +659,10 @@ TEST(Vtk, FrameWriterSeriesAndResume) {
     ASSERT_EQ(entries.size(), 3u) << series;
     for (std::size_t k = 0; k < entries.size(); ++k) {
       const test::VtpFile f = test::readVtp((def.directory / entries[k].file).string());
-      EXPECT_EQ(entries[k].file, "frames/" + std::string(series) + "_00000" + std::to_string(k) + ".vtp");
+      // The floor stays where it is: written once, named by every frame.
+      EXPECT_EQ(entries[k].file, std::string(series) == "boundaries"
+                                     ? std::string("frames/boundaries_000000_planes.vtp")
+                                     : "frames/" + std::string(series) + "_00000" + std::to_string(k) + ".vtp");
       if (points.count(series)) {
         EXPECT_EQ(f.points, points.at(series));
       }
@@ -648,4 +689,243 @@ TEST(Vtk, FrameWriterSeriesAndResume) {
   EXPECT_EQ(entries[2].time, w.time());
   EXPECT_EQ(entries[2].file, "frames/particles_000002.vtp");
   EXPECT_EQ(test::readVtp((def.directory / entries[2].file).string()).points, 3u);
+}
+
+namespace {
+
+// A world with a floor, a tool at rest and a tool moving at 1 m/s along x.
+template <int D>
+World<D> toolWorld() {
+  World<D> w = smallWorld<D>();
+  for (int k = 0; k < 2; ++k) {
+    ToolDef<D> tool;
+    tool.name = k == 0 ? "anvil" : "hammer";
+    tool.shape = test::sphereShape<D>(0.04);
+    ConstantVelocity<D> motion;
+    motion.position = Vec<D>::Constant(0.6 + 0.2 * k);
+    motion.velocity = Vec<D>::UnitX() * double(k);
+    tool.motion = motion;
+    w.addTool(tool);
+  }
+  return w;
+}
+
+// The boundaries.pvd entries as (part, file) pairs.
+std::vector<std::pair<int, std::string>> boundaryEntries(const fs::path& dir) {
+  std::vector<std::pair<int, std::string>> out;
+  for (const auto& e : io::readPvd(dir / "boundaries.pvd")) out.emplace_back(e.part, e.file);
+  return out;
+}
+
+// The boundary frame files on disk.
+std::set<std::string> boundaryFiles(const fs::path& dir) {
+  std::set<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir / "frames")) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("boundaries_", 0) == 0) out.insert(name);
+  }
+  return out;
+}
+
+template <int D>
+void checkBoundariesWrittenOnce() {
+  ScratchDir dir("static_boundaries" + std::to_string(D));
+  io::FrameWriterDef<D> def;
+  def.directory = dir.path() / "straight";
+  def.extent.lower = Vec<D>::Constant(-1.0);
+  def.extent.upper = Vec<D>::Constant(1.0);
+  def.particles = def.surfaces = def.contacts = true;
+  // Four frames, a step apart.
+  std::vector<double> times;
+  {
+    World<D> w = toolWorld<D>();
+    io::FrameWriter<D> writer(def);
+    for (int k = 0; k < 4; ++k) {
+      writer.write(w);
+      times.push_back(w.time());
+      w.step();
+    }
+  }
+  // Each frame: the planes (part 0), the tool at rest (1), the moving tool
+  // (2). The first two are the files of frame 0; the moving one is new each time.
+  const auto entries = boundaryEntries(def.directory);
+  ASSERT_EQ(entries.size(), 12u);
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_EQ(entries[3 * k], std::make_pair(0, std::string("frames/boundaries_000000_planes.vtp")));
+    EXPECT_EQ(entries[3 * k + 1], std::make_pair(1, std::string("frames/boundaries_000000_tool0.vtp")));
+    EXPECT_EQ(entries[3 * k + 2], std::make_pair(2, "frames/boundaries_00000" + std::to_string(k) + "_tool1.vtp"));
+  }
+  EXPECT_EQ(boundaryFiles(def.directory).size(), 6u);  // 1 + 1 + 4, not 12
+  // Every part as VTK reads it: the planes as segments (2D) or polygons, the
+  // tools' polygons, with kind and index; the moving tool 1 m/s x dt further each frame.
+  const io::VtpPiece planes = io::readVtp(def.directory / entries[0].second);
+  EXPECT_EQ(planes.cellCount(), 1u);
+  EXPECT_EQ(D == 2 ? planes.lines.size() : planes.polys.size(), 1u);
+  EXPECT_FALSE(planes.time.has_value());  // one file for many times
+  double first = 0.0;
+  for (std::size_t k = 0; k < 4; ++k) {
+    const io::VtpPiece hammer = io::readVtp(def.directory / entries[3 * k + 2].second);
+    EXPECT_EQ(hammer.lines.size(), 0u);
+    EXPECT_GT(hammer.polys.size(), 0u);
+    EXPECT_EQ(io::arrayAsDoubles(*io::findArray(hammer.cellData, "index")),
+              std::vector<double>(hammer.polys.size(), 1.0));
+    double x = 0.0;
+    for (std::size_t i = 0; i < hammer.pointCount(); ++i) x += hammer.points[3 * i];
+    x /= double(hammer.pointCount());
+    if (k == 0) first = x;
+    EXPECT_NEAR(x - first, times[k] - times[0], 1e-6) << k;
+  }
+  EXPECT_GT(times[3], times[0]);
+
+  // The same run stopped after frame 2 and resumed from a checkpoint at
+  // frame 1: the same series, the same files.
+  def.directory = dir.path() / "resumed";
+  {
+    World<D> w = toolWorld<D>();
+    io::FrameWriter<D> writer(def);
+    for (int k = 0; k < 3; ++k) {
+      writer.write(w);
+      w.step();
+    }
+  }
+  World<D> w = toolWorld<D>();
+  w.step();  // the state at frame 1's time (the checkpoint)
+  ASSERT_EQ(w.time(), times[1]);
+  def.resume = true;
+  io::FrameWriter<D> resumed(def);
+  resumed.truncateAfter(times[1]);
+  EXPECT_EQ(resumed.nextFrame(), 2u);
+  for (int k = 2; k < 4; ++k) {
+    w.step();
+    resumed.write(w);
+  }
+  EXPECT_EQ(test::readText((dir.path() / "straight" / "boundaries.pvd").string()),
+            test::readText((dir.path() / "resumed" / "boundaries.pvd").string()));
+  EXPECT_EQ(boundaryFiles(dir.path() / "straight"), boundaryFiles(dir.path() / "resumed"));
+  for (const std::string& f : boundaryFiles(dir.path() / "straight")) {
+    EXPECT_EQ(test::readText((dir.path() / "straight" / "frames" / f).string()),
+              test::readText((dir.path() / "resumed" / "frames" / f).string()))
+        << f;
+  }
+  // A resumed series whose kept files are gone writes them again, and the
+  // series still names files that exist.
+  def.directory = dir.path() / "straight";
+  fs::remove(def.directory / "frames" / "boundaries_000000_tool0.vtp");
+  io::FrameWriter<D> again(def);
+  again.truncateAfter(times[1]);
+  World<D> w2 = toolWorld<D>();
+  w2.step();
+  w2.step();
+  again.write(w2);
+  const auto kept = boundaryEntries(def.directory);
+  ASSERT_EQ(kept.size(), 9u);
+  EXPECT_EQ(kept[7], std::make_pair(1, std::string("frames/boundaries_000002_tool0.vtp")));
+  EXPECT_EQ(kept[6], std::make_pair(0, std::string("frames/boundaries_000000_planes.vtp")));
+  EXPECT_TRUE(fs::exists(def.directory / "frames" / "boundaries_000002_tool0.vtp"));
+}
+
+}  // namespace
+
+// Boundaries that do not move are written once and named by every frame's
+// entry; a moving tool gets a file per frame; a resumed writer makes the same
+// choices as an uninterrupted one (the same .pvd and files).
+TEST(Vtk, StaticBoundariesWrittenOnce2D) { checkBoundariesWrittenOnce<2>(); }
+TEST(Vtk, StaticBoundariesWrittenOnce3D) { checkBoundariesWrittenOnce<3>(); }
+
+// Stress invariants of a known tensor: principal stresses 2, -1, -3 MPa (a
+// rotated diagonal tensor in 3D); 2D plane stress 2, -1 MPa and 0 out of plane.
+TEST(Vtk, StressInvariantsOfAKnownTensor) {
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.7, Vec<3>(1.0, -2.0, 0.5).normalized()).toRotationMatrix();
+  const Mat<3> sigma3 = r * Vec<3>(-3e6, 2e6, -1e6).asDiagonal() * r.transpose();
+  const io::StressInvariants s3 = io::stressInvariants<3>(sigma3);
+  EXPECT_NEAR(s3.mean, -2e6 / 3.0, 1e-6);
+  EXPECT_NEAR(s3.vonMises, std::sqrt(19.0) * 1e6, 1e-6);  // sqrt(((2+1)^2 + (-1+3)^2 + (-3-2)^2) / 2) MPa
+  EXPECT_NEAR(s3.principal[0], 2e6, 1e-6);
+  EXPECT_NEAR(s3.principal[1], -1e6, 1e-6);
+  EXPECT_NEAR(s3.principal[2], -3e6, 1e-6);
+  const Eigen::Matrix2d r2 = Eigen::Rotation2Dd(0.3).toRotationMatrix();
+  const Mat<2> sigma2 = r2 * Vec<2>(-1e6, 2e6).asDiagonal() * r2.transpose();
+  const io::StressInvariants s2 = io::stressInvariants<2>(sigma2);
+  EXPECT_NEAR(s2.mean, 1e6 / 3.0, 1e-6);
+  EXPECT_NEAR(s2.vonMises, std::sqrt(7.0) * 1e6, 1e-6);  // sqrt((3^2 + 1^2 + 2^2) / 2) MPa
+  EXPECT_NEAR(s2.principal[0], 2e6, 1e-6);
+  EXPECT_NEAR(s2.principal[1], -1e6, 1e-6);
+  EXPECT_EQ(s2.principal[2], 0.0);
+}
+
+namespace {
+
+// A grain resting on a floor under gravity: one contact, the floor's push m g
+// straight up at the bottom, r below the centroid, so eq. 5 gives uniaxial
+// compression sigma_yy = -m g r / V: mean stress sigma_yy / 3 and von Mises
+// |sigma_yy| (3D; 2D plane stress the same, the out-of-plane stress being 0).
+template <int D>
+void checkRestingGrainStress() {
+  ScratchDir dir("resting" + std::to_string(D));
+  WorldDef<D> def;
+  def.gravity = -9.81 * Vec<D>::Unit(1);
+  def.globalDamping = 40.0;
+  def.contact.kn = 1e6;
+  World<D> w(def);
+  PlaneDef<D> floor;
+  floor.plane.point = Vec<D>::Zero();
+  floor.plane.normal = Vec<D>::Unit(1);
+  w.addPlane(floor);
+  const double r = 0.05;
+  ParticleDef<D> grain;
+  grain.shape = test::sphereShape<D>(r);
+  grain.position = Vec<D>::Unit(1) * (r + 0.002);
+  w.addParticle(grain);
+  while (w.time() < 0.5) w.step();
+  ASSERT_LT(w.particles().velocity[0].norm(), 1e-3);  // at rest (it lands at about 0.2 m/s)
+  io::FrameWriterDef<D> wd;
+  wd.directory = dir.path();
+  wd.surfaces = wd.boundaries = wd.contacts = false;
+  io::FrameWriter<D> writer(wd);
+  writer.write(w);
+  const io::VtpPiece f = io::readVtp(dir.path() / "frames" / "particles_000000.vtp");
+  const double m = w.particles().mass[0], volume = w.particles().shape[0]->volume();
+  const double syy = -m * 9.81 * r / volume;
+  const double mean = io::arrayAsDoubles(*io::findArray(f.pointData, "mean_stress"))[0];
+  const double q = io::arrayAsDoubles(*io::findArray(f.pointData, "von_mises_stress"))[0];
+  const std::vector<double> principal = io::arrayAsDoubles(*io::findArray(f.pointData, "principal_stress"));
+  // The nodes in contact sit a little inside the bottom (overlap, node spread): 3 %.
+  EXPECT_NEAR(mean, syy / 3.0, 0.03 * std::abs(syy / 3.0));
+  EXPECT_NEAR(q, std::abs(syy), 0.03 * std::abs(syy));
+  EXPECT_NEAR(principal[2 - (D == 2 ? 1 : 0)], syy, 0.03 * std::abs(syy));  // the most compressive
+  EXPECT_LT(std::abs(principal[0]), 0.03 * std::abs(syy));
+}
+
+}  // namespace
+
+TEST(Vtk, RestingGrainStressInvariants2D) { checkRestingGrainStress<2>(); }
+TEST(Vtk, RestingGrainStressInvariants3D) { checkRestingGrainStress<3>(); }
+
+// Pieces joined: points in turn, cells by kind (all lines before any
+// polygon), arrays every piece has kept in their type (Float64 where the
+// types differ), arrays only some pieces have left out.
+TEST(Vtk, JoinPiecesKeepsCellOrderAndTypes) {
+  io::VtpPiece a, b;
+  a.points = {0, 0, 0, 1, 0, 0};
+  a.lines.add(std::vector<std::int64_t>{0, 1});
+  a.cellData.push_back({"kind", 1, std::vector<std::int32_t>{0}});
+  a.cellData.push_back({"value", 1, std::vector<double>{0.5}});
+  b.points = {0, 1, 0, 1, 1, 0, 0, 2, 0};
+  b.polys.add(std::vector<std::int64_t>{0, 1, 2});
+  b.lines.add(std::vector<std::int64_t>{2, 0});
+  b.cellData.push_back({"kind", 1, std::vector<std::int32_t>{7, 1}});  // its line, then its polygon
+  b.cellData.push_back({"value", 1, std::vector<float>{1.5f, 2.5f}});
+  b.cellData.push_back({"extra", 1, std::vector<double>{9.0, 9.0}});
+  const std::vector<io::VtpPiece> pieces{a, b};
+  const io::VtpPiece j = io::joinPieces(pieces);
+  EXPECT_EQ(j.pointCount(), 5u);
+  EXPECT_EQ(j.lines.connectivity, (std::vector<std::int64_t>{0, 1, 4, 2}));
+  EXPECT_EQ(j.lines.offsets, (std::vector<std::int64_t>{2, 4}));
+  EXPECT_EQ(j.polys.connectivity, (std::vector<std::int64_t>{2, 3, 4}));
+  ASSERT_EQ(j.cellData.size(), 2u);
+  EXPECT_EQ(std::get<std::vector<std::int32_t>>(j.cellData[0].values), (std::vector<std::int32_t>{0, 7, 1}));
+  EXPECT_EQ(std::get<std::vector<double>>(j.cellData[1].values), (std::vector<double>{0.5, 1.5, 2.5}));
+  ScratchDir dir("join");
+  io::writeVtp(dir / "j.vtp", j, VtkEncoding::Compressed);
+  EXPECT_EQ(test::readVtp(dir / "j.vtp").cellArray("kind").i32, (std::vector<std::int32_t>{0, 7, 1}));
 }

@@ -65,14 +65,14 @@ void FrameRecorder<D>::write(const World& w) {
   }
   // Contacts are read only while they describe the particles: not right
   // after a breakage or removal, when the frame shows zero stresses.
+  stress_.clear();
+  if (w.contactsCurrent()) breakage::grainStresses(p, w.contacts(), stress_);
+  stress_.resize(p.size(), geometry::Mat<D>::Zero());
   stressMeasure_.assign(p.size(), 0.0);
-  if (w.contactsCurrent()) {
-    breakage::grainStresses(p, w.contacts(), stress_);
-    for (std::size_t i = 0; i < stressMeasure_.size() && i < stress_.size(); ++i) {
-      stressMeasure_[i] = criterion_->characteristicStress(breakage::principalStressTriple<D>(stress_[i]));
-    }
+  for (std::size_t i = 0; w.contactsCurrent() && i < p.size(); ++i) {
+    stressMeasure_[i] = criterion_->characteristicStress(breakage::principalStressTriple<D>(stress_[i]));
   }
-  writer_->write(w, stressMeasure_);
+  writer_->write(w, stressMeasure_, stress_);
   lastFrameTime_ = w.time();
 }
 

@@ -38,6 +38,7 @@
 #include "lsdem/geometry/Shape.h"
 #include "lsdem/geometry/Types.h"
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -108,6 +109,13 @@ struct VtpPiece {
   std::size_t cellCount() const { return verts.size() + lines.size() + polys.size(); }
 };
 
+/// @brief Pieces joined into one (the parts of a frame): points one piece
+/// after the other, cells of each kind in piece order (VTK's cell order,
+/// verts, lines, polys, kept), and the point and cell data arrays every piece
+/// has with the same component count: of their own type where every piece
+/// has that type, else Float64; other arrays are left out. No time.
+VtpPiece joinPieces(std::span<const VtpPiece> pieces);
+
 /// @brief Writes `piece` as a VTK XML PolyData file, atomically (`file.tmp`, then rename).
 /// @note Throws std::invalid_argument when an array's size does not match its
 /// point or cell count, a cell refers to a missing point, or offsets are not
@@ -122,8 +130,9 @@ void writeFileAtomically(const std::filesystem::path& file, const std::string& c
 void writeFileAtomically(const std::filesystem::path& file, std::span<const std::string_view> parts);
 
 /// The zero level set of one shape in its BODY frame (origin at the centroid,
-/// principal axes), world units: closed polylines in 2D (each loop one cell
-/// whose last index repeats the first), triangles in 3D.
+/// principal axes), world units: closed loops in 2D (each loop one polygon
+/// cell, its vertices in order, the first not repeated at the end), triangles
+/// in 3D.
 template <int D>
 struct BodyContour {
   std::vector<geometry::Vec<D>> vertices;  ///< body frame, m
@@ -133,8 +142,8 @@ struct BodyContour {
 
   /// @brief Number of cells (loops in 2D, triangles in 3D).
   std::size_t cellCount() const { return offsets.size(); }
-  /// @brief Number of edges in 2D (sum over loops of their vertex count) or
-  /// triangles in 3D.
+  /// @brief Number of edges in 2D (sum over loops of their vertex count: a
+  /// closed loop of n vertices has n edges) or triangles in 3D.
   std::size_t pieceCount() const;
 };
 
@@ -173,17 +182,42 @@ class SurfaceCache {
 /// parent_id (Int64, -1 for none), generation (Int32), radius (bounding radius,
 /// m), equivalent_diameter (m), mass (kg), velocity (3, m/s), angular_velocity
 /// (3, rad/s), orientation (4: quaternion w, x, y, z, body to world; 2D: the
-/// rotation about z), stress (the breakage criterion value, Pa) and strength (Pa).
+/// rotation about z), axis_x/y/z (3 each: the body axes in the world), stress
+/// (the breakage criterion value, Pa), strength (Pa), criterion_ratio, and the
+/// invariants of each grain's average stress tensor (eq. 5, tension positive,
+/// Pa): mean_stress (tr(sigma) / 3), von_mises_stress (sqrt(3 J2)) and
+/// principal_stress (3: principalStressTriple, s1 >= s2 >= s3 in 3D; 2D plane
+/// stress (s1, s2, 0)).
 /// @param stressMeasure one value per particle in store order, or empty (zeros written).
-/// @note Throws std::invalid_argument when stressMeasure is neither empty nor
-/// one value per particle; std::runtime_error when the file cannot be written.
+/// @param stressTensors each particle's average stress tensor (world frame,
+/// Pa, tension positive; breakage::grainStresses), or empty (the invariants
+/// are written as zeros).
+/// @note Throws std::invalid_argument when stressMeasure or stressTensors is
+/// neither empty nor one value per particle; std::runtime_error when the file
+/// cannot be written.
 template <int D>
 void writeParticleFrame(const std::filesystem::path& file, const dynamics::World<D>& world,
-                        std::span<const double> stressMeasure, VtkEncoding encoding);
+                        std::span<const double> stressMeasure, VtkEncoding encoding,
+                        std::span<const geometry::Mat<D>> stressTensors = {});
+
+/// The stress invariants the particle frame writes, of one stress tensor
+/// (Pa, tension positive).
+struct StressInvariants {
+  double mean = 0.0;                  ///< tr(sigma) / 3 (2D plane stress: (s1 + s2) / 3), Pa; < 0 in compression
+  double vonMises = 0.0;              ///< sqrt(3 J2) = sqrt(((s1-s2)^2 + (s2-s3)^2 + (s3-s1)^2) / 2), Pa, >= 0
+  std::array<double, 3> principal{};  ///< breakage::principalStressTriple, Pa
+};
+
+/// @brief Mean stress, von Mises stress and principal stresses of `sigma`
+/// (a symmetric tensor, world frame, Pa; only its lower triangle is read). 2D
+/// tensors are taken as plane stress (the out-of-plane stress is zero).
+template <int D>
+StressInvariants stressInvariants(const geometry::Mat<D>& sigma);
 
 /// @brief Surface frame: every particle's surface in world coordinates (body
-/// contour placed at the particle's pose: x = R x_body + position), as closed
-/// polylines in 2D and triangles in 3D. Cell data, the particle's: id
+/// contour placed at the particle's pose: x = R x_body + position), as
+/// polygons in 2D (one per closed loop: ParaView fills them) and triangles in
+/// 3D. Cell data, the particle's: id
 /// (UInt64), generation (Int32), velocity (3), stress, strength and
 /// criterion_ratio (as in the particle frame). 3D point data: Normals
 /// (Float32, outward unit normals from the level set's gradient, rotated with
@@ -194,14 +228,22 @@ template <int D>
 void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
                        VtkEncoding encoding, std::span<const double> stressMeasure = {});
 
-/// @brief Boundary frame: planes clipped to `extent` (a segment in 2D, a
+/// @brief The boundaries' geometry, one piece per boundary group: piece 0
+/// holds the planes clipped to `extent` (a segment, a line cell, in 2D; a
 /// polygon in 3D; a plane that misses the box is drawn as a segment / square
-/// of the box's diagonal centred at the box centre's projection), then the
-/// tools' surfaces at their current pose. Cells are polylines in 2D and
-/// polygons in 3D. Cell data: kind (Int32, 0 plane, 1 tool), index (Int32,
-/// within its kind), force (3, N: the load of the particles on that boundary
-/// from the last step, zeros before the first).
+/// of the box's diagonal centred at the box centre's projection), piece 1 + k
+/// tool k's surface at its current pose (polygons in 2D, triangles in 3D).
+/// Cell data: kind (Int32, 0 plane, 1 tool), index (Int32, within its kind).
+/// Points are Float32; no time (a piece can stand for many frames: the loads
+/// on the boundaries are in history.csv, docs/outputs.md).
 /// @param extent the scene's domain, world frame, m.
+/// @note Throws std::invalid_argument when the extent is not a box of positive size.
+template <int D>
+std::vector<VtpPiece> boundaryPieces(const dynamics::World<D>& world, SurfaceCache<D>& cache,
+                                     const geometry::Box<D>& extent);
+
+/// @brief Boundary frame: every piece of boundaryPieces in one file (planes,
+/// then tools).
 /// @note Throws std::invalid_argument when the extent is not a box of positive size.
 template <int D>
 void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
@@ -219,15 +261,19 @@ void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World
 template <int D>
 void writeContactFrame(const std::filesystem::path& file, const dynamics::World<D>& world, VtkEncoding encoding);
 
-/// A ParaView time series (`.pvd`): a list of (time, file) entries, rewritten
-/// atomically after every change, so a run killed at any moment leaves a valid
-/// `.pvd` listing frames that exist.
+/// A ParaView time series (`.pvd`): a list of (time, part, file) entries,
+/// rewritten atomically after every change, so a run killed at any moment
+/// leaves a valid `.pvd` listing frames that exist. A frame is one entry, or
+/// several with the same time and parts 0, 1, ... (ParaView shows the parts
+/// of a time as the blocks of one data set); an entry of part 0 starts a frame.
+/// Entries of different frames can name the same file.
 class PvdSeries {
  public:
-  /// One frame of the series.
+  /// One file of a frame of the series.
   struct Entry {
     double time = 0.0;  ///< simulated time, s
     std::string file;   ///< path relative to the .pvd's directory
+    int part = 0;       ///< part of its frame, 0 first
   };
 
   /// @brief A series written to `pvdFile`.
@@ -241,10 +287,15 @@ class PvdSeries {
   /// @brief Appends a frame and rewrites the file.
   /// @param relativeFile path of the frame relative to the .pvd's directory.
   void add(double time, const std::string& relativeFile);
+  /// @brief Appends a frame of several parts (files relative to the .pvd's
+  /// directory, part 0 first) and rewrites the file once.
+  void add(double time, std::span<const std::string> partFiles);
   /// @brief Drops every entry later than `time` (s) and rewrites the file.
   void truncateAfter(double time);
   /// @brief The entries, in order of addition.
   const std::vector<Entry>& entries() const { return entries_; }
+  /// @brief Number of frames (entries of part 0).
+  std::size_t frameCount() const;
   /// @brief The .pvd file.
   const std::filesystem::path& path() const { return path_; }
 
@@ -273,6 +324,16 @@ struct FrameWriterDef {
 /// The four series of a run: `particles.pvd`, `surfaces.pvd`,
 /// `boundaries.pvd`, `contacts.pvd` in the output directory, with frames in
 /// `frames/<series>_NNNNNN.vtp` (NNNNNN the frame number from 0).
+///
+/// Boundaries are written once and referenced while they stay where they
+/// are: each frame of `boundaries.pvd` has one part per piece of
+/// boundaryPieces (part 0 the planes, `frames/boundaries_NNNNNN_planes.vtp`;
+/// part 1 + k tool k, `frames/boundaries_NNNNNN_tool<k>.vtp`), and a piece
+/// whose points and cells are those of its last written file (compared as
+/// written, Float32) is not written again: the frame's entry names that file.
+/// A static floor is one file for the whole run; a moving jaw one per frame.
+/// A resumed writer reads the files the kept frames name, so it makes the
+/// same choices as an uninterrupted run.
 template <int D>
 class FrameWriter {
  public:
@@ -282,7 +343,12 @@ class FrameWriter {
 
   /// @brief Writes one frame of every enabled series at world.time().
   /// @param stressMeasure per particle criterion value (Pa), or empty.
-  void write(const dynamics::World<D>& world, std::span<const double> stressMeasure = {});
+  /// @param stress per particle average stress tensor (eq. 5), or empty: then
+  ///   breakage::grainStresses on the world's contact records (zeros while the
+  ///   records do not describe the particles, right after a breakage).
+  /// @note The particles' stress invariants are those of `stress`.
+  void write(const dynamics::World<D>& world, std::span<const double> stressMeasure = {},
+             std::span<const geometry::Mat<D>> stress = {});
   /// @brief Drops frames later than `time` (s) from every series (resumed runs).
   void truncateAfter(double time);
   /// @brief The number the next frame gets.
@@ -291,10 +357,22 @@ class FrameWriter {
   const FrameWriterDef<D>& def() const { return def_; }
 
  private:
+  /// The last written file of one boundary piece, as written.
+  struct WrittenPiece {
+    std::string file;                ///< relative to the output directory; empty: none yet
+    std::vector<float> points;       ///< Float32 coordinates, as in the file
+    VtkCells lines, polys;
+  };
+
   void updateNextFrame();
+  void writeBoundaries(const dynamics::World<D>& world, const std::string& number);
+  void recallBoundaries(std::size_t pieces);
 
   FrameWriterDef<D> def_;
   SurfaceCache<D> cache_;
+  std::vector<WrittenPiece> boundaryFiles_;  ///< per boundary piece
+  bool boundariesRecalled_ = false;          ///< boundaryFiles_ read from the series (resume) or started
+  std::vector<geometry::Mat<D>> stress_;     ///< scratch: the grains' stress tensors
   std::optional<PvdSeries> particles_, surfaces_, boundaries_, contacts_;
   std::size_t nextFrame_ = 0;
 };
@@ -306,9 +384,15 @@ extern template BodyContour<3> bodyContour<3>(const geometry::Shape<3>&);
 extern template class SurfaceCache<2>;
 extern template class SurfaceCache<3>;
 extern template void writeParticleFrame<2>(const std::filesystem::path&, const dynamics::World<2>&,
-                                           std::span<const double>, VtkEncoding);
+                                           std::span<const double>, VtkEncoding, std::span<const geometry::Mat<2>>);
 extern template void writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&,
-                                           std::span<const double>, VtkEncoding);
+                                           std::span<const double>, VtkEncoding, std::span<const geometry::Mat<3>>);
+extern template StressInvariants stressInvariants<2>(const geometry::Mat<2>&);
+extern template StressInvariants stressInvariants<3>(const geometry::Mat<3>&);
+extern template std::vector<VtpPiece> boundaryPieces<2>(const dynamics::World<2>&, SurfaceCache<2>&,
+                                                        const geometry::Box<2>&);
+extern template std::vector<VtpPiece> boundaryPieces<3>(const dynamics::World<3>&, SurfaceCache<3>&,
+                                                        const geometry::Box<3>&);
 extern template void writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
                                           VtkEncoding, std::span<const double>);
 extern template void writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,

@@ -42,12 +42,23 @@ namespace lsdem::io {
 /// end of the file, a block that does not decompress to its size.
 VtpPiece readVtp(const std::filesystem::path& file);
 
-/// @brief Reads the entries of a ParaView series (`.pvd`): one (time, file)
-/// per `<DataSet timestep=... file=...>`, in file order. The file names are
-/// as written (relative to the `.pvd`'s folder). The file is only read.
+/// @brief Reads the entries of a ParaView series (`.pvd`): one (time, file,
+/// part) per `<DataSet timestep=... file=... [part=...]>`, in file order
+/// (part 0 when the attribute is absent). The file names are as written
+/// (relative to the `.pvd`'s folder). The file is only read.
 /// @note Throws io::InputError when the file cannot be read, is not a
-/// `<VTKFile type="Collection">`, or a DataSet lacks a finite timestep or a file.
+/// `<VTKFile type="Collection">`, or a DataSet lacks a finite timestep or a
+/// file, or has a part that is not a number >= 0.
 std::vector<PvdSeries::Entry> readPvd(const std::filesystem::path& file);
+
+/// @brief The entries of frame `frame` of a series (PvdSeries: an entry of
+/// part 0 starts a frame): its parts, in file order.
+/// @return empty when the series has no such frame.
+std::vector<PvdSeries::Entry> frameEntries(const std::vector<PvdSeries::Entry>& entries, std::size_t frame);
+
+/// @brief The number of frames of a series (its entries of part 0).
+std::size_t frameCount(const std::vector<PvdSeries::Entry>& entries);
+
 
 /// @brief The array called `name` in `arrays`, or nullptr.
 const VtkArray* findArray(const std::vector<VtkArray>& arrays, std::string_view name);
