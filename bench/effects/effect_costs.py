@@ -3,10 +3,15 @@
 
 Runs a shipped scene as it is and with one effect or output left out at a time,
 each `--repeats` times for `--steps` steps on one thread, and prints a Markdown
-table: ms per step (median wall time of the run over its steps), the difference
-to the scene as shipped, and for effects the seconds the world itself measured
-for them (summary.json `effects`). An effect or output the scene does not
-declare is not built: leaving it out removes its whole cost.
+table: ms per step (median wall time of the run over its steps, set-up
+included), the difference to the scene as shipped, and for effects the seconds
+the world itself measured for them (summary.json `effects`, and the energy
+ledger's `stage_seconds.energy`). An effect or output the scene does not
+declare is not built: leaving it out removes its whole cost. Leaving out an
+output or the energy ledger leaves the motion as it is, so the difference is
+that output's cost; leaving out gravity, damping, breakage or the outflow
+changes the motion, so there the measured seconds inside the step are the
+effect's cost.
 
   python3 bench/effects/effect_costs.py --lsdem build/apps/lsdem \
       apps/scenes/oedometer/oedometer_2d.toml --steps 20000
@@ -74,7 +79,9 @@ def variants(text):
     out = [("nothing (the scene as shipped)", text)]
     for key in ("gravity", "global_damping", "local_damping", "outflow"):
         if has_key(text, "effects", key):
-            out.append((f"effect `{key}`", without_key(text, "effects", key)))
+            # the discharge classifies what the outflow removes: it goes too
+            variant = without_key(text, "effects", key)
+            out.append((f"effect `{key}`", without_key(variant, "effects", "discharge") if key == "outflow" else variant))
     if has_section(text, "effects.breakage"):
         out.append(("effect `breakage`", without_section(text, "effects.breakage")))
     if has_section(text, "effects"):
