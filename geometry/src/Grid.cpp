@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -75,6 +77,54 @@ double Grid<D>::maxGradientNorm() const {
     largest2 = std::max(largest2, g2);
   }
   return std::sqrt(largest2) / spacing_;
+}
+
+template <int D>
+std::vector<float> Grid<D>::cubicDeviationBounds() const {
+  std::array<std::size_t, D> stride;
+  stride[0] = 1;
+  for (int a = 1; a < D; ++a) stride[a] = stride[a - 1] * std::size_t(dims_[a - 1]);
+  const std::size_t n = values_.size();
+  // Per axis: |second difference| at every node (border neighbours clamped,
+  // as the interpolant's stencil is), then its largest value over the
+  // window [c - 1, c + 2] along every axis (separable maximum filters).
+  std::array<std::vector<double>, D> largest;
+  std::vector<double> scratch(n);
+  for (int a = 0; a < D; ++a) {
+    std::vector<double>& m = largest[a];
+    m.assign(n, 0.0);
+    Index<D> i = Index<D>::Zero();
+    for (std::size_t q = 0; q < n; ++q, advance(i)) {
+      const double below = i[a] > 0 ? values_[q - stride[a]] : values_[q];
+      const double above = i[a] + 1 < dims_[a] ? values_[q + stride[a]] : values_[q];
+      m[q] = std::abs(below - 2.0 * double(values_[q]) + above);
+    }
+    for (int b = 0; b < D; ++b) {
+      i = Index<D>::Zero();
+      for (std::size_t q = 0; q < n; ++q, advance(i)) {
+        double best = m[q];
+        for (int k = -1; k <= 2; ++k) {
+          const int j = i[b] + k;
+          if (j >= 0 && j < dims_[b]) best = std::max(best, m[std::size_t(std::ptrdiff_t(q) + std::ptrdiff_t(j - i[b]) * std::ptrdiff_t(stride[b]))]);
+        }
+        scratch[q] = best;
+      }
+      m.swap(scratch);
+    }
+  }
+  // The bound per cell: ((5/4)^(D-1) M_x + (5/4)^(D-2) M_y + ... + M_last) / 8.
+  std::vector<float> bound(n, 0.0f);
+  Index<D> i = Index<D>::Zero();
+  for (std::size_t q = 0; q < n; ++q, advance(i)) {
+    if ((i >= dims_ - 1).any()) continue;
+    double e = 0.0, factor = 1.0;
+    for (int a = D - 1; a >= 0; --a, factor *= 1.25) e += factor * largest[a][q];
+    e /= 8.0;
+    float f = float(e);
+    if (double(f) < e) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    bound[q] = f;
+  }
+  return bound;
 }
 
 template class Grid<2>;
