@@ -243,8 +243,9 @@ constexpr double kCertificateSlack = 1e-6;
 // (Grid::cubicValueAtCells). The rejections keep their multilinear tests,
 // with E = other.cubicMargin() taken off: where the multilinear value
 // exceeds E the cubic is positive, so a cell is rejected when
-// phi(c') - L r > E, a node's certificate margin is (phi_lin - E) / L, and
-// the bounding sphere is Shape::cubicBoundingRadius().
+// phi(c') - L r > E, a node is rejected without the cubic look-up when
+// phi_lin > E (its certificate margin (phi_lin - E) / L; a node nearer than
+// that gets none), and the bounding sphere is Shape::cubicBoundingRadius().
 template <int D, ForceFormulation Formulation, bool Cubic>
 std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
@@ -370,10 +371,12 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     Vec<D> grad;
     double phi;
     if constexpr (Cubic) {
+      // The multilinear value first: above the cubic margin the cubic is
+      // positive (Shape::cubicMargin), and most nodes tested are there.
+      const double clear = grid.valueAtCells(g) - other.cubicMargin() - margin;
+      if (clear > 0.0) return certify ? clear * perSlopeCell : 0.0;
       phi = grid.cubicValueAtCellsGradientBelow(g, 0.0, grad);
-      if (!(phi < 0.0)) {
-        return certify ? std::max(0.0, (grid.valueAtCells(g) - other.cubicMargin() - margin) * perSlopeCell) : 0.0;
-      }
+      if (!(phi < 0.0)) return 0.0;
     } else {
       phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
       if (!(phi < 0.0)) return certify ? (phi - margin) * perSlopeCell : 0.0;

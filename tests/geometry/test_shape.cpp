@@ -133,7 +133,9 @@ void checkCubicMarginAndReach(const Shape<D>& shape) {
     for (int a = 0; a < D; ++a) c[a] = u(rng) * double(g.dims()[a] - 1);
     const double cubic = g.cubicValueAtCells(c);
     // Where the multilinear value exceeds E the cubic is positive ...
-    if (g.valueAtCells(c) > E) ASSERT_GT(cubic, 0.0);
+    if (g.valueAtCells(c) > E) {
+      ASSERT_GT(cubic, 0.0);
+    }
     // ... and where the cubic is negative the point is in the cubic bounding sphere.
     if (cubic < 0.0) {
       ++negative;

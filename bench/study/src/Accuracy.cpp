@@ -137,7 +137,14 @@ AccuracyReport runStudy(const AccuracyOptions& options) {
   std::vector<Planned> plan;
   const AccuracySetting base;
   for (double c : lists.cells) plan.push_back({"cells", c, [&] { auto s = base; s.cellsAcross = c; return s; }()});
-  for (double c : lists.cells) {
+  // The two method knobs over the same cells and the baseline's (10, which
+  // the quick list skips), so they compare with the baseline directly.
+  std::vector<double> methodCells = lists.cells;
+  if (std::find(methodCells.begin(), methodCells.end(), base.cellsAcross) == methodCells.end()) {
+    methodCells.push_back(base.cellsAcross);
+    std::sort(methodCells.begin(), methodCells.end());
+  }
+  for (double c : methodCells) {
     plan.push_back({"cells_tricubic", c, [&] {
                       auto s = base;
                       s.cellsAcross = c;
@@ -145,7 +152,7 @@ AccuracyReport runStudy(const AccuracyOptions& options) {
                       return s;
                     }()});
   }
-  for (double c : lists.cells) {
+  for (double c : methodCells) {
     plan.push_back({"cells_grid_nodes", c, [&] {
                       auto s = base;
                       s.cellsAcross = c;

@@ -154,13 +154,15 @@ class Grid {
 
   /// @brief Per cell, a bound on |cubic - multilinear| over the cell (world
   /// units), stored at the cell's lowest corner (entries at the last node of
-  /// an axis are 0). Per axis, Catmull-Rom minus linear on a cell is
+  /// an axis are 0). The tensor product is written as a telescoping sum,
+  /// C_x C_y C_z - L_x L_y L_z = (C_x - L_x) C_y C_z + L_x (C_y - L_y) C_z +
+  /// L_x L_y (C_z - L_z). Per axis, Catmull-Rom minus linear on a cell is
   /// alpha(t) D2[i] + beta(t) D2[i+1] with |alpha| + |beta| = t(1-t)/2 <= 1/8
-  /// (D2 the second differences at the cell's ends) and the Catmull-Rom
-  /// weights sum in absolute value to 1 + t(1-t) <= 5/4, so with M_a the
-  /// largest |D2| along axis a over the cell's 4^D stencil the bound is
-  /// ((5/4)^(D-1) M_x + ... + M_last) / 8 (the tensor product written as a
-  /// telescoping sum of one-axis differences). Rounded up to float.
+  /// (D2 the second differences at the cell's two nodes); the Catmull-Rom
+  /// weights of the inner two nodes sum to at most 9/8, the outer two's
+  /// absolute values to at most 1/8, the linear weights to 1. Each term is
+  /// bounded by filtering |D2| with those weights axis by axis. Rounded up
+  /// to float.
   std::vector<float> cubicDeviationBounds() const;
 
   /// @brief The largest |grad phi| of the multilinear interpolant inside the
