@@ -303,7 +303,7 @@ TEST(ContactConvergence, TricubicPairOfCirclesConvergesFasterThanSecondOrder2D) 
               e20, p, grid10);
   EXPECT_LT(std::abs(e10), 0.02);
   EXPECT_LT(std::abs(e20), 0.01);
-  EXPECT_GT(p, 2.5);
+  EXPECT_GT(p, 3.0);
 }
 
 // The area-weighted law's stiffness stays flat against node density with

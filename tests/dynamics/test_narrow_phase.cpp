@@ -247,7 +247,7 @@ void checkOrderIndependence() {
 // A dense random cluster of grains in a box of planes with a tool: forces,
 // torques and node contacts after a few steps, as raw bytes.
 template <int D>
-std::vector<unsigned char> clusterRun(int threads, std::size_t count) {
+std::vector<unsigned char> clusterRun(int threads, std::size_t count, const ContactLawDef& law = {}) {
 #ifdef _OPENMP
   const int before = omp_get_max_threads();
   omp_set_num_threads(threads);
@@ -286,7 +286,7 @@ std::vector<unsigned char> clusterRun(int threads, std::size_t count) {
   tool.velocity = Vec<D>::UnitX() * 0.1;
   tool.angularVelocity = randomSpin<D>(rng, 0.5);
   const std::vector<ToolPose<D>> tools{tool};
-  ContactSolver<D> solver(ContactLawDef{});
+  ContactSolver<D> solver(law);
   std::vector<unsigned char> bytes;
   const auto append = [&](const void* data, std::size_t size) {
     const auto* b = static_cast<const unsigned char*>(data);
@@ -557,6 +557,13 @@ TEST(NarrowPhase, OneAndTwoThreadsAreBitwiseIdentical) {
   const std::vector<unsigned char> one3 = clusterRun<3>(1, 64), two3 = clusterRun<3>(2, 64);
   ASSERT_EQ(one3.size(), two3.size());
   EXPECT_EQ(std::memcmp(one3.data(), two3.data(), one3.size()), 0);
+  // The tricubic look-up too.
+  ContactLawDef cubic;
+  cubic.interpolation = LevelSetInterpolation::Tricubic;
+  const std::vector<unsigned char> oneC = clusterRun<3>(1, 64, cubic), twoC = clusterRun<3>(2, 64, cubic);
+  ASSERT_EQ(oneC.size(), twoC.size());
+  EXPECT_EQ(std::memcmp(oneC.data(), twoC.data(), oneC.size()), 0);
+  EXPECT_NE(oneC, one3);  // a different look-up, different forces
 #endif
 }
 
