@@ -186,6 +186,67 @@ void BM_TrilinearLookup(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * std::int64_t(points.size()));
   state.SetLabel(nearSurface ? "look-ups near the surface" : "look-ups in the box");
 }
+// The narrow phase's own look-up, trilinear (argument 0) against
+// Catmull-Rom tricubic (argument 1): value at grid coordinates and, where it
+// is negative, the gradient (Grid::valueAtCellsGradientBelow and its cubic
+// twin), at points within one cell of the surface of a sphere 10 cells
+// across (the accuracy study's baseline grid). Items = look-ups.
+template <int D>
+void BM_LookupAtCells(benchmark::State& state) {
+  const geometry::Grid<D> grid = geometry::sphereGrid<D>(0.5, 1.0 / 10.0);
+  const geometry::Box<D> box = grid.bounds();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const bool cubic = state.range(0) == 1;
+  std::vector<Vec<D>> points;  // grid coordinates
+  while (points.size() < (std::size_t(1) << 16)) {
+    Vec<D> x;
+    for (int a = 0; a < D; ++a) x[a] = box.lower[a] + u(rng) * (box.upper[a] - box.lower[a]);
+    if (std::abs(grid.value(x)) > grid.spacing()) continue;
+    points.push_back(grid.toGrid(x));
+  }
+  double sum = 0.0;
+  Vec<D> grad = Vec<D>::Zero();
+  for (auto _ : state) {
+    if (cubic) {
+      for (const Vec<D>& g : points) sum += grid.cubicValueAtCellsGradientBelow(g, 0.0, grad);
+    } else {
+      for (const Vec<D>& g : points) sum += grid.valueAtCellsGradientBelow(g, 0.0, grad);
+    }
+    benchmark::DoNotOptimize(sum);
+    benchmark::DoNotOptimize(grad);
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(points.size()));
+  state.SetLabel(cubic ? "tricubic" : "trilinear");
+}
+BENCHMARK(BM_LookupAtCells<3>)->Arg(0)->Arg(1);
+BENCHMARK(BM_LookupAtCells<2>)->Arg(0)->Arg(1);
+
+// compute() as BM_NarrowPhase with the trilinear (argument 3 = 0) or
+// tricubic (1) look-up; items = node checks.
+template <int D>
+void BM_NarrowPhaseInterpolation(benchmark::State& state) {
+  const Cluster<D> c = makeCluster<D>(int(state.range(0)), double(state.range(1)), 0.01 * double(state.range(2)));
+  ContactLawDef law;
+  law.interpolation = state.range(3) == 1 ? LevelSetInterpolation::Tricubic : LevelSetInterpolation::Trilinear;
+  ContactSolver<D> solver(law);
+  for (int warm = 0; warm < 2; ++warm) solver.compute(c.particles, c.pairs, {}, {}, 1e-6);
+  for (auto _ : state) {
+    solver.compute(c.particles, c.pairs, {}, {}, 1e-6);
+    benchmark::DoNotOptimize(solver.pairContacts().data());
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(solver.nodeChecks()));
+  state.counters["node contacts"] = double(solver.nodeContacts().size());
+  state.SetLabel(state.range(3) == 1 ? "tricubic" : "trilinear");
+}
+BENCHMARK(BM_NarrowPhaseInterpolation<3>)
+    ->Args({10, 10, 97, 0})
+    ->Args({10, 10, 97, 1})
+    ->Args({10, 10, 90, 0})
+    ->Args({10, 10, 90, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 BENCHMARK(BM_TrilinearLookup<3>)->Arg(0)->Arg(1);
 BENCHMARK(BM_TrilinearLookup<2>)->Arg(1);
 BENCHMARK(BM_NarrowPhase<3>)->Args({4, 20, 90})->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -238,7 +238,15 @@ constexpr double kCertificateSlack = 1e-6;
 // moved by the margin relative to the other's grid, so the next walk is
 // spared while the composed map has moved less (README "Separation
 // certificates").
-template <int D, ForceFormulation Formulation>
+//
+// Cubic: the node look-up is the Catmull-Rom interpolant
+// (Grid::cubicValueAtCells). The rejections keep their multilinear tests,
+// with E = other.cubicMargin() taken off: where the multilinear value
+// exceeds E the cubic is positive, so a cell is rejected when
+// phi(c') - L r > E, a node is rejected without the cubic look-up when
+// phi_lin > E (its certificate margin (phi_lin - E) / L; a node nearer than
+// that gets none), and the bounding sphere is Shape::cubicBoundingRadius().
+template <int D, ForceFormulation Formulation, bool Cubic>
 std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
                               std::uint8_t ownerIsB, ThreadBuffers<D>& buf, const CertificateKey<D>* key) {
@@ -257,7 +265,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // its centroid, the grid-frame image of the body origin) and its node box.
   const Vec<D> upper = (grid.dims() - 1).template cast<double>().matrix();
   const Vec<D> centre = (toGrid.translation - grid.origin()) / h;
-  const double reach = other.boundingRadius() / h;
+  const double reach = (Cubic ? other.cubicBoundingRadius() : other.boundingRadius()) / h;
   const double reach2 = reach * reach;
   const double slope = other.levelSetSlope();
   // Round-off of the look-up and of the mapped centre, far below any overlap that matters.
@@ -327,7 +335,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     // the box are tested: a centre outside the box is replaced by its closest
     // point of the box, no farther from any node in the box.
     const Vec<D> inside = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
-    const double above = grid.valueAtCells(inside) - (slope * cell.radius + margin);
+    double above = grid.valueAtCells(inside) - (slope * cell.radius + margin);
+    if constexpr (Cubic) above -= other.cubicMargin();
     if (above > 0.0) {
       clear = above * perSlopeCell;
       return true;
@@ -360,14 +369,31 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     if (outside > 0.0) return certify ? outside : 0.0;
     // The value; the gradient, from the same corners, only for the few nodes inside.
     Vec<D> grad;
-    const double phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
-    if (!(phi < 0.0)) return certify ? (phi - margin) * perSlopeCell : 0.0;
+    double phi;
+    if constexpr (Cubic) {
+      // The multilinear value first: above the cubic margin the cubic is
+      // positive (Shape::cubicMargin), and most nodes tested are there.
+      const double clear = grid.valueAtCells(g) - other.cubicMargin() - margin;
+      if (clear > 0.0) return certify ? clear * perSlopeCell : 0.0;
+      phi = grid.cubicValueAtCellsGradientBelow(g, 0.0, grad);
+      if (!(phi < 0.0)) return 0.0;
+    } else {
+      phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
+      if (!(phi < 0.0)) return certify ? (phi - margin) * perSlopeCell : 0.0;
+    }
     // A node at a point of zero gradient (a medial point) has no normal: skipped.
     Vec<D> normal = gradToWorld * grad;
     const double length = normal.norm();
     if (!(length > 0.0)) return 0.0;
     // Whole records, not value-initialised then written field by field.
-    buf.nodes.push_back({Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB});
+    if constexpr (Cubic) {
+      // (Appended from an lvalue: another std::vector member than the
+      // trilinear path's, which GCC then keeps inlined there as before.)
+      const NodeContact<D> record{Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB};
+      buf.nodes.push_back(record);
+    } else {
+      buf.nodes.push_back({Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB});
+    }
     buf.work.push_back({stiffnessFactor<Formulation>(weights[i], weightToFactor), directionWeight * weights[i],
                         length / h, -1});
     return 0.0;
@@ -442,7 +468,13 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     // The whole tree, keeping the leaves that survive and their margins.
     buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
       const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
-      detail::KeptLeaf& kept = buf.leaves.emplace_back();
+      // (The cubic path appends a copy: see the node records above.)
+      if constexpr (Cubic) {
+        buf.leaves.push_back(detail::KeptLeaf{});
+      } else {
+        buf.leaves.emplace_back();
+      }
+      detail::KeptLeaf& kept = buf.leaves.back();
       kept.cell = index;
       kept.cellMargin = -lowered(passed);
       tested += cell.end - cell.begin;
@@ -926,6 +958,9 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   law.dt = dt;
   law.shearDt = shearDt;
 
+  // The look-up in the other body's level set, chosen once per compute().
+  const bool cubic = law_.interpolation == LevelSetInterpolation::Tricubic;
+
   // Tasks: one per candidate pair, then one per particle for the planes and one for the tools.
   const std::size_t n = p.size();
   const std::size_t pairTasks = pairs.size();
@@ -1037,7 +1072,8 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         ba = certificateKey(2 * k + 1, p.id[ib], p.id[ia]);
       }
       // Bounding spheres apart: no node can touch.
-      const double reach = sa.boundingRadius() + sb.boundingRadius();
+      const double reach = cubic ? sa.cubicBoundingRadius() + sb.cubicBoundingRadius()
+                                 : sa.boundingRadius() + sb.boundingRadius();
       if ((xb - xa).squaredNorm() > reach * reach) return;
       // Nodes of a in b, then nodes of b in a.
       const Mat<D>& Ra = rotations_[ia];
@@ -1045,8 +1081,13 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       const std::size_t begin = buf.nodes.size();
       const CertificateKey<D>* abKey = certify ? &ab : nullptr;
       const CertificateKey<D>* baKey = certify ? &ba : nullptr;
-      buf.nodeChecks += collectLevelSet<D, Formulation>(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf, abKey);
-      buf.nodeChecks += collectLevelSet<D, Formulation>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf, baKey);
+      if (cubic) {
+        buf.nodeChecks += collectLevelSet<D, Formulation, true>(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf, abKey);
+        buf.nodeChecks += collectLevelSet<D, Formulation, true>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf, baKey);
+      } else {
+        buf.nodeChecks += collectLevelSet<D, Formulation, false>(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf, abKey);
+        buf.nodeChecks += collectLevelSet<D, Formulation, false>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf, baKey);
+      }
       if (buf.nodes.size() == begin) return;
       // The law on the pair's node contacts.
       double radius = 0.0;
@@ -1097,12 +1138,17 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         if (certify) key = certificateKey(2 * pairTasks + std::size_t(i) * tools.size() + j, p.id[std::size_t(i)],
                                           kToolTag | std::uint64_t(j));
         // Bounding spheres apart: no node can touch.
-        const double reach = s.boundingRadius() + ts.boundingRadius();
+        const double reach = s.boundingRadius() + (cubic ? ts.cubicBoundingRadius() : ts.boundingRadius());
         if ((tool.position - x).squaredNorm() > reach * reach) continue;
         const std::size_t begin = buf.nodes.size();
-        buf.nodeChecks += collectLevelSet<D, Formulation>(s, rotations_[std::size_t(i)], x, ts,
-                                                          Rotation<D>::matrix(tool.orientation), tool.position, 1.0,
-                                                          1.0, 0, buf, certify ? &key : nullptr);
+        const Mat<D> toolRotation = Rotation<D>::matrix(tool.orientation);
+        if (cubic) {
+          buf.nodeChecks += collectLevelSet<D, Formulation, true>(s, rotations_[std::size_t(i)], x, ts, toolRotation,
+                                                                  tool.position, 1.0, 1.0, 0, buf, certify ? &key : nullptr);
+        } else {
+          buf.nodeChecks += collectLevelSet<D, Formulation, false>(s, rotations_[std::size_t(i)], x, ts, toolRotation,
+                                                                   tool.position, 1.0, 1.0, 0, buf, certify ? &key : nullptr);
+        }
         if (buf.nodes.size() == begin) continue;
         double radius = 0.0;
         if constexpr (Normal == NormalModel::Hertz) {

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -75,6 +77,54 @@ double Grid<D>::maxGradientNorm() const {
     largest2 = std::max(largest2, g2);
   }
   return std::sqrt(largest2) / spacing_;
+}
+
+template <int D>
+std::vector<float> Grid<D>::cubicDeviationBounds() const {
+  std::array<std::size_t, D> stride;
+  stride[0] = 1;
+  for (int a = 1; a < D; ++a) stride[a] = stride[a - 1] * std::size_t(dims_[a - 1]);
+  const std::size_t n = values_.size();
+  // The value at node q shifted by k along axis b, the index clamped to the
+  // grid as the interpolant's stencil is.
+  const auto at = [&](const std::vector<double>& m, std::size_t q, const Index<D>& i, int b, int k) {
+    const int j = std::clamp(i[b] + k, 0, dims_[b] - 1);
+    return m[std::size_t(std::ptrdiff_t(q) + std::ptrdiff_t(j - i[b]) * std::ptrdiff_t(stride[b]))];
+  };
+  std::vector<double> term(n), scratch(n);
+  std::vector<double> total(n, 0.0);
+  for (int a = 0; a < D; ++a) {
+    // |second difference| along a at every node (border neighbours clamped).
+    Index<D> i = Index<D>::Zero();
+    for (std::size_t q = 0; q < n; ++q, advance(i)) {
+      const double below = i[a] > 0 ? values_[q - stride[a]] : values_[q];
+      const double above = i[a] + 1 < dims_[a] ? values_[q + stride[a]] : values_[q];
+      term[q] = std::abs(below - 2.0 * double(values_[q]) + above);
+    }
+    // Axis a's term of the telescoping sum: the linear weights on the axes
+    // before a and a's own (the cell's two nodes), the Catmull-Rom weights
+    // on the axes after it, whose sums of |weight| over the inner and outer
+    // pair are at most 9/8 and 1/8 for every t. One axis at a time.
+    for (int b = 0; b < D; ++b) {
+      i = Index<D>::Zero();
+      for (std::size_t q = 0; q < n; ++q, advance(i)) {
+        const double inner = std::max(term[q], at(term, q, i, b, 1));
+        scratch[q] = b <= a ? inner : 1.125 * inner + 0.125 * std::max(at(term, q, i, b, -1), at(term, q, i, b, 2));
+      }
+      term.swap(scratch);
+    }
+    for (std::size_t q = 0; q < n; ++q) total[q] += term[q] / 8.0;
+  }
+  // Per cell, rounded up to a float.
+  std::vector<float> bound(n, 0.0f);
+  Index<D> i = Index<D>::Zero();
+  for (std::size_t q = 0; q < n; ++q, advance(i)) {
+    if ((i >= dims_ - 1).any()) continue;
+    float f = float(total[q]);
+    if (double(f) < total[q]) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    bound[q] = f;
+  }
+  return bound;
 }
 
 template class Grid<2>;

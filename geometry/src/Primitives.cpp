@@ -363,6 +363,23 @@ Grid<D> ellipsoidGrid(const Vec<D>& semiAxes, double spacing, int paddingCells) 
 }
 
 template <int D>
+double superellipsoidRadialDistance(const Vec<D>& x, const Vec<D>& semiAxes, const std::vector<double>& exponents) {
+  // The inside-outside function F = N^n1 is homogeneous, so its "norm" N is of
+  // degree 1: the surface point on the ray through x is x / N, and
+  // |x| (1 - 1/N) is the signed distance along that ray (exact on the surface).
+  const Vec<D> u = (x.array() / semiAxes.array()).abs().matrix();
+  double norm;
+  if constexpr (D == 2) {
+    norm = powerNorm(u[0], u[1], exponents[0]);
+  } else {
+    norm = powerNorm(powerNorm(u[0], u[1], exponents[1]), u[2], exponents[0]);
+  }
+  // The centre is inside; any negative value does (sweeping replaces it).
+  if (norm == 0.0) return -semiAxes.minCoeff();
+  return x.norm() * (1.0 - 1.0 / norm);
+}
+
+template <int D>
 Grid<D> superellipsoidGrid(const Vec<D>& semiAxes, const std::vector<double>& exponents, double spacing,
                            int paddingCells) {
   requirePositive<D>(semiAxes, "superellipsoidGrid", "semiAxes");
@@ -373,24 +390,10 @@ Grid<D> superellipsoidGrid(const Vec<D>& semiAxes, const std::vector<double>& ex
   }
   for (const double e : exponents) requirePositive(e, "superellipsoidGrid", "exponent");
 
-  // The inside-outside function F = N^n1 is homogeneous, so its "norm" N is of
-  // degree 1: the surface point on the ray through x is x / N, and
-  // |x| (1 - 1/N) is the signed distance along that ray (exact on the surface).
-  const double aMin = semiAxes.minCoeff();
-  auto radialDistance = [&](const Vec<D>& x) {
-    const Vec<D> u = (x.array() / semiAxes.array()).abs().matrix();
-    double norm;
-    if constexpr (D == 2) {
-      norm = powerNorm(u[0], u[1], exponents[0]);
-    } else {
-      norm = powerNorm(powerNorm(u[0], u[1], exponents[1]), u[2], exponents[0]);
-    }
-    // The centre is inside; any negative value does (sweeping replaces it).
-    if (norm == 0.0) return -aMin;
-    return x.norm() * (1.0 - 1.0 / norm);
-  };
   const Box<D> box{-semiAxes, semiAxes};
-  Grid<D> grid = sampleGrid<D>(box, spacing, paddingCells, radialDistance);
+  Grid<D> grid = sampleGrid<D>(box, spacing, paddingCells, [&](const Vec<D>& x) {
+    return superellipsoidRadialDistance<D>(x, semiAxes, exponents);
+  });
 
   // Signed distance everywhere (eq. 17), nodes next to the surface subcell-accurate.
   reinitializeFastSweeping(grid);
@@ -423,6 +426,8 @@ template Grid<2> boxGrid<2>(const Vec<2>&, double, double, int);
 template Grid<3> boxGrid<3>(const Vec<3>&, double, double, int);
 template Grid<2> ellipsoidGrid<2>(const Vec<2>&, double, int);
 template Grid<3> ellipsoidGrid<3>(const Vec<3>&, double, int);
+template double superellipsoidRadialDistance<2>(const Vec<2>&, const Vec<2>&, const std::vector<double>&);
+template double superellipsoidRadialDistance<3>(const Vec<3>&, const Vec<3>&, const std::vector<double>&);
 template Grid<2> superellipsoidGrid<2>(const Vec<2>&, const std::vector<double>&, double, int);
 template Grid<3> superellipsoidGrid<3>(const Vec<3>&, const std::vector<double>&, double, int);
 

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
+#include <memory>
 #include <numbers>
 #include <random>
 #include <sstream>
@@ -269,51 +271,75 @@ void validate(const RandomGrainDef& def, double spacing) {
 
 }  // namespace
 
+namespace {
+
+/// A grain's profile and its placement: r0, the stretch and the bounding box.
 template <int D>
-Grid<D> randomGrainGrid(const RandomGrainDef& def, double spacing, int paddingCells) {
-  validate(def, spacing);
+struct GrainModel {
+  Profile<D> profile;
+  double r0 = 0.0;
+  Vec<D> stretch;
+  Box<D> box;
+  double centreValue = 0.0;
 
-  // Draw the profile r / r0.
-  Random random(def.seed);
-  const Profile<D> profile(random, def.roughness);
+  explicit GrainModel(const RandomGrainDef& def, Random&& random)
+      : profile(random, def.roughness) {
+    // r0 from the area 1/2 int rho^2 dtheta (2D) or volume 1/3 int rho^3 dOmega
+    // (3D) of the profile, by quadrature, and the largest rho for the bounding box.
+    std::vector<Vec<D>> dirs;
+    std::vector<double> weights;
+    Profile<D>::quadrature(dirs, weights);
+    double moment = 0.0, rhoMax = 0.0;
+    for (std::size_t k = 0; k < dirs.size(); ++k) {
+      const double rho = profile(dirs[k]);
+      moment += weights[k] * std::pow(rho, D) / D;
+      rhoMax = std::max(rhoMax, rho);
+    }
+    const double d = def.equivalentDiameter;
+    const double target = (D == 2) ? kPi * d * d / 4.0 : kPi * d * d * d / 6.0;
+    r0 = std::pow(target / moment, 1.0 / D);
 
-  // r0 from the area 1/2 int rho^2 dtheta (2D) or volume 1/3 int rho^3 dOmega
-  // (3D) of the profile, by quadrature, and the largest rho for the bounding box.
-  std::vector<Vec<D>> dirs;
-  std::vector<double> weights;
-  Profile<D>::quadrature(dirs, weights);
-  double moment = 0.0, rhoMax = 0.0;
-  for (std::size_t k = 0; k < dirs.size(); ++k) {
-    const double rho = profile(dirs[k]);
-    moment += weights[k] * std::pow(rho, D) / D;
-    rhoMax = std::max(rhoMax, rho);
+    // Bounding box of the stretched grain, 2% beyond the sampled maximum radius.
+    stretch = stretchFactors<D>(def.elongation);
+    const Vec<D> half = 1.02 * r0 * rhoMax * stretch;
+    box = Box<D>{-half, half};
+    centreValue = -kFloor * r0 * stretch.minCoeff();
   }
-  const double d = def.equivalentDiameter;
-  const double target = (D == 2) ? kPi * d * d / 4.0 : kPi * d * d * d / 6.0;
-  const double r0 = std::pow(target / moment, 1.0 / D);
-
-  // Bounding box of the stretched grain, 2% beyond the sampled maximum radius.
-  const Vec<D> stretch = stretchFactors<D>(def.elongation);
-  const Vec<D> half = 1.02 * r0 * rhoMax * stretch;
-  const Box<D> box{-half, half};
 
   // Signed distance along the ray from the centre: the ray through x meets the
   // surface at x r(dir x') / |x'|, with x' = x / stretch the unstretched point.
-  const double centreValue = -kFloor * r0 * stretch.minCoeff();
-  auto radialDistance = [&](const Vec<D>& x) {
+  double radialDistance(const Vec<D>& x) const {
     const Vec<D> xu = (x.array() / stretch.array()).matrix();
     const double radius = xu.norm();
     if (radius == 0.0) return centreValue;
     return x.norm() * (1.0 - r0 * profile(xu / radius) / radius);
-  };
-  Grid<D> grid = sampleGrid<D>(box, spacing, paddingCells, radialDistance);
+  }
+};
+
+}  // namespace
+
+template <int D>
+Grid<D> randomGrainGrid(const RandomGrainDef& def, double spacing, int paddingCells) {
+  validate(def, spacing);
+  const GrainModel<D> grain(def, Random(def.seed));
+  Grid<D> grid = sampleGrid<D>(grain.box, spacing, paddingCells,
+                               [&](const Vec<D>& x) { return grain.radialDistance(x); });
 
   // Signed distance everywhere (eq. 17).
   reinitializeFastSweeping(grid);
   return grid;
 }
 
+template <int D>
+std::function<double(const Vec<D>&)> randomGrainSurface(const RandomGrainDef& def) {
+  validate(def, 1.0);
+  auto grain = std::make_shared<const GrainModel<D>>(def, Random(def.seed));
+  return [grain](const Vec<D>& x) { return grain->radialDistance(x); };
+}
+
 template Grid<2> randomGrainGrid<2>(const RandomGrainDef&, double, int);
 template Grid<3> randomGrainGrid<3>(const RandomGrainDef&, double, int);
+template std::function<double(const Vec<2>&)> randomGrainSurface<2>(const RandomGrainDef&);
+template std::function<double(const Vec<3>&)> randomGrainSurface<3>(const RandomGrainDef&);
 
 }  // namespace lsdem::geometry

@@ -3,6 +3,7 @@
 #include "lsdem/geometry/SurfaceNodes.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -166,6 +167,39 @@ template <int D>
 void Shape<D>::deriveSearchData() {
   nodeTree_ = NodeTree<D>::build(nodes_.positions);
   levelSetSlope_ = grid_.maxGradientNorm();
+
+  // The tricubic look-up's margin and reach: the cells where the cubic may
+  // be <= 0 (smallest corner - deviation bound <= 0; elsewhere it is above
+  // the multilinear interpolant's corner minimum less the bound, > 0).
+  const std::vector<float> deviation = grid_.cubicDeviationBounds();
+  const Index<D> dims = grid_.dims();
+  std::array<std::size_t, 1 << D> cornerOffset;
+  for (int c = 0; c < (1 << D); ++c) {
+    Index<D> corner;
+    for (int a = 0; a < D; ++a) corner[a] = (c >> a) & 1;
+    cornerOffset[std::size_t(c)] = grid_.linear(corner);
+  }
+  double margin = 0.0;
+  double reach2 = boundingRadius_ * boundingRadius_;
+  Index<D> i = Index<D>::Zero();
+  for (std::size_t n = 0; n < grid_.size(); ++n, grid_.advance(i)) {
+    if ((i >= dims - 1).any()) continue;
+    double lo = grid_[n], hi = grid_[n];
+    for (const std::size_t o : cornerOffset) {
+      lo = std::min(lo, double(grid_[n + o]));
+      hi = std::max(hi, double(grid_[n + o]));
+    }
+    const double e = deviation[n];
+    if (lo - e > 0.0) continue;
+    margin = std::max(margin, std::min(e, hi));
+    for (int c = 0; c < (1 << D); ++c) {
+      Index<D> corner = i;
+      for (int a = 0; a < D; ++a) corner[a] += (c >> a) & 1;
+      reach2 = std::max(reach2, (grid_.nodePosition(corner) - bodyToGrid_.translation).squaredNorm());
+    }
+  }
+  cubicMargin_ = margin;
+  cubicBoundingRadius_ = std::sqrt(reach2);
 }
 
 template <int D>

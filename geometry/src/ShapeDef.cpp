@@ -119,8 +119,59 @@ Grid<D> buildGrid(const ShapeDef<D>& def, MeshImportReport* meshReport) {
 }
 
 template <int D>
+SurfaceFunction<D> exactSurface(const ShapeDef<D>& def) {
+  // Check the dimensions once (the sampled grid does the same), not per call.
+  switch (def.kind) {
+    case ShapeKind::Sphere: {
+      (void)sdfSphere<D>(Vec<D>::Zero(), def.radius);
+      const double r = def.radius;
+      return [r](const Vec<D>& x) { return x.norm() - r; };
+    }
+    case ShapeKind::Box: {
+      (void)sdfBox<D>(Vec<D>::Zero(), def.halfExtents, def.rounding);
+      const Vec<D> half = def.halfExtents;
+      const double rounding = def.rounding;
+      return [half, rounding](const Vec<D>& x) { return sdfBox<D>(x, half, rounding); };
+    }
+    case ShapeKind::Ellipsoid: {
+      (void)sdfEllipsoid<D>(Vec<D>::Zero(), def.semiAxes);
+      const Vec<D> axes = def.semiAxes;
+      return [axes](const Vec<D>& x) { return sdfEllipsoid<D>(x, axes); };
+    }
+    case ShapeKind::Superellipsoid: {
+      const Vec<D> axes = def.semiAxes;
+      const std::vector<double> exponents = def.exponents;
+      if (exponents.size() != (D == 2 ? 1u : 2u)) return {};  // superellipsoidGrid names the problem
+      return [axes, exponents](const Vec<D>& x) { return superellipsoidRadialDistance<D>(x, axes, exponents); };
+    }
+    case ShapeKind::RandomGrain: return randomGrainSurface<D>(def.grain);
+    case ShapeKind::Polygon:
+      if constexpr (D == 2) {
+        validatePolygon(def.vertices);
+        const std::vector<Vec<2>> vertices = def.vertices;
+        return [vertices](const Vec<2>& x) { return sdfPolygon(x, vertices); };
+      } else {
+        return {};
+      }
+    case ShapeKind::Mesh: return {};
+  }
+  return {};
+}
+
+template <int D>
 std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def, MeshImportReport* meshReport) {
-  return Shape<D>::fromGrid(buildGrid(def, meshReport), def.options);
+  Grid<D> grid = buildGrid(def, meshReport);
+  const SurfaceFunction<D> surface = def.exactNodes ? exactSurface(def) : SurfaceFunction<D>{};
+  if (!surface) return Shape<D>::fromGrid(std::move(grid), def.options);
+  // Nodes made on the grid's surface, then moved on to the exact one.
+  NodeSet<D> nodes;
+  if constexpr (D == 2) {
+    nodes = surfaceNodes(grid, def.options.nodesPerCell, surface);
+  } else {
+    nodes = surfaceNodes(grid, def.options.nodesPerCell, nullptr, surface);
+  }
+  if (nodes.empty()) throw std::invalid_argument("the level set has no surface to place nodes on");
+  return Shape<D>::fromGridAndNodes(std::move(grid), std::move(nodes), def.options);
 }
 
 template const char* shapeKindName<2>(ShapeKind);
@@ -131,6 +182,8 @@ template double resolvedSpacing<2>(const ShapeDef<2>&);
 template double resolvedSpacing<3>(const ShapeDef<3>&);
 template Grid<2> buildGrid<2>(const ShapeDef<2>&, MeshImportReport*);
 template Grid<3> buildGrid<3>(const ShapeDef<3>&, MeshImportReport*);
+template SurfaceFunction<2> exactSurface<2>(const ShapeDef<2>&);
+template SurfaceFunction<3> exactSurface<3>(const ShapeDef<3>&);
 template std::shared_ptr<const Shape<2>> buildShape<2>(const ShapeDef<2>&, MeshImportReport*);
 template std::shared_ptr<const Shape<3>> buildShape<3>(const ShapeDef<3>&, MeshImportReport*);
 

@@ -30,7 +30,7 @@ void checkDensity(double nodesPerCell) {
 
 }  // namespace
 
-NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell) {
+NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell, const SurfaceFunction<2>& exactSurface) {
   checkDensity(nodesPerCell);
   const double target = grid.spacing() / nodesPerCell;
   NodeSet<2> nodes;
@@ -61,6 +61,12 @@ NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell) {
       const Vec<2> x = loop[segment] + u * (loop[(segment + 1) % m] - loop[segment]);
       nodes.positions.push_back(projectOntoZero(grid, x));
     }
+    // Onto the true surface, where the shape has one.
+    if (exactSurface) {
+      for (std::size_t k = first; k < nodes.positions.size(); ++k) {
+        nodes.positions[k] = projectOntoSurface(exactSurface, nodes.positions[k], grid.spacing());
+      }
+    }
 
     // Weights: half the distance to each neighbour along the contour.
     for (int k = 0; k < n; ++k) {
@@ -73,7 +79,8 @@ NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell) {
   return nodes;
 }
 
-NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* meshOut) {
+NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* meshOut,
+                        const SurfaceFunction<3>& exactSurface) {
   checkDensity(nodesPerCell);
   const double target = grid.spacing() / nodesPerCell;
   NodeSet<3> nodes;
@@ -95,11 +102,14 @@ NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* 
   surface.collect_garbage();
   TriangleMesh mesh = cgal::toTriangleMesh(surface);
 
-  // Vertices onto phi = 0 (independent per vertex).
+  // Vertices onto phi = 0, then onto the true surface where the shape has
+  // one (independent per vertex).
   const int vertexCount = int(mesh.vertices.size());
 #pragma omp parallel for schedule(static)
   for (int v = 0; v < vertexCount; ++v) {
-    mesh.vertices[std::size_t(v)] = projectOntoZero(grid, mesh.vertices[std::size_t(v)]);
+    Vec<3>& x = mesh.vertices[std::size_t(v)];
+    x = projectOntoZero(grid, x);
+    if (exactSurface) x = projectOntoSurface(exactSurface, x, grid.spacing());
   }
 
   // Nodes are the vertices; each face gives a third of its area to each corner
@@ -202,6 +212,43 @@ Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int
   return closest;
 }
 
+template <int D>
+Vec<D> projectOntoSurface(const SurfaceFunction<D>& surface, const Vec<D>& start, double spacing) {
+  const double tolerance = 1e-10 * spacing, delta = 1e-6 * spacing;
+  Vec<D> x = start;
+  double f = surface(x);
+  for (int iteration = 0; iteration < 30 && std::abs(f) > tolerance; ++iteration) {
+    // Gradient by central differences.
+    Vec<D> grad;
+    for (int a = 0; a < D; ++a) {
+      Vec<D> e = Vec<D>::Zero();
+      e[a] = delta;
+      grad[a] = (surface(x + e) - surface(x - e)) / (2.0 * delta);
+    }
+    const double gradSquared = grad.squaredNorm();
+    if (!(gradSquared > 1e-12)) break;
+    // Newton step, capped at half a cell, halved until |f| decreases.
+    Vec<D> step = (f / gradSquared) * grad;
+    const double length = step.norm();
+    if (length > 0.5 * spacing) step *= 0.5 * spacing / length;
+    bool accepted = false;
+    for (double t = 1.0; t > 1.0 / 64.0 && !accepted; t *= 0.5) {
+      const Vec<D> trial = x - t * step;
+      const double trialF = surface(trial);
+      if (std::abs(trialF) < std::abs(f)) {
+        x = trial;
+        f = trialF;
+        accepted = true;
+      }
+    }
+    if (!accepted) break;
+  }
+  if (!(std::abs(f) <= 1e3 * tolerance) || !((x - start).norm() <= spacing)) return start;
+  return x;
+}
+
+template Vec<2> projectOntoSurface<2>(const SurfaceFunction<2>&, const Vec<2>&, double);
+template Vec<3> projectOntoSurface<3>(const SurfaceFunction<3>&, const Vec<3>&, double);
 template Vec<2> projectOntoZero<2>(const Grid<2>&, Vec<2>, double, int);
 template Vec<3> projectOntoZero<3>(const Grid<3>&, Vec<3>, double, int);
 

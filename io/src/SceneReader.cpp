@@ -220,6 +220,14 @@ class SceneReader {
     } else {
       r.fail("formulation", "must be \"per_node\" or \"area_weighted\", got \"" + formulation + "\"");
     }
+    const std::string interpolation = r.string("interpolation", "trilinear");
+    if (interpolation == "trilinear") {
+      law.interpolation = dynamics::LevelSetInterpolation::Trilinear;
+    } else if (interpolation == "tricubic") {
+      law.interpolation = dynamics::LevelSetInterpolation::Tricubic;
+    } else {
+      r.fail("interpolation", "must be \"trilinear\" or \"tricubic\", got \"" + interpolation + "\"");
+    }
     if (law.normal == dynamics::NormalModel::Linear) {
       law.kn = r.positive("kn");
     } else {

@@ -113,6 +113,15 @@ ShapeDecl readOfDimension(TomlReader& r, const std::string& file, int line, cons
     }
   }
   def.options.nodesPerCell = r.positive("node_density", 2.0);
+  // Nodes on the exact surface (default) or on the grid's interpolated one.
+  const std::string nodesOn = r.string("nodes_on", "exact_surface");
+  if (nodesOn == "exact_surface") {
+    def.exactNodes = true;
+  } else if (nodesOn == "grid") {
+    def.exactNodes = false;
+  } else {
+    r.fail("nodes_on", "must be \"exact_surface\" or \"grid\", got \"" + nodesOn + "\"");
+  }
   const std::string method = r.string("mass_method", "extrapolated");
   if (method == "extrapolated") {
     def.options.massMethod = geometry::MassMethod::Extrapolated;

@@ -320,9 +320,11 @@ TEST(BreakageEffect, ManualBreakAtGivenTime) {
   ASSERT_EQ(w.effectNames(), std::vector<std::string>{"breakage"});
 
   const double mass = w.particleMass();
-  while (w.time() < 0.01 - 0.5 * w.dt()) {
+  // Up to the last step that ends before the break time (the break is made
+  // after the first step that ends at or past it).
+  while (w.time() + w.dt() < 0.01) {
     w.step();
-    ASSERT_EQ(brk.breakages(), 0u);
+    ASSERT_EQ(brk.breakages(), 0u) << "time " << w.time();
     for (double x : w.particles().strength) EXPECT_GT(x, 0.0);
   }
   // Momentum of particle 0 just before its break.
@@ -332,6 +334,7 @@ TEST(BreakageEffect, ManualBreakAtGivenTime) {
   const double parentStrength = p.strength[i0];
   const double yCut = 0.001;  // the cut, fixed in the world
   w.step();
+  for (const auto& n : brk.manualNotApplied()) ADD_FAILURE() << "not applied: " << n.reason;
   ASSERT_EQ(brk.breakages(), 1u);
   const BreakageEvent<2>& ev = brk.events()[0];
   EXPECT_TRUE(ev.manual);

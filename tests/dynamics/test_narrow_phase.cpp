@@ -247,7 +247,7 @@ void checkOrderIndependence() {
 // A dense random cluster of grains in a box of planes with a tool: forces,
 // torques and node contacts after a few steps, as raw bytes.
 template <int D>
-std::vector<unsigned char> clusterRun(int threads, std::size_t count) {
+std::vector<unsigned char> clusterRun(int threads, std::size_t count, const ContactLawDef& law = {}) {
 #ifdef _OPENMP
   const int before = omp_get_max_threads();
   omp_set_num_threads(threads);
@@ -286,7 +286,7 @@ std::vector<unsigned char> clusterRun(int threads, std::size_t count) {
   tool.velocity = Vec<D>::UnitX() * 0.1;
   tool.angularVelocity = randomSpin<D>(rng, 0.5);
   const std::vector<ToolPose<D>> tools{tool};
-  ContactSolver<D> solver(ContactLawDef{});
+  ContactSolver<D> solver(law);
   std::vector<unsigned char> bytes;
   const auto append = [&](const void* data, std::size_t size) {
     const auto* b = static_cast<const unsigned char*>(data);
@@ -412,9 +412,9 @@ TEST(NarrowPhase, ForcesAndMomentsBalance3D) { checkBalance<3>(); }
 // miss the contacts that appear as the ring closes) and, for the pairs in
 // contact, the tree walks (only the leaves a certificate kept are tested).
 template <int D>
-void checkCertificatesExact() {
+void checkCertificatesExact(const ContactLawDef& law = {}) {
   Particles<D> p = ringOfGrains<D>(2.0, 21);
-  ContactSolver<D> with(ContactLawDef{}), without(ContactLawDef{});
+  ContactSolver<D> with(law), without(law);
   without.setSeparationCertificates(false);
   const auto hub = grain<D>(4);
   ToolPose<D> tool;
@@ -461,6 +461,59 @@ void checkCertificatesExact() {
 
 TEST(NarrowPhase, SeparationCertificatesAreExact2D) { checkCertificatesExact<2>(); }
 TEST(NarrowPhase, SeparationCertificatesAreExact3D) { checkCertificatesExact<3>(); }
+// The same with the tricubic look-up: its certificates are the multilinear
+// ones with the margin Shape::cubicMargin taken off.
+TEST(NarrowPhase, SeparationCertificatesAreExactTricubic3D) {
+  ContactLawDef law;
+  law.interpolation = LevelSetInterpolation::Tricubic;
+  checkCertificatesExact<3>(law);
+}
+
+// The tricubic look-up's contacts are exactly those of testing every node
+// of every pair against the other body's Catmull-Rom interpolant: the
+// bulk rejection (multilinear, lowered by Shape::cubicMargin) and the cubic
+// bounding radius lose none. The overlaps are the interpolant's values.
+template <int D>
+void checkTricubicAgainstBruteForce() {
+  const Particles<D> p = ringOfGrains<D>(1.2, 5);
+  PairList pairs;
+  for (std::uint32_t i = 0; i < p.size(); ++i) {
+    for (std::uint32_t j = i + 1; j < p.size(); ++j) pairs.push_back({i, j});
+  }
+  ContactLawDef law;
+  law.interpolation = LevelSetInterpolation::Tricubic;
+  ContactSolver<D> solver(law);
+  solver.setSeparationCertificates(false);
+  solver.compute(p, pairs, {}, {}, 1e-6);
+  std::size_t expected = 0;
+  double expectedOverlap = 0.0;
+  for (const auto& [a, b] : pairs) {
+    for (const auto& [owner, other] : {std::pair{a, b}, std::pair{b, a}}) {
+      const geometry::Shape<D>& so = *p.shape[owner];
+      const geometry::Shape<D>& st = *p.shape[other];
+      const geometry::Grid<D>& grid = st.grid();
+      for (const Vec<D>& x : so.nodes().positions) {
+        const Vec<D> world = p.position[owner] + p.rotation(owner) * x;
+        const Vec<D> body = p.rotation(other).transpose() * (world - p.position[other]);
+        const Vec<D> g = grid.toGrid(st.bodyToGrid().apply(body));
+        if (!grid.contains(grid.toWorld(g))) continue;
+        const double phi = grid.cubicValueAtCells(g);
+        if (phi < 0.0) {
+          ++expected;
+          expectedOverlap -= phi;
+        }
+      }
+    }
+  }
+  double overlap = 0.0;
+  for (const NodeContact<D>& c : solver.nodeContacts()) overlap += c.overlap;
+  EXPECT_GT(expected, 20u);
+  EXPECT_EQ(solver.nodeContacts().size(), expected);
+  EXPECT_NEAR(overlap, expectedOverlap, 1e-9 * expectedOverlap);
+}
+
+TEST(NarrowPhase, TricubicContactsMatchBruteForce2D) { checkTricubicAgainstBruteForce<2>(); }
+TEST(NarrowPhase, TricubicContactsMatchBruteForce3D) { checkTricubicAgainstBruteForce<3>(); }
 
 // Node margins: a pressed ring computed twice at the same state. The second
 // step is a leaf walk for every touching direction, and a node of a kept
@@ -504,6 +557,13 @@ TEST(NarrowPhase, OneAndTwoThreadsAreBitwiseIdentical) {
   const std::vector<unsigned char> one3 = clusterRun<3>(1, 64), two3 = clusterRun<3>(2, 64);
   ASSERT_EQ(one3.size(), two3.size());
   EXPECT_EQ(std::memcmp(one3.data(), two3.data(), one3.size()), 0);
+  // The tricubic look-up too.
+  ContactLawDef cubic;
+  cubic.interpolation = LevelSetInterpolation::Tricubic;
+  const std::vector<unsigned char> oneC = clusterRun<3>(1, 64, cubic), twoC = clusterRun<3>(2, 64, cubic);
+  ASSERT_EQ(oneC.size(), twoC.size());
+  EXPECT_EQ(std::memcmp(oneC.data(), twoC.data(), oneC.size()), 0);
+  EXPECT_NE(oneC, one3);  // a different look-up, different forces
 #endif
 }
 

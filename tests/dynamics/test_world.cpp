@@ -139,13 +139,15 @@ TEST(World, UndampedRunConservesEnergy) {
     w.addParticle(p);
   }
   double worst = 0.0;
+  std::uint64_t looked = 0;
   for (int s = 0; s < 100000; ++s) {
     w.step();
     worst = std::max(worst, std::abs(w.energy().relativeBalanceError()));
+    looked += w.contacts().nodeChecks() + w.contacts().certifiedWalks();
   }
   EXPECT_LT(worst, 2e-3);
   // The narrow phase ran: nodes tested, or walks its certificates spared.
-  EXPECT_GT(w.contacts().nodeChecks() + w.contacts().certifiedWalks(), 0u);
+  EXPECT_GT(looked, 0u);
   RecordProperty("worst_relative_energy_error", std::to_string(worst));
 }
 

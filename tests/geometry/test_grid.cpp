@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <vector>
 #include <random>
 
 using namespace lsdem::geometry;
@@ -174,4 +176,128 @@ TEST(Grid, CoveringRefusesAbsurdSizes) {
   Box<3> box{Vec<3>::Constant(-1.0), Vec<3>::Constant(1.0)};
   EXPECT_THROW(Grid<3>::covering(box, 1e-9, 4), std::invalid_argument);
   EXPECT_THROW(Grid<3>::covering(box, std::nan(""), 4), std::invalid_argument);
+}
+
+// ---- the Catmull-Rom tricubic interpolant ----
+
+namespace {
+
+// A random point of the node box at least `inset` cells from its border (grid coordinates).
+template <int D>
+Vec<D> pointInBox(const Grid<D>& g, std::mt19937& rng, double inset) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Vec<D> p;
+  for (int a = 0; a < D; ++a) p[a] = inset + u(rng) * (double(g.dims()[a] - 1) - 2.0 * inset);
+  return p;
+}
+
+// The largest error of the interpolant (cubic or multilinear) against |x| - R
+// over points within one cell of a sphere of radius R sampled at spacing h.
+double sphereError(double R, double h, bool cubic) {
+  const Grid<3> g = sampled(Grid<3>::covering(Box<3>{Vec<3>::Constant(-R), Vec<3>::Constant(R)}, h, 4),
+                            [R](const Vec<3>& x) { return x.norm() - R; });
+  std::mt19937 rng(3);
+  double worst = 0.0;
+  for (int k = 0, found = 0; found < 4000 && k < 400000; ++k) {
+    const Vec<3> c = pointInBox(g, rng, 0.0);
+    const Vec<3> x = g.toWorld(c);
+    const double exact = x.norm() - R;
+    if (std::abs(exact) > h) continue;
+    ++found;
+    const double v = cubic ? g.cubicValueAtCells(c) : g.valueAtCells(c);
+    worst = std::max(worst, std::abs(v - exact));
+  }
+  return worst;
+}
+
+}  // namespace
+
+// Catmull-Rom reproduces quadratics: on cells whose 4^D stencil is inside
+// the grid, the value and gradient of x^T C x + b . x + a are exact (to the
+// floats the grid stores); at grid nodes it equals the stored value.
+template <int D>
+void checkCubicReproducesQuadratics() {
+  Mat<D> C = Mat<D>::Zero();
+  Vec<D> b;
+  for (int i = 0; i < D; ++i) {
+    b[i] = 0.3 - 0.2 * i;
+    for (int j = 0; j < D; ++j) C(i, j) = 0.1 * (i + 1) + 0.05 * (i == j) - 0.03 * j;
+  }
+  C = 0.5 * (C + C.transpose()).eval();
+  Index<D> dims = Index<D>::Constant(7);
+  const Grid<D> g = sampled(Grid<D>(dims, Vec<D>::Constant(-0.6), 0.2),
+                            [&](const Vec<D>& x) { return x.dot(C * x) + b.dot(x) + 0.25; });
+  std::mt19937 rng(11);
+  for (int k = 0; k < 200; ++k) {
+    const Vec<D> c = pointInBox(g, rng, 1.0);  // the stencil stays inside
+    const Vec<D> x = g.toWorld(c);
+    Vec<D> grad;
+    const double v = g.cubicValueAndGradientAtCells(c, grad);
+    EXPECT_NEAR(v, x.dot(C * x) + b.dot(x) + 0.25, 1e-6);
+    const Vec<D> exact = 2.0 * C * x + b;
+    EXPECT_LT((grad / g.spacing() - exact).norm(), 1e-5);
+    EXPECT_EQ(g.cubicValueAtCells(c), v);  // the same arithmetic with and without the gradient
+  }
+  const Index<D> node = Index<D>::Constant(3);
+  EXPECT_NEAR(g.cubicValueAtCells(node.template cast<double>().matrix()), double(g.at(node)), 1e-12);
+}
+
+TEST(Grid, CubicReproducesQuadratics2D) { checkCubicReproducesQuadratics<2>(); }
+TEST(Grid, CubicReproducesQuadratics3D) { checkCubicReproducesQuadratics<3>(); }
+
+// The gradient is the derivative of the value (central differences of a
+// sphere's distance with a ripple, so every cell differs).
+TEST(Grid, CubicGradientMatchesFiniteDifferences) {
+  const Grid<3> g = sampled(Grid<3>::covering(Box<3>{Vec<3>::Constant(-0.5), Vec<3>::Constant(0.5)}, 0.1, 4),
+                            [](const Vec<3>& x) { return x.norm() - 0.5 + 0.02 * std::sin(9.0 * x[0] + 4.0 * x[2]); });
+  std::mt19937 rng(5);
+  for (int k = 0; k < 200; ++k) {
+    const Vec<3> c = pointInBox(g, rng, 0.01);
+    Vec<3> grad;
+    g.cubicValueAndGradientAtCells(c, grad);
+    for (int a = 0; a < 3; ++a) {
+      Vec<3> e = Vec<3>::Zero();
+      e[a] = 1e-5;
+      const double fd = (g.cubicValueAtCells(c + e) - g.cubicValueAtCells(c - e)) / 2e-5;
+      EXPECT_NEAR(grad[a], fd, 1e-6 + 1e-5 * std::abs(fd));
+    }
+  }
+}
+
+// On a sphere's signed distance near the surface the multilinear
+// interpolant's error falls like h^2 (~h^2 / (8 R) per curved direction),
+// the Catmull-Rom one's at least like h^3. Measured at R / h = 5, 10:
+// trilinear 6.05e-3 -> 1.36e-3 (order 2.15), tricubic 2.94e-4 -> 3.15e-5
+// (order 3.22).
+TEST(Grid, CubicErrorOnASphereIsThirdOrder) {
+  const double R = 0.5;
+  const double linear5 = sphereError(R, R / 5, false), linear10 = sphereError(R, R / 10, false);
+  const double cubic5 = sphereError(R, R / 5, true), cubic10 = sphereError(R, R / 10, true);
+  const double linearOrder = std::log2(linear5 / linear10), cubicOrder = std::log2(cubic5 / cubic10);
+  std::printf("sphere error: trilinear %.2e -> %.2e (order %.2f), tricubic %.2e -> %.2e (order %.2f)\n", linear5,
+              linear10, linearOrder, cubic5, cubic10, cubicOrder);
+  EXPECT_NEAR(linearOrder, 2.0, 0.3);
+  EXPECT_GE(cubicOrder, 3.0);
+  EXPECT_LT(cubic5, 0.2 * linear5);
+}
+
+// cubicDeviationBounds bounds |cubic - multilinear| in every cell, border
+// cells (clamped stencils) included.
+TEST(Grid, CubicDeviationBoundHolds) {
+  const Grid<3> g = sampled(Grid<3>::covering(Box<3>{Vec<3>::Constant(-0.5), Vec<3>::Constant(0.5)}, 0.1, 2),
+                            [](const Vec<3>& x) { return x.norm() - 0.5 + 0.05 * std::sin(13.0 * x[1]); });
+  const std::vector<float> bound = g.cubicDeviationBounds();
+  ASSERT_EQ(bound.size(), g.size());
+  std::mt19937 rng(9);
+  double tightest = 1e30;
+  for (int k = 0; k < 20000; ++k) {
+    const Vec<3> c = pointInBox(g, rng, 0.0);
+    Index<3> cell;
+    for (int a = 0; a < 3; ++a) cell[a] = std::min(int(c[a]), g.dims()[a] - 2);
+    const double e = bound[g.linear(cell)];
+    const double deviation = std::abs(g.cubicValueAtCells(c) - g.valueAtCells(c));
+    ASSERT_LE(deviation, e) << "cell " << cell.transpose();
+    tightest = std::min(tightest, e - deviation);
+  }
+  EXPECT_GE(tightest, 0.0);
 }

@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
+#include <utility>
 
 using namespace lsdem::geometry;
 
@@ -108,4 +111,130 @@ TEST(Shape, BoundingSphereHoldsTheWholeInterpolatedGrain) {
   triangle.vertices = {Vec<2>(0.0, 0.0), Vec<2>(1.0, 0.1), Vec<2>(0.2, 0.5)};
   triangle.cellsAcross = 6;
   EXPECT_LE(lsdem::test::boundingSphereExcess(*buildShape(triangle)), 0.0);
+}
+
+// ---- the tricubic look-up's margin and reach (Shape::cubicMargin, cubicBoundingRadius) ----
+
+namespace {
+
+// Random points of a shape's grid box (grid coordinates), over every cell.
+template <int D>
+void checkCubicMarginAndReach(const Shape<D>& shape) {
+  const Grid<D>& g = shape.grid();
+  const double E = shape.cubicMargin();
+  EXPECT_GE(E, 0.0);
+  EXPECT_LT(E, 0.5 * g.spacing());  // small on a smooth grain: the rejection tests stay useful
+  EXPECT_GE(shape.cubicBoundingRadius(), shape.boundingRadius());
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int negative = 0;
+  for (int k = 0; k < 200000; ++k) {
+    Vec<D> c;
+    for (int a = 0; a < D; ++a) c[a] = u(rng) * double(g.dims()[a] - 1);
+    const double cubic = g.cubicValueAtCells(c);
+    // Where the multilinear value exceeds E the cubic is positive ...
+    if (g.valueAtCells(c) > E) {
+      ASSERT_GT(cubic, 0.0);
+    }
+    // ... and where the cubic is negative the point is in the cubic bounding sphere.
+    if (cubic < 0.0) {
+      ++negative;
+      const Vec<D> body = shape.bodyToGrid().applyInverse(g.toWorld(c));
+      ASSERT_LE(body.norm(), shape.cubicBoundingRadius() * (1.0 + 1e-12));
+    }
+  }
+  EXPECT_GT(negative, 1000);
+}
+
+}  // namespace
+
+TEST(Shape, CubicMarginAndReachHoldForGrains) {
+  ShapeDef<3> grain;
+  grain.kind = ShapeKind::RandomGrain;
+  grain.grain.roughness = 0.15;
+  grain.grain.elongation = 1.3;
+  grain.grain.seed = 4;
+  grain.cellsAcross = 8;
+  grain.options.nodesPerCell = 1.0;
+  checkCubicMarginAndReach<3>(*buildShape(grain));
+  ShapeDef<3> box;
+  box.kind = ShapeKind::Box;
+  box.halfExtents = Vec<3>(0.3, 0.2, 0.1);
+  box.cellsAcross = 6;
+  checkCubicMarginAndReach<3>(*buildShape(box));
+  ShapeDef<2> triangle;
+  triangle.kind = ShapeKind::Polygon;
+  triangle.vertices = {Vec<2>(0.0, 0.0), Vec<2>(1.0, 0.1), Vec<2>(0.2, 0.5)};
+  triangle.cellsAcross = 6;
+  checkCubicMarginAndReach<2>(*buildShape(triangle));
+}
+
+// Nodes on the exact surface (ShapeDef::exactNodes, the default): on a
+// sphere |x| = R to round-off, where the grid's nodes sit inside by about
+// h^2 / (8 R) per curved direction; on a random grain its radial distance
+// function is 0 at every node; a mesh (no exact surface) keeps the grid's.
+TEST(ShapeDef, ExactNodesLieOnTheTrueSurface) {
+  ShapeDef<3> def;
+  def.kind = ShapeKind::Sphere;
+  def.radius = 0.5;
+  def.cellsAcross = 10;
+  def.options.nodesPerCell = 1.0;
+  const auto exact = buildShape(def);
+  def.exactNodes = false;
+  const auto onGrid = buildShape(def);
+  const double h = exact->grid().spacing();
+  const auto radialGap = [](const Shape<3>& s) {
+    double worst = 0.0, mean = 0.0;
+    for (const Vec<3>& x : s.nodes().positions) {
+      const double gap = s.bodyToGrid().apply(x).norm() - 0.5;
+      worst = std::max(worst, std::abs(gap));
+      mean += gap / double(s.nodes().size());
+    }
+    return std::pair{worst, mean};
+  };
+  const auto [exactWorst, exactMean] = radialGap(*exact);
+  const auto [gridWorst, gridMean] = radialGap(*onGrid);
+  EXPECT_LT(exactWorst, 1e-9 * h);
+  EXPECT_LT(gridMean, -0.05 * h * h / 0.5);  // inside, by a good part of h^2 / (8 R) per direction
+  EXPECT_GT(gridWorst, 1e3 * exactWorst);
+  // The weights are the area of the polyhedron through the nodes: nearer 4 pi R^2 on the sphere.
+  const double area = 4.0 * kPi * 0.25;
+  EXPECT_LT(std::abs(exact->nodes().totalWeight() - area), std::abs(onGrid->nodes().totalWeight() - area));
+
+  ShapeDef<3> grain;
+  grain.kind = ShapeKind::RandomGrain;
+  grain.grain.roughness = 0.15;
+  grain.grain.seed = 4;
+  grain.cellsAcross = 8;
+  grain.options.nodesPerCell = 1.0;
+  const auto rough = buildShape(grain);
+  const SurfaceFunction<3> surface = exactSurface(grain);
+  ASSERT_TRUE(bool(surface));
+  double worst = 0.0;
+  for (const Vec<3>& x : rough->nodes().positions) worst = std::max(worst, std::abs(surface(rough->bodyToGrid().apply(x))));
+  EXPECT_LT(worst, 1e-6 * rough->grid().spacing());
+
+  ShapeDef<3> mesh;
+  mesh.kind = ShapeKind::Mesh;
+  EXPECT_FALSE(bool(exactSurface(mesh)));
+}
+
+TEST(ShapeDef, ExactNodesOnAnEllipseAndAPolygon2D) {
+  ShapeDef<2> ellipse;
+  ellipse.kind = ShapeKind::Ellipsoid;
+  ellipse.semiAxes = Vec<2>(0.5, 0.3);
+  ellipse.cellsAcross = 8;
+  ellipse.options.nodesPerCell = 1.0;
+  const auto shape = buildShape(ellipse);
+  for (const Vec<2>& x : shape->nodes().positions) {
+    EXPECT_NEAR(sdfEllipsoid<2>(shape->bodyToGrid().apply(x), ellipse.semiAxes), 0.0, 1e-9);
+  }
+  ShapeDef<2> triangle;
+  triangle.kind = ShapeKind::Polygon;
+  triangle.vertices = {Vec<2>(0.0, 0.0), Vec<2>(1.0, 0.1), Vec<2>(0.2, 0.5)};
+  triangle.cellsAcross = 6;
+  const auto tri = buildShape(triangle);
+  for (const Vec<2>& x : tri->nodes().positions) {
+    EXPECT_NEAR(sdfPolygon(tri->bodyToGrid().apply(x), triangle.vertices), 0.0, 1e-9);
+  }
 }

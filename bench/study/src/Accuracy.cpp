@@ -74,8 +74,8 @@ struct SettingResult {
 
 std::string settingKey(const AccuracySetting& s) {
   char buf[128];
-  std::snprintf(buf, sizeof buf, "%g/%g/%s/%g", s.cellsAcross, s.nodesPerCell, formulationName(s.formulation),
-                s.dtFraction);
+  std::snprintf(buf, sizeof buf, "%g/%g/%s/%g/%s/%d", s.cellsAcross, s.nodesPerCell, formulationName(s.formulation),
+                s.dtFraction, interpolationName(s.interpolation), s.exactNodes ? 1 : 0);
   return buf;
 }
 
@@ -137,6 +137,29 @@ AccuracyReport runStudy(const AccuracyOptions& options) {
   std::vector<Planned> plan;
   const AccuracySetting base;
   for (double c : lists.cells) plan.push_back({"cells", c, [&] { auto s = base; s.cellsAcross = c; return s; }()});
+  // The two method knobs over the same cells and the baseline's (10, which
+  // the quick list skips), so they compare with the baseline directly.
+  std::vector<double> methodCells = lists.cells;
+  if (std::find(methodCells.begin(), methodCells.end(), base.cellsAcross) == methodCells.end()) {
+    methodCells.push_back(base.cellsAcross);
+    std::sort(methodCells.begin(), methodCells.end());
+  }
+  for (double c : methodCells) {
+    plan.push_back({"cells_tricubic", c, [&] {
+                      auto s = base;
+                      s.cellsAcross = c;
+                      s.interpolation = dynamics::LevelSetInterpolation::Tricubic;
+                      return s;
+                    }()});
+  }
+  for (double c : methodCells) {
+    plan.push_back({"cells_grid_nodes", c, [&] {
+                      auto s = base;
+                      s.cellsAcross = c;
+                      s.exactNodes = false;
+                      return s;
+                    }()});
+  }
   for (double n : lists.nodesPerCell) {
     plan.push_back({"nodes_per_cell", n, [&] { auto s = base; s.nodesPerCell = n; return s; }()});
   }

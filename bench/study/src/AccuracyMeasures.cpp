@@ -56,17 +56,19 @@ double clockSeconds(clockid_t clock) {
 // Shapes are cached by (radius, cells, nodes per cell): several measurements
 // and settings share one sphere, and 3D surface nodes are costly to make.
 template <int D>
-std::shared_ptr<const geometry::Shape<D>> sphereShape(double radius, double cells, double nodesPerCell) {
+std::shared_ptr<const geometry::Shape<D>> sphereShape(double radius, double cells, double nodesPerCell,
+                                                      bool exactNodes) {
   static std::mutex cacheMutex;
-  static std::map<std::array<double, 3>, std::shared_ptr<const geometry::Shape<D>>> cache;
+  static std::map<std::array<double, 4>, std::shared_ptr<const geometry::Shape<D>>> cache;
   std::lock_guard<std::mutex> lock(cacheMutex);
-  auto& slot = cache[{radius, cells, nodesPerCell}];
+  auto& slot = cache[{radius, cells, nodesPerCell, exactNodes ? 1.0 : 0.0}];
   if (!slot) {
     geometry::ShapeDef<D> def;
     def.kind = geometry::ShapeKind::Sphere;
     def.radius = radius;
     def.cellsAcross = cells;
     def.options.nodesPerCell = nodesPerCell;
+    def.exactNodes = exactNodes;
     slot = geometry::buildShape(def);
   }
   return slot;
@@ -201,6 +203,10 @@ const char* formulationName(dynamics::ForceFormulation formulation) {
   return formulation == dynamics::ForceFormulation::PerNode ? "per_node" : "area_weighted";
 }
 
+const char* interpolationName(dynamics::LevelSetInterpolation interpolation) {
+  return interpolation == dynamics::LevelSetInterpolation::Tricubic ? "tricubic" : "trilinear";
+}
+
 // ---- mass properties ----
 
 template <int D>
@@ -280,7 +286,7 @@ std::vector<MetricValue> massMetrics(double cellsAcross, double referenceCells) 
 template <int D>
 std::vector<MetricValue> contactMetrics(const AccuracySetting& setting) {
   const double R = 0.5, delta = 0.02 * R;
-  const auto shape = sphereShape<D>(R, setting.cellsAcross, setting.nodesPerCell);
+  const auto shape = sphereShape<D>(R, setting.cellsAcross, setting.nodesPerCell, setting.exactNodes);
   const double wRef = dynamics::referenceNodeWeight<D>(shape->grid().spacing());
   const double wMean = shape->nodes().totalWeight() / double(shape->nodes().size());
   // kn per reference weight, the same for both formulations.
@@ -289,6 +295,7 @@ std::vector<MetricValue> contactMetrics(const AccuracySetting& setting) {
   law.kn = 1e6;
   law.hasFriction = false;
   law.hasDamping = false;
+  law.interpolation = setting.interpolation;
   dynamics::ContactSolver<D> solver(law);
   const double perArea = law.kn / wRef;
   const double lawPerArea = setting.formulation == dynamics::ForceFormulation::PerNode ? law.kn / wMean : perArea;
@@ -350,9 +357,10 @@ std::vector<MetricValue> contactMetrics(const AccuracySetting& setting) {
 template <int D>
 std::vector<MetricValue> restitutionMetrics(const AccuracySetting& setting) {
   const double R = 0.005, speed = 1.0, target = 0.5;
-  const auto shape = sphereShape<D>(R, setting.cellsAcross, setting.nodesPerCell);
+  const auto shape = sphereShape<D>(R, setting.cellsAcross, setting.nodesPerCell, setting.exactNodes);
   dynamics::WorldDef<D> def;
   def.contact.formulation = setting.formulation;
+  def.contact.interpolation = setting.interpolation;
   def.contact.kn = stiffnessPerArea<D>() * dynamics::referenceNodeWeight<D>(shape->grid().spacing());
   def.contact.hasFriction = false;
   def.contact.hasDamping = true;
@@ -388,7 +396,7 @@ std::vector<MetricValue> restitutionMetrics(const AccuracySetting& setting) {
 template <int D>
 std::vector<MetricValue> splitMetrics(const AccuracySetting& setting, double& splitSeconds) {
   const double R = 0.5, d = 0.15;
-  const auto shape = sphereShape<D>(R, setting.cellsAcross, setting.nodesPerCell);
+  const auto shape = sphereShape<D>(R, setting.cellsAcross, setting.nodesPerCell, setting.exactNodes);
   breakage::FractureSurface<D> surface;
   surface.plane = geometry::HalfSpace<D>{Vec<D>::Unit(1), d};
   // Median of five splits timed in CPU seconds on one thread.
@@ -458,6 +466,7 @@ PackingResult packingRun(const AccuracySetting& setting, int grains, double sett
     def.grain.seed = 11 + std::uint64_t(k);
     def.spacing = spacing;
     def.options.nodesPerCell = setting.nodesPerCell;
+    def.exactNodes = setting.exactNodes;
     shapes.push_back(geometry::buildShape(def));
     shapeBytes += double(shapes.back()->bytes()) / 8.0;
   }
@@ -465,6 +474,7 @@ PackingResult packingRun(const AccuracySetting& setting, int grains, double sett
   // World: linear law with friction and damping for e = 0.5, local damping, gravity.
   dynamics::WorldDef<D> def;
   def.contact.formulation = setting.formulation;
+  def.contact.interpolation = setting.interpolation;
   def.contact.kn = kPackingSoftening * stiffnessPerArea<D>() * dynamics::referenceNodeWeight<D>(spacing);
   def.contact.ks = 0.8 * def.contact.kn;
   def.contact.friction = 0.5;

@@ -104,6 +104,20 @@ enum class ForceFormulation {
   AreaWeighted,  ///< a node carries kn w_i / w_ref (its share of the surface)
 };
 
+/// How the narrow phase reads the other body's level set at a node (eq. 3-4).
+enum class LevelSetInterpolation {
+  /// Multilinear on the grid cell (the paper): 2^D values per look-up. On a
+  /// convex surface it overestimates the distance by up to ~h^2 / (8 R) per
+  /// curved direction (R the radius of curvature), so at coarse grids it
+  /// loses much of a small overlap.
+  Trilinear,
+  /// Catmull-Rom tricubic (bicubic in 2D) on the same grid
+  /// (Grid::cubicValueAtCells): 4^D values per look-up, error O(h^3), the
+  /// normal from its exact gradient. Bulk rejection and certificates keep
+  /// their multilinear tests with a margin (Shape::cubicMargin).
+  Tricubic,
+};
+
 /// Definition of a contact law (STYLE 7). Defaults are the paper's Table 1
 /// (jaw crusher): kn = 3e7 N/m, ks = 0.8 kn, mu = 0.6, C_res = 0.4.
 struct ContactLawDef {
@@ -135,6 +149,8 @@ struct ContactLawDef {
   /// frictionless, then tested with friction.
   double frictionFrom = 0.0;
   bool hasDamping = true;   ///< contact damping C_res
+  /// The look-up of a node in the other body's level set (planes are exact either way).
+  LevelSetInterpolation interpolation = LevelSetInterpolation::Trilinear;
 };
 
 /// The contact material of a wall (plane) or tool against the grains

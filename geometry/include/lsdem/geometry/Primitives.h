@@ -183,6 +183,13 @@ template <int D>
 Grid<D> superellipsoidGrid(const Vec<D>& semiAxes, const std::vector<double>& exponents, double spacing,
                            int paddingCells = kDefaultPaddingCells);
 
+/// @brief The function superellipsoidGrid samples before reinitialising:
+/// |x| (1 - 1/N(x)), N the superellipsoid's degree-1 "norm" (N = 1 on the
+/// surface), the signed distance along the ray from the centre: exact on the
+/// surface, world units. Arguments as for superellipsoidGrid, not checked.
+template <int D>
+double superellipsoidRadialDistance(const Vec<D>& x, const Vec<D>& semiAxes, const std::vector<double>& exponents);
+
 /// @brief Signed-distance grid of a simple polygon (see sdfPolygon), in the
 /// polygon's own coordinates (not re-centred).
 /// @param vertices polygon vertices, world units; validated with validatePolygon.

@@ -17,6 +17,7 @@
 #include "lsdem/geometry/Grid.h"
 
 #include <cstdint>
+#include <functional>
 
 namespace lsdem::geometry {
 
@@ -52,5 +53,13 @@ struct RandomGrainDef {
 /// everywhere, in practice roughness <= 0.2).
 template <int D>
 Grid<D> randomGrainGrid(const RandomGrainDef& def, double spacing, int paddingCells = kDefaultPaddingCells);
+
+/// @brief The grain's exact surface as the zero set of a function: the
+/// signed distance along the ray from the centre that randomGrainGrid samples
+/// before reinitialising (world units; exact on the surface, negative
+/// inside). The function is thread-safe and holds its own copy of the profile.
+/// @note Throws std::invalid_argument for a definition randomGrainGrid rejects.
+template <int D>
+std::function<double(const Vec<D>&)> randomGrainSurface(const RandomGrainDef& def);
 
 }  // namespace lsdem::geometry

@@ -128,6 +128,18 @@ class Shape {
   /// segment in the box), which lets one look-up at a sphere's centre show
   /// that every point of the sphere in the box is outside the shape.
   double levelSetSlope() const { return levelSetSlope_; }
+  /// A bound E >= 0 (world units) such that wherever the multilinear
+  /// interpolant exceeds E, the Catmull-Rom interpolant (Grid::cubicValueAtCells)
+  /// is positive: the largest over the cells where the cubic may be <= 0 of
+  /// min(the cell's deviation bound, its largest corner value)
+  /// (Grid::cubicDeviationBounds). So the narrow phase's multilinear bulk
+  /// rejection and separation certificates hold for the tricubic look-up
+  /// with their margins lowered by E.
+  double cubicMargin() const { return cubicMargin_; }
+  /// The bounding radius for the tricubic look-up (world units, >=
+  /// boundingRadius()): it also holds every cell where the Catmull-Rom
+  /// interpolant may be negative.
+  double cubicBoundingRadius() const { return cubicBoundingRadius_; }
   /// Options the shape was made with.
   const ShapeOptions& options() const { return options_; }
   /// Bytes held by the shape (grid values and nodes).
@@ -156,6 +168,8 @@ class Shape {
   // Derived on construction (not stored in grain files or checkpoints).
   NodeTree<D> nodeTree_;
   double levelSetSlope_ = 0.0;
+  double cubicMargin_ = 0.0;
+  double cubicBoundingRadius_ = 0.0;
   void deriveSearchData();
 };
 

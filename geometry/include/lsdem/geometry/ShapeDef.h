@@ -7,6 +7,7 @@
 
 #include "lsdem/geometry/RandomGrain.h"
 #include "lsdem/geometry/Shape.h"
+#include "lsdem/geometry/SurfaceNodes.h"
 #include "lsdem/geometry/Types.h"
 
 #include <memory>
@@ -45,7 +46,21 @@ struct ShapeDef {
   double cellsAcross = 0.0;   ///< grid cells across the smallest dimension of the shape
 
   ShapeOptions options;       ///< node density and mass estimator
+  /// Surface nodes on the shape's exact surface (exactSurface) where it has
+  /// one, rather than on the zero set of the grid's multilinear interpolant,
+  /// which lies ~h^2 / (8 R) inside a convex surface (R the radius of
+  /// curvature): the contact then loses none of a small overlap on its own
+  /// side. Meshes have no exact surface here and keep the grid's.
+  bool exactNodes = true;
 };
+
+/// @brief The definition's exact surface as the zero set of a function
+/// (grid frame = the definition's frame, world units): the exact signed
+/// distance of spheres, boxes, ellipsoids and polygons, the distance along
+/// the ray from the centre of superellipsoids and random grains; empty for
+/// meshes. @note Throws std::invalid_argument for invalid dimensions.
+template <int D>
+SurfaceFunction<D> exactSurface(const ShapeDef<D>& def);
 
 /// @brief The smallest dimension of the shape (world units), used to turn
 /// `cellsAcross` into a spacing: the diameter of a sphere, twice the smallest
@@ -68,7 +83,8 @@ double resolvedSpacing(const ShapeDef<D>& def);
 template <int D>
 Grid<D> buildGrid(const ShapeDef<D>& def, MeshImportReport* meshReport = nullptr);
 
-/// @brief The shape of the definition: grid, mass properties, nodes, descriptors.
+/// @brief The shape of the definition: grid, mass properties, nodes (on the
+/// exact surface when `def.exactNodes` and the kind has one), descriptors.
 /// @param meshReport as for buildGrid.
 template <int D>
 std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def, MeshImportReport* meshReport = nullptr);

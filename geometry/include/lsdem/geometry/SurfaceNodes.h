@@ -8,7 +8,17 @@
 #include "lsdem/geometry/NodeSet.h"
 #include "lsdem/geometry/TriangleMesh.h"
 
+#include <functional>
+
 namespace lsdem::geometry {
+
+/// A shape's exact surface as the zero set of a function of a point (world
+/// units, grid frame; negative inside): an exact signed distance, or any
+/// function with the same zero set and a non-zero gradient there (the
+/// distance along the ray from the centre of a superellipsoid or random
+/// grain). Empty: the shape has no better description than its grid.
+template <int D>
+using SurfaceFunction = std::function<double(const Vec<D>&)>;
 
 /// @brief eq. 2 in 2D: nodes spread evenly along every closed contour of the
 /// zero level set.
@@ -22,8 +32,11 @@ namespace lsdem::geometry {
 /// two neighbours along the contour, so the weights sum to the length of the
 /// closed polygon through the nodes (the perimeter, world units). Positions are
 /// in the grid's frame (world units). Empty when no node is inside.
+/// @param exactSurface when not empty, each node then moves on to the zero
+/// set of this function (projectOntoSurface) before the weights are taken:
+/// nodes on the true surface, not h^2 / (8 R) inside it on the interpolant's.
 /// @note Throws std::invalid_argument when nodesPerCell is not finite or <= 0.
-NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell);
+NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell, const SurfaceFunction<2>& exactSurface = {});
 
 /// @brief eq. 2 in 3D: nodes spread evenly over the zero level set.
 /// @param grid level set, world units, phi < 0 inside.
@@ -42,8 +55,23 @@ NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell);
 /// vertex becomes a node whose weight is a third of the area of its incident
 /// triangles, so the weights sum to the mesh area (world units^2). Empty when
 /// no node is inside.
+/// @param exactSurface when not empty, each vertex then moves on to the zero
+/// set of this function (projectOntoSurface) before the weights are taken.
 /// @note Throws std::invalid_argument when nodesPerCell is not finite or <= 0.
-NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* meshOut = nullptr);
+NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* meshOut = nullptr,
+                        const SurfaceFunction<3>& exactSurface = {});
+
+/// @brief Moves the point x (world units) onto the zero set of `surface` by
+/// Newton steps along its gradient (central differences of 1e-6 spacing;
+/// each step at most half a cell, halved until |f| decreases), to |f| <=
+/// 1e-10 spacing. A point that does not get there, or would move more than
+/// one cell, is returned unmoved (it stays on the grid's surface).
+/// @param spacing the grid spacing, world units: the scale of the steps and tolerances.
+template <int D>
+Vec<D> projectOntoSurface(const SurfaceFunction<D>& surface, const Vec<D>& x, double spacing);
+
+extern template Vec<2> projectOntoSurface<2>(const SurfaceFunction<2>&, const Vec<2>&, double);
+extern template Vec<3> projectOntoSurface<3>(const SurfaceFunction<3>&, const Vec<3>&, double);
 
 /// @brief Moves the point x (world units, grid frame) onto phi = 0 of the
 /// grid's multilinear interpolant by damped Newton steps along the gradient

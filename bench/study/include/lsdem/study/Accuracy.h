@@ -42,10 +42,17 @@ struct AccuracySetting {
   double nodesPerCell = 1.0;  ///< surface nodes per cell length (the paper's pts/pix)
   dynamics::ForceFormulation formulation = dynamics::ForceFormulation::AreaWeighted;  ///< linear law's formulation
   double dtFraction = 0.2;    ///< time step as a fraction of the critical step (WorldDef::dtSafety)
+  /// The narrow phase's look-up in the other body's level set (ContactLawDef::interpolation).
+  dynamics::LevelSetInterpolation interpolation = dynamics::LevelSetInterpolation::Trilinear;
+  /// Surface nodes on the exact surface of the sphere / random grain
+  /// (ShapeDef::exactNodes), or on the grid's multilinear zero set.
+  bool exactNodes = true;
 };
 
 /// @brief The knob's CSV name of a formulation: "per_node" or "area_weighted".
 const char* formulationName(dynamics::ForceFormulation formulation);
+/// @brief The CSV name of an interpolation: "trilinear" or "tricubic".
+const char* interpolationName(dynamics::LevelSetInterpolation interpolation);
 
 /// One measured quantity of one setting, against its reference.
 struct MetricValue {
@@ -68,7 +75,10 @@ struct AccuracyCost {
 
 /// One row of the study: a knob setting, a metric, and the cost of the setting.
 struct AccuracyPoint {
-  std::string knob;         ///< "cells", "nodes_per_cell", "nodes_per_cell_per_node", "dt_fraction"
+  /// "cells", "cells_tricubic" (the cells sweep with the tricubic look-up),
+  /// "cells_grid_nodes" (the cells sweep with nodes on the grid's zero set),
+  /// "nodes_per_cell", "nodes_per_cell_per_node", "dt_fraction"
+  std::string knob;
   double setting = 0.0;     ///< the knob's value in this row
   AccuracySetting config;   ///< the full configuration
   MetricValue metric;
