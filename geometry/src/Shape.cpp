@@ -23,6 +23,46 @@ void validateContactOptions(const ShapeOptions& options) {
   }
 }
 
+// The tricubic look-up's margin and reach (Shape::cubicMargin,
+// cubicBoundingRadius) of a grid whose multilinear bounding radius about
+// `centroid` (grid frame) is `boundingRadius`: the cells where the cubic may
+// be <= 0 (smallest corner - deviation bound <= 0; elsewhere it is above the
+// multilinear interpolant's corner minimum less the bound, > 0).
+struct CubicData {
+  double margin = 0.0, boundingRadius = 0.0;
+};
+template <int D>
+CubicData cubicData(const Grid<D>& grid, double boundingRadius, const Vec<D>& centroid) {
+  const std::vector<float> deviation = grid.cubicDeviationBounds();
+  const Index<D> dims = grid.dims();
+  std::array<std::size_t, 1 << D> cornerOffset;
+  for (int c = 0; c < (1 << D); ++c) {
+    Index<D> corner;
+    for (int a = 0; a < D; ++a) corner[a] = (c >> a) & 1;
+    cornerOffset[std::size_t(c)] = grid.linear(corner);
+  }
+  double margin = 0.0;
+  double reach2 = boundingRadius * boundingRadius;
+  Index<D> i = Index<D>::Zero();
+  for (std::size_t n = 0; n < grid.size(); ++n, grid.advance(i)) {
+    if ((i >= dims - 1).any()) continue;
+    double lo = grid[n], hi = grid[n];
+    for (const std::size_t o : cornerOffset) {
+      lo = std::min(lo, double(grid[n + o]));
+      hi = std::max(hi, double(grid[n + o]));
+    }
+    const double e = deviation[n];
+    if (lo - e > 0.0) continue;
+    margin = std::max(margin, std::min(e, hi));
+    for (int c = 0; c < (1 << D); ++c) {
+      Index<D> corner = i;
+      for (int a = 0; a < D; ++a) corner[a] += (c >> a) & 1;
+      reach2 = std::max(reach2, (grid.nodePosition(corner) - centroid).squaredNorm());
+    }
+  }
+  return {margin, std::sqrt(reach2)};
+}
+
 }  // namespace
 
 template <int D>
@@ -167,39 +207,15 @@ template <int D>
 void Shape<D>::deriveSearchData() {
   nodeTree_ = NodeTree<D>::build(nodes_.positions);
   levelSetSlope_ = grid_.maxGradientNorm();
+}
 
-  // The tricubic look-up's margin and reach: the cells where the cubic may
-  // be <= 0 (smallest corner - deviation bound <= 0; elsewhere it is above
-  // the multilinear interpolant's corner minimum less the bound, > 0).
-  const std::vector<float> deviation = grid_.cubicDeviationBounds();
-  const Index<D> dims = grid_.dims();
-  std::array<std::size_t, 1 << D> cornerOffset;
-  for (int c = 0; c < (1 << D); ++c) {
-    Index<D> corner;
-    for (int a = 0; a < D; ++a) corner[a] = (c >> a) & 1;
-    cornerOffset[std::size_t(c)] = grid_.linear(corner);
-  }
-  double margin = 0.0;
-  double reach2 = boundingRadius_ * boundingRadius_;
-  Index<D> i = Index<D>::Zero();
-  for (std::size_t n = 0; n < grid_.size(); ++n, grid_.advance(i)) {
-    if ((i >= dims - 1).any()) continue;
-    double lo = grid_[n], hi = grid_[n];
-    for (const std::size_t o : cornerOffset) {
-      lo = std::min(lo, double(grid_[n + o]));
-      hi = std::max(hi, double(grid_[n + o]));
-    }
-    const double e = deviation[n];
-    if (lo - e > 0.0) continue;
-    margin = std::max(margin, std::min(e, hi));
-    for (int c = 0; c < (1 << D); ++c) {
-      Index<D> corner = i;
-      for (int a = 0; a < D; ++a) corner[a] += (c >> a) & 1;
-      reach2 = std::max(reach2, (grid_.nodePosition(corner) - bodyToGrid_.translation).squaredNorm());
-    }
-  }
-  cubicMargin_ = margin;
-  cubicBoundingRadius_ = std::sqrt(reach2);
+template <int D>
+void Shape<D>::deriveCubicData() const {
+  std::call_once(cubicOnce_.flag, [this] {
+    const CubicData data = cubicData(grid_, boundingRadius_, bodyToGrid_.translation);
+    cubicMargin_ = data.margin;
+    cubicBoundingRadius_ = data.boundingRadius;
+  });
 }
 
 template <int D>
