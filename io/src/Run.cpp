@@ -169,7 +169,7 @@ class Runner {
   }
 
   void loadRunState(const std::string& bytes) {
-    try {
+    asCheckpointError(checkpointFile().string(), [&] {
       dynamics::StateReader s(bytes.data(), bytes.size());
       s.expectTag("run");
       context_.basis.initialMass = s.get<double>();
@@ -190,10 +190,7 @@ class Runner {
         dynamics::StateReader section(it->second.data(), it->second.size());
         r->load(section);
       }
-    } catch (const std::runtime_error& e) {
-      if (dynamic_cast<const InputError*>(&e)) throw;
-      throw InputError(checkpointFile().string(), 0, "", e.what());
-    }
+    });
   }
 
   void report(double rate, bool done) const {

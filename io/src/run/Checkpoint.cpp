@@ -12,6 +12,7 @@
 
 #include <cstring>
 #include <fstream>
+#include <array>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -51,35 +52,13 @@ std::string readCheckpointFile(const std::string& path) {
   return bytes;
 }
 
-// Reads a checkpoint's fields in order; a field past the end is an InputError.
-class Fields {
- public:
-  Fields(const std::string& bytes, std::string path) : bytes_(bytes), path_(std::move(path)) {}
-  [[noreturn]] void fail(const std::string& what) const { throw InputError(path_, 0, "", what); }
-  const char* take(std::size_t n) {
-    if (n > bytes_.size() - pos_) fail("truncated checkpoint");
-    const char* p = bytes_.data() + pos_;
-    pos_ += n;
-    return p;
-  }
-  template <class T>
-  T get() {
-    T v;
-    std::memcpy(&v, take(sizeof(T)), sizeof(T));
-    return v;
-  }
-  std::string getBytes() {
-    const std::uint64_t n = get<std::uint64_t>();
-    if (n > bytes_.size() - pos_) fail("truncated checkpoint");
-    const char* p = take(std::size_t(n));
-    return std::string(p, std::size_t(n));
-  }
-
- private:
-  const std::string& bytes_;
-  std::string path_;
-  std::size_t pos_ = 0;
-};
+// Reads past a checkpoint's magic and format version (readCheckpointFile
+// checked both) and returns its dimension.
+std::int32_t readHeader(dynamics::StateReader& in) {
+  in.get<std::array<char, 8>>();
+  in.get<std::uint32_t>();
+  return in.get<std::int32_t>();
+}
 
 }  // namespace
 
@@ -110,26 +89,22 @@ void writeCheckpoint(const fs::path& file, const std::string& scenePath, std::ui
     if (added) shapes.push_back(s.get());
     return it->second;
   });
-  std::ostringstream out(std::ios::binary);
-  out.write(kMagic, 8);
-  const auto put = [&](const auto& v) { out.write(reinterpret_cast<const char*>(&v), sizeof(v)); };
-  const auto putBytes = [&](std::string_view b) {
-    put(std::uint64_t(b.size()));
-    out.write(b.data(), std::streamsize(b.size()));
-  };
-  put(kVersion);
-  put(std::int32_t(D));
-  putBytes(fs::absolute(scenePath).string());
-  put(hash);
-  put(std::uint64_t(shapes.size()));
+  // The fields in order; a byte string is its length (uint64) and its bytes.
+  dynamics::StateWriter out;
+  out.put(kMagic);
+  out.put(kVersion);
+  out.put(std::int32_t(D));
+  out.putString(fs::absolute(scenePath).string());
+  out.put(hash);
+  out.put(std::uint64_t(shapes.size()));
   for (const geometry::Shape<D>* s : shapes) {
     std::ostringstream g(std::ios::binary);
     writeGrain<D>(g, *s, GrainFormat::Binary);
-    putBytes(g.str());
+    out.putString(g.str());
   }
-  putBytes(std::string_view(state.bytes().data(), state.bytes().size()));
-  putBytes(runState);
-  std::string bytes = out.str();
+  out.putVector(state.bytes());
+  out.putString(runState);
+  std::string bytes(out.bytes().begin(), out.bytes().end());
   const std::uint32_t crc = crc32Of(bytes.data(), bytes.size());
   bytes.append(reinterpret_cast<const char*>(&crc), 4);
   writeFileAtomically(file, bytes);
@@ -139,30 +114,25 @@ template <int D>
 std::string loadCheckpoint(const fs::path& file, dynamics::World<D>& world) {
   const std::string path = file.string();
   const std::string bytes = readCheckpointFile(path);
-  Fields in(bytes, path);
-  in.take(8);
-  in.get<std::uint32_t>();  // the version, checked by readCheckpointFile
-  if (in.get<std::int32_t>() != D) in.fail("checkpoint of another dimension");
-  in.getBytes();  // scene path, read by resumeScene
-  in.get<std::uint64_t>();
-  std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes(std::size_t(in.get<std::uint64_t>()));
-  for (auto& s : shapes) {
-    std::istringstream g(in.getBytes(), std::ios::binary);
-    s = readGrain<D>(g, path);
-  }
-  const std::string state = in.getBytes();
-  std::string runState = in.getBytes();
-  try {
+  return asCheckpointError(path, [&] {
+    dynamics::StateReader in(bytes.data(), bytes.size());
+    if (readHeader(in) != D) throw InputError(path, 0, "", "checkpoint of another dimension");
+    in.getString();          // scene path, read by resumeScene
+    in.get<std::uint64_t>();  // scene hash, checked by resumeScene
+    std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes(std::size_t(in.get<std::uint64_t>()));
+    for (auto& s : shapes) {
+      std::istringstream g(in.getString(), std::ios::binary);
+      s = readGrain<D>(g, path);
+    }
+    const std::string state = in.getString();
+    std::string runState = in.getString();
     dynamics::StateReader r(state.data(), state.size());
     world.loadState(r, [&](std::uint32_t k) {
       if (k >= shapes.size()) throw std::runtime_error("shape " + std::to_string(k) + " is not in the checkpoint");
       return shapes[k];
     });
-  } catch (const std::runtime_error& e) {
-    if (dynamic_cast<const InputError*>(&e)) throw;
-    in.fail(e.what());
-  }
-  return runState;
+    return runState;
+  });
 }
 
 std::string resumeScene(const RunOptions& options) {
@@ -170,10 +140,12 @@ std::string resumeScene(const RunOptions& options) {
   const std::string path = (fs::path(dir) / outputs::kCheckpoint).string();
   if (!fs::exists(path)) throw InputError(path, 0, "", "no checkpoint to resume from (is this a run's output folder?)");
   const std::string bytes = readCheckpointFile(path);
-  Fields in(bytes, path);
-  in.take(8 + 4 + 4);
-  const std::string named = in.getBytes();
-  const std::uint64_t hash = in.get<std::uint64_t>();
+  const auto [named, hash] = asCheckpointError(path, [&] {
+    dynamics::StateReader in(bytes.data(), bytes.size());
+    readHeader(in);
+    std::string scenePath = in.getString();
+    return std::pair(std::move(scenePath), in.get<std::uint64_t>());
+  });
 
   const fs::path copy = fs::path(dir) / "scene.toml";
   const bool haveCopy = fs::exists(copy);

@@ -7,13 +7,29 @@
 /// CRC-32 of all of it.
 
 #include "lsdem/dynamics/World.h"
+#include "lsdem/io/InputError.h"
 #include "lsdem/io/Run.h"
 
 #include <cstdint>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 
 namespace lsdem::io {
+
+/// @brief Runs `read` (reading a checkpoint's fields or state) and turns a
+/// std::runtime_error it throws (a field past the end, a corrupt state) into
+/// an InputError naming the checkpoint `path`; InputErrors pass as they are.
+template <class F>
+auto asCheckpointError(const std::string& path, F&& read) -> decltype(read()) {
+  try {
+    return read();
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::runtime_error& e) {
+    throw InputError(path, 0, "", e.what());
+  }
+}
 
 /// @brief A hash of a scene file's text: the run's identity in its checkpoints.
 std::uint64_t sceneHash(const std::string& text);
