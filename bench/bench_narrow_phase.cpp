@@ -164,13 +164,13 @@ BENCHMARK(BM_NarrowPhaseThreads<3>)->Args({10, 20, 97})->Args({10, 20, 90})->Uni
 // a neighbour's grid is in the narrow phase), points spread over the box
 // (argument 0) or within one cell of the surface (argument 1), as the
 // narrow phase's look-ups are. Items = look-ups.
+// 2^16 points spread over the grid's box, or only those within one cell of
+// its zero level set (fixed seed).
 template <int D>
-void BM_TrilinearLookup(benchmark::State& state) {
-  const geometry::Grid<D> grid = geometry::sphereGrid<D>(0.5, 1.0 / 20.0);
+std::vector<Vec<D>> lookupPoints(const geometry::Grid<D>& grid, bool nearSurface) {
   const geometry::Box<D> box = grid.bounds();
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  const bool nearSurface = state.range(0) == 1;
   std::vector<Vec<D>> points;
   while (points.size() < (std::size_t(1) << 16)) {
     Vec<D> x;
@@ -178,6 +178,14 @@ void BM_TrilinearLookup(benchmark::State& state) {
     if (nearSurface && std::abs(grid.value(x)) > grid.spacing()) continue;
     points.push_back(x);
   }
+  return points;
+}
+
+template <int D>
+void BM_TrilinearLookup(benchmark::State& state) {
+  const geometry::Grid<D> grid = geometry::sphereGrid<D>(0.5, 1.0 / 20.0);
+  const bool nearSurface = state.range(0) == 1;
+  const std::vector<Vec<D>> points = lookupPoints(grid, nearSurface);
   double sum = 0.0;
   for (auto _ : state) {
     for (const Vec<D>& x : points) sum += grid.value(x);
@@ -194,17 +202,9 @@ void BM_TrilinearLookup(benchmark::State& state) {
 template <int D>
 void BM_LookupAtCells(benchmark::State& state) {
   const geometry::Grid<D> grid = geometry::sphereGrid<D>(0.5, 1.0 / 10.0);
-  const geometry::Box<D> box = grid.bounds();
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
   const bool cubic = state.range(0) == 1;
-  std::vector<Vec<D>> points;  // grid coordinates
-  while (points.size() < (std::size_t(1) << 16)) {
-    Vec<D> x;
-    for (int a = 0; a < D; ++a) x[a] = box.lower[a] + u(rng) * (box.upper[a] - box.lower[a]);
-    if (std::abs(grid.value(x)) > grid.spacing()) continue;
-    points.push_back(grid.toGrid(x));
-  }
+  std::vector<Vec<D>> points = lookupPoints(grid, true);
+  for (Vec<D>& x : points) x = grid.toGrid(x);  // grid coordinates
   double sum = 0.0;
   Vec<D> grad = Vec<D>::Zero();
   for (auto _ : state) {
