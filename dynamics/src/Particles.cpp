@@ -81,13 +81,12 @@ void Particles<D>::remove(std::size_t i) {
 }
 
 template <int D>
-double Particles<D>::kineticEnergy(std::size_t i) const {
-  const double translational = 0.5 * mass[i] * velocity[i].squaredNorm();
+double Particles<D>::rotationalEnergy(std::size_t i) const {
   if constexpr (D == 2) {
-    return translational + 0.5 * inertia[i] * angularVelocity[i] * angularVelocity[i];
+    return 0.5 * inertia[i] * angularVelocity[i] * angularVelocity[i];
   } else {
     const Vec<3> wBody = orientation[i].conjugate() * angularVelocity[i];
-    return translational + 0.5 * (inertia[i].array() * wBody.array().square()).sum();
+    return 0.5 * (inertia[i].array() * wBody.array().square()).sum();
   }
 }
 

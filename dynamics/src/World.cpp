@@ -350,6 +350,7 @@ std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
   updateTimeStep(true);
   broad_.invalidate();
   forcesValid_ = false;
+  energyCurrent_ = false;
   if (steps_ > 0) energy_.addedEnergy += particles_.kineticEnergy(i);
   return i;
 }
@@ -376,6 +377,7 @@ void World<D>::removeParticle(std::size_t index, const std::string& reason) {
   // springs the particle held leave the ledger as splitRelease.
   broad_.invalidate();
   forcesValid_ = false;
+  energyCurrent_ = false;
 }
 
 template <int D>
@@ -466,6 +468,7 @@ template <int D>
 void World<D>::particlesChanged() {
   broad_.invalidate();
   forcesValid_ = false;
+  energyCurrent_ = false;
   stiffness_.resize(particles_.size());
   for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(particles_.shape[i]);
   if (def_.densityScaling) {
@@ -608,6 +611,7 @@ void World<D>::refreshContacts() {
   if (forcesValid_) return;
   const double elasticBefore = contacts_.elasticEnergy();
   computeForces(0.0);
+  energyCurrent_ = false;
   if (steps_ == 0) {
     refreshEnergy();
     energy_.initial = energy_.total();
@@ -658,9 +662,9 @@ void World<D>::step() {
   }
   stageSeconds_[std::size_t(Stage::AfterStep)] += secondsSince(t0);
 
-  t0 = Clock::now();
-  if (def_.energyLedger) refreshEnergy();
-  stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
+  // The kinetic and elastic energy of the new state are worked out when the
+  // ledger is read (energy()), not every step.
+  energyCurrent_ = false;
   if (def_.checkFinite) checkFinite();
 }
 
@@ -792,6 +796,7 @@ void World<D>::loadState(StateReader& in,
     e->loadState(in);
   }
   in.expectTag("end of world");
+  energyCurrent_ = false;
 
   // Derived state: per-particle stiffness, poses at the current time, a fresh
   // broad phase (its output is sorted by id, so a rebuild finds the same
@@ -809,13 +814,13 @@ template <int D>
 void World<D>::refreshEnergy() const {
   double kt = 0.0, kr = 0.0;
   for (std::size_t i = 0; i < particles_.size(); ++i) {
-    const double t = 0.5 * particles_.mass[i] * particles_.velocity[i].squaredNorm();
-    kt += t;
-    kr += particles_.kineticEnergy(i) - t;
+    kt += particles_.translationalEnergy(i);
+    kr += particles_.rotationalEnergy(i);
   }
   energy_.kineticTranslational = kt;
   energy_.kineticRotational = kr;
   energy_.elastic = contacts_.elasticEnergy();
+  energyCurrent_ = true;
 }
 
 template <int D>

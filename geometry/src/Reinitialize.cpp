@@ -209,6 +209,14 @@ void sweepRounds(int maxRounds, double tolerance, Sweep&& sweepOnce) {
   }
 }
 
+/// The flat index of grid node i.
+template <int D>
+std::size_t flatIndex(const Index<D>& i, const std::array<std::ptrdiff_t, D>& strides) {
+  std::size_t n = 0;
+  for (int a = 0; a < D; ++a) n += std::size_t(i[a]) * std::size_t(strides[std::size_t(a)]);
+  return n;
+}
+
 /// Godunov upwind solution of |grad u| = 1 at a node whose smallest neighbour
 /// value along each axis is m[a] (unsorted, possibly infinite), spacing h.
 template <int D>
@@ -239,8 +247,7 @@ double sweep(std::vector<double>& dist, const std::vector<unsigned char>& fixed,
   double maxChange = 0.0;
   // The node visitor: smallest neighbour per axis, upwind update, keep the minimum.
   auto visit = [&](const Index<D>& i) {
-    std::size_t n = 0;
-    for (int a = 0; a < D; ++a) n += std::size_t(i[a]) * std::size_t(strides[std::size_t(a)]);
+    const std::size_t n = flatIndex<D>(i, strides);
     if (fixed[n]) return;
     std::array<double, D> m;
     for (int a = 0; a < D; ++a) {
@@ -297,8 +304,7 @@ double sweepSecondOrder(std::vector<double>& dist, const std::vector<unsigned ch
                         const std::array<std::ptrdiff_t, D>& strides, double h, const std::array<bool, D>& forward) {
   double maxChange = 0.0;
   auto visit = [&](const Index<D>& i) {
-    std::size_t n = 0;
-    for (int a = 0; a < D; ++a) n += std::size_t(i[a]) * std::size_t(strides[std::size_t(a)]);
+    const std::size_t n = flatIndex<D>(i, strides);
     if (fixed[n]) return;
     std::array<AxisTerm, D> terms;
     int count = 0;

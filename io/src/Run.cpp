@@ -253,6 +253,11 @@ RunResult runScene(const RunOptions& options) {
     lock = std::make_unique<OutputLock>(options.resumeDir);
   }
   const std::string scenePath = options.resumeDir.empty() ? options.scene : resumeScene(options);
+#ifdef LSDEM_HAVE_OPENMP
+  // The threads asked for on the command line apply to building the shapes
+  // (reading the scene) as well; the scene's own `threads` once it is read.
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+#endif
   AnySceneDef scene = readScene(scenePath);
   std::string text = readWholeFile(scenePath);
   if (options.note) std::visit([&](const auto& s) { for (const std::string& n : s.notes) options.note(n); }, scene);

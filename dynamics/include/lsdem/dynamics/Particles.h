@@ -96,8 +96,13 @@ class Particles {
   Vec<D> velocityAt(std::size_t i, const Vec<D>& x) const {
     return velocity[i] + Rotation<D>::velocityAt(angularVelocity[i], x - position[i]);
   }
+  /// @brief Translational kinetic energy of particle i, J.
+  double translationalEnergy(std::size_t i) const { return 0.5 * mass[i] * velocity[i].squaredNorm(); }
+  /// @brief Rotational kinetic energy of particle i, J (in 3D 0.5 I w_b^2
+  /// with the body-frame spin).
+  double rotationalEnergy(std::size_t i) const;
   /// @brief Translational plus rotational kinetic energy of particle i, J.
-  double kineticEnergy(std::size_t i) const;
+  double kineticEnergy(std::size_t i) const { return translationalEnergy(i) + rotationalEnergy(i); }
 
   /// @brief Writes every field and the id counter; each shape as the number
   /// `shapeIndex` gives it (the caller stores the shapes themselves).

@@ -321,10 +321,12 @@ class World {
   const std::vector<std::string>& planeNames() const { return planeNames_; }
   /// @brief Loads of the particles on planes and tools from the last step.
   const BoundaryLoads<D>& boundaryLoads() const { return loads_; }
-  /// @brief The energy budget. Without the ledger (WorldDef::energyLedger)
-  /// its kinetic and elastic energy are computed now, its other terms are 0.
+  /// @brief The energy budget. Its kinetic and elastic energy are those of
+  /// the state now, worked out at the first read after a change (a step, a
+  /// change of the particles); the other terms are booked as the steps go.
+  /// Without the ledger (WorldDef::energyLedger) those are 0.
   const EnergyLedger& energy() const {
-    if (!def_.energyLedger) refreshEnergy();
+    if (!energyCurrent_) refreshEnergy();
     return energy_;
   }
   const std::vector<RemovedParticle>& removed() const { return removed_; }
@@ -409,7 +411,8 @@ class World {
   double time_ = 0.0;
   std::uint64_t steps_ = 0;
   bool forcesValid_ = false;
-  mutable EnergyLedger energy_;  // without the ledger, a cache refreshed when read
+  mutable EnergyLedger energy_;      // its kinetic and elastic energy: a cache refreshed when read
+  mutable bool energyCurrent_ = false;  // that cache is of the state now
   // The ledger's damping, dashpot and boundary work follow the trapezoid rule in
   // time. Forces evaluated at the end of a step act through the closing half
   // kick of that step and the opening half kick of the next, so each half kick
