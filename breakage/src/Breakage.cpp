@@ -186,22 +186,27 @@ void Breakage<D>::queueChips(const World<D>& world) {
     if (loads.empty() || !std::isfinite(p.strength[i])) continue;  // no contact; unsplittable
     const Shape<D>& shape = *p.shape[i];
     const double shallowest = chip.minDepthCells * shape.grid().spacing();
-    // The contact whose pressure exceeds its chipping strength the most.
+    // The contact whose pressure exceeds its chipping strength the most,
+    // among those whose cap is a chip (Chipping.h: not a face's slab).
     double worst = 1.0;
     const ContactLoad<D>* at = nullptr;
     double depth = 0.0, strength = 0.0;
+    HalfSpace<D> plane;
     for (const ContactLoad<D>& load : loads) {
       if (!(load.force > 0.0)) continue;
       const double d = chipDepth<D>(chip, load.force, load.localRadius);
       if (d < shallowest) continue;  // not resolved by the grain's grid
       const double s = chipStrength(chip, d, chipUniform(def_.seed, p.id[i], load.partner));
       const double ratio = load.pressure() / s;
-      if (ratio >= worst) {
-        worst = ratio;
-        at = &load;
-        depth = d;
-        strength = s;
-      }
+      if (ratio < worst) continue;
+      // The chip plane: normal to the contact, depth d below its tip.
+      const HalfSpace<D> cut{load.normal, load.normal.dot(p.position[i]) + load.localRadius - d};
+      if (capWidth<D>(shape, p.rotation(i), p.position[i], cut.normal, cut.offset) > chip.maxWidthToDepth * d) continue;
+      worst = ratio;
+      at = &load;
+      depth = d;
+      strength = s;
+      plane = cut;
     }
     if (!at) continue;
     if (def_.haltBelowMinimum && isBelowMinimum(shape)) continue;
@@ -210,8 +215,6 @@ void Breakage<D>::queueChips(const World<D>& world) {
     const auto split = std::find_if(queue_.begin(), queue_.begin() + std::ptrdiff_t(queued),
                                     [&](const Pending& q) { return q.index == i; });
     if (split != queue_.begin() + std::ptrdiff_t(queued)) continue;
-    // The chip plane: normal to the contact, depth below its tip.
-    const HalfSpace<D> plane{at->normal, at->normal.dot(p.position[i]) + at->localRadius - depth};
     queue_.push_back({p.id[i], i, at->pressure(), plane, false, false, nullptr, true, depth, strength});
   }
 }

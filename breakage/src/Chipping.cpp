@@ -32,6 +32,7 @@ void validateChipping(const ChippingDef& def) {
   checkRange(def.maxDepthFraction > 0.0 && def.maxDepthFraction < 1.0, "maxDepthFraction", def.maxDepthFraction,
              "in (0, 1)");
   checkRange(def.minDepthCells >= 0.5, "minDepthCells", def.minDepthCells, ">= 0.5");
+  checkRange(def.maxWidthToDepth > 0.0, "maxWidthToDepth", def.maxWidthToDepth, "> 0");
   if (def.depth == ChipDepthMode::Hertz) {
     checkRange(def.youngsModulus > 0.0, "youngsModulus", def.youngsModulus, "> 0 (Hertz depth)");
     checkRange(def.poissonRatio >= 0.0 && def.poissonRatio < 0.5, "poissonRatio", def.poissonRatio, "in [0, 0.5)");
@@ -52,6 +53,39 @@ double chipDepth(const ChippingDef& def, double force, double localRadius) {
     depth = def.hertzFactor * a;
   }
   return std::min(depth, def.maxDepthFraction * localRadius);
+}
+
+template <int D>
+double capWidth(const geometry::Shape<D>& shape, const geometry::Mat<D>& rotation, const Vec<D>& position,
+                const Vec<D>& normal, double offset) {
+  // The plane in the body frame; the nodes beyond it, projected across the normal.
+  const Vec<D> n = rotation.transpose() * normal;
+  const double o = offset - normal.dot(position);
+  const auto& nodes = shape.nodes().positions;
+  const auto across = [&n](const Vec<D>& x) -> Vec<D> { return x - n.dot(x) * n; };
+  Vec<D> sum = Vec<D>::Zero();
+  std::size_t count = 0;
+  for (const Vec<D>& x : nodes) {
+    if (n.dot(x) <= o) continue;
+    sum += across(x);
+    ++count;
+  }
+  if (count == 0) return 0.0;
+  const Vec<D> mean = sum / double(count);
+  // 2D: the extent along the line; 3D: twice the farthest node from the mean.
+  double lo = 0.0, hi = 0.0;
+  for (const Vec<D>& x : nodes) {
+    if (n.dot(x) <= o) continue;
+    const Vec<D> y = across(x) - mean;
+    if constexpr (D == 2) {
+      const double t = n[0] * y[1] - n[1] * y[0];
+      lo = std::min(lo, t);
+      hi = std::max(hi, t);
+    } else {
+      hi = std::max(hi, y.norm());
+    }
+  }
+  return D == 2 ? hi - lo : 2.0 * hi;
 }
 
 double chipUniform(std::uint64_t seed, std::uint64_t particleId, std::uint64_t partnerKey) {
@@ -141,6 +175,8 @@ void contactLoads(const dynamics::Particles<D>& particles, const dynamics::Conta
   out.offset[0] = 0;
 }
 
+template double capWidth<2>(const geometry::Shape<2>&, const geometry::Mat<2>&, const Vec<2>&, const Vec<2>&, double);
+template double capWidth<3>(const geometry::Shape<3>&, const geometry::Mat<3>&, const Vec<3>&, const Vec<3>&, double);
 template double chipDepth<2>(const ChippingDef&, double, double);
 template double chipDepth<3>(const ChippingDef&, double, double);
 template void contactLoads<2>(const dynamics::Particles<2>&, const dynamics::ContactSolver<2>&,

@@ -672,6 +672,7 @@ class SceneReader {
     c.maxDepthFraction = openUnit("max_depth_fraction", c.maxDepthFraction);
     c.minDepthCells = r.number("min_depth_cells", c.minDepthCells);
     if (!(c.minDepthCells >= 0.5 && c.minDepthCells <= 1000.0)) r.fail("min_depth_cells", "must be in [0.5, 1000]");
+    c.maxWidthToDepth = r.positive("max_width_to_depth", c.maxWidthToDepth);
     r.finish();
     return c;
   }

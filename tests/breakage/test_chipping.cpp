@@ -86,6 +86,31 @@ TEST(Chipping, StrengthIsKeyedAndSizeDependent) {
   EXPECT_NE(contactPartnerKey(PartnerKind::Plane, 3), contactPartnerKey(PartnerKind::Particle, 3));
 }
 
+// The cap a plane cuts: a corner's width is a few depths, a face's is the face.
+TEST(Chipping, CapWidthTellsACornerFromAFace) {
+  geometry::ShapeDef<2> sd;
+  sd.kind = geometry::ShapeKind::Box;
+  sd.halfExtents = Vec<2>(0.01, 0.01);
+  sd.cellsAcross = 40;
+  sd.options.nodesPerCell = 2.0;
+  const auto square = geometry::buildShape(sd);
+  const Mat<2> r = square->bodyToGrid().rotation.transpose();  // world = the square's own axes
+  const Vec<2> x = r * square->bodyToGrid().applyInverse(Vec<2>::Zero());
+  // A corner cut 2 mm deep along the diagonal: the cap is the triangle of
+  // hypotenuse 2 x 2 mm = 4 mm; a face cut 1 mm deep: the whole 20 mm side.
+  const Vec<2> diagonal = Vec<2>(1.0, 1.0).normalized();
+  const double corner = capWidth<2>(*square, r, x, diagonal, diagonal.dot(Vec<2>(0.01, 0.01) + x) - 0.002);
+  const double face = capWidth<2>(*square, r, x, Vec<2>::UnitY(), x[1] + 0.009);
+  const double h = square->grid().spacing();
+  EXPECT_NEAR(corner, 0.004, 2.0 * h);
+  EXPECT_NEAR(face, 0.02, 2.0 * h);
+  EXPECT_EQ(capWidth<2>(*square, r, x, Vec<2>::UnitY(), x[1] + 0.02), 0.0);  // the plane misses it
+  // 3D: a sphere cut at a tenth of its radius: 2 sqrt(2 R d - d^2) = 0.87 R.
+  const auto ball = test::sphereShape<3>(0.01, 30);
+  const double cap = capWidth<3>(*ball, Mat<3>::Identity(), Vec<3>::Zero(), Vec<3>::UnitZ(), 0.009);
+  EXPECT_NEAR(cap, 2.0 * std::sqrt(2.0 * 0.01 * 0.001 - 1e-6), 1.5 * ball->grid().spacing());
+}
+
 TEST(Chipping, RejectsBadDefinitions) {
   const auto bad = [](auto change) {
     BreakageDef<3> def;
@@ -97,6 +122,7 @@ TEST(Chipping, RejectsBadDefinitions) {
   bad([](ChippingDef& c) { c.depthFraction = 1.0; });
   bad([](ChippingDef& c) { c.maxDepthFraction = 1.5; });
   bad([](ChippingDef& c) { c.minDepthCells = 0.1; });
+  bad([](ChippingDef& c) { c.maxWidthToDepth = 0.0; });
   bad([](ChippingDef& c) { c.weibull.modulus = 0.0; });
   bad([](ChippingDef& c) { c.depth = ChipDepthMode::Hertz; });  // no Young's modulus
   bad([](ChippingDef& c) {

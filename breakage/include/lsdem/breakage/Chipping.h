@@ -29,7 +29,13 @@
 ///     force F on a body of radius r against a flat of the grain's material,
 ///     3D a = (3 F r / (4 E*))^(1/3), 2D (line contact, F per unit
 ///     thickness) a = (4 F r / (pi E*))^(1/2), E* = E / (1 - nu^2);
-/// capped at maxDepthFraction r. The contact chips when p >= its chipping
+/// capped at maxDepthFraction r. A chip is a corner's or an asperity's: the
+/// grain's surface nodes beyond the chip plane must span at most
+/// maxWidthToDepth x delta across the normal (capWidth); a flat face pressed
+/// evenly would otherwise lose a slab as wide as the face (a 2D corner of
+/// 127 degrees has width / depth 4, a cube's corner 2.8; a sphere cut at a
+/// tenth of its radius 8.9: smooth grains do not chip at that depth).
+/// The contact chips when p >= its chipping
 /// strength, the Weibull strength (eq. 12) of a chip of size delta:
 ///     sigma_chip = sigma_0c ((d_0c / delta)^3 (-ln(1 - U)))^(1/m_c),
 /// U = chipUniform(seed, grain id, partner): one fixed number per grain and
@@ -45,6 +51,7 @@
 #include "lsdem/breakage/Weibull.h"
 #include "lsdem/dynamics/NarrowPhase.h"
 #include "lsdem/dynamics/Particles.h"
+#include "lsdem/geometry/Shape.h"
 #include "lsdem/geometry/Types.h"
 
 #include <cstdint>
@@ -72,6 +79,7 @@ struct ChippingDef {
   double poissonRatio = 0.25;     ///< Hertz: the grain's nu, in [0, 0.5)
   double maxDepthFraction = 0.3;  ///< delta <= this x r, in (0, 1)
   double minDepthCells = 1.5;     ///< chips shallower than this many grid cells are not tried, >= 0.5
+  double maxWidthToDepth = 4.0;   ///< a chip's width (capWidth) is at most this x its depth, > 0
 };
 
 /// @brief Checks ChippingDef (ranges in its field comments; Weibull by validateWeibull).
@@ -83,6 +91,19 @@ void validateChipping(const ChippingDef& def);
 /// localRadius (file comment). 0 for force <= 0 or localRadius <= 0.
 template <int D>
 double chipDepth(const ChippingDef& def, double force, double localRadius);
+
+/// @brief The width of the cap that `plane` cuts off a grain, m: the
+/// largest distance across the plane's normal of the grain's surface nodes
+/// beyond the plane (normal . x > offset) from their mean, doubled (2D: the
+/// extent of their projections on the plane's line). 0 when no node is beyond.
+/// @param shape the grain's shape (nodes in its body frame).
+/// @param rotation body -> world rotation of the grain.
+/// @param position the grain's centroid, world frame, m.
+/// @param normal the plane's unit normal, world frame (pointing into the cap).
+/// @param offset normal . x on the plane, world frame, m.
+template <int D>
+double capWidth(const geometry::Shape<D>& shape, const geometry::Mat<D>& rotation, const geometry::Vec<D>& position,
+                const geometry::Vec<D>& normal, double offset);
 
 /// @brief The U(0,1) number of the chipping strength of grain `particleId` at
 /// its contact with `partnerKey` (contactPartnerKey), fixed per (seed, grain, partner).
@@ -135,6 +156,10 @@ template <int D>
 void contactLoads(const dynamics::Particles<D>& particles, const dynamics::ContactSolver<D>& contacts,
                   GrainContactLoads<D>& out);
 
+extern template double capWidth<2>(const geometry::Shape<2>&, const geometry::Mat<2>&, const geometry::Vec<2>&,
+                                   const geometry::Vec<2>&, double);
+extern template double capWidth<3>(const geometry::Shape<3>&, const geometry::Mat<3>&, const geometry::Vec<3>&,
+                                   const geometry::Vec<3>&, double);
 extern template double chipDepth<2>(const ChippingDef&, double, double);
 extern template double chipDepth<3>(const ChippingDef&, double, double);
 extern template void contactLoads<2>(const dynamics::Particles<2>&, const dynamics::ContactSolver<2>&,
