@@ -303,6 +303,79 @@ TEST(Chipping, CubePressedOnACornerLosesThatCornerOnly) {
   EXPECT_NEAR(w.particleMass() + w.removedMass(), s.initialMass, 1e-13 * s.initialMass);
 }
 
+// 2D: a square dropped corner first loses a triangle of the prescribed
+// depth; its area is d^2 / (2 n1 n2) within 3 %, and circularity rises.
+TEST(Chipping, SquarePressedOnACornerLosesThatCorner2D) {
+  const double a = 0.01;
+  geometry::ShapeDef<2> sd;
+  sd.kind = geometry::ShapeKind::Box;
+  sd.halfExtents = Vec<2>::Constant(a);
+  sd.cellsAcross = 40;
+  sd.options.nodesPerCell = 1.0;
+  const auto square = geometry::buildShape(sd);
+  const Vec<2> corner = square->bodyToGrid().applyInverse(Vec<2>::Constant(a));
+  WorldDef<2> def;
+  def.contact.kn = 2e5;
+  def.contact.ks = 1.6e5;
+  World<2> w(def);
+  addPlane<2>(w, Vec<2>::Zero(), Vec<2>::UnitY());
+  ParticleDef<2> p;
+  p.shape = square;
+  p.density = 2650.0;
+  // The corner straight down: turn its direction onto -y.
+  p.orientation = std::atan2(-1.0, 0.0) - std::atan2(corner[1], corner[0]);
+  p.position = Vec<2>(0.0, corner.norm() + 0.02 * a);
+  p.velocity = Vec<2>(0.0, -0.5);
+  w.addParticle(p);
+  BreakageDef<2> bdef;
+  bdef.weibull.referenceStrength = 1e15;
+  bdef.weibull.referenceDiameter = 2.0 * a;
+  bdef.minBreakableVolume = 0.05 * square->volume();
+  ChippingDef c;
+  c.weibull = {2e5, 2e-3, 3.0};
+  c.depthFraction = 0.2;
+  bdef.chipping = c;
+  auto effect = std::make_unique<Breakage<2>>(bdef);
+  const Breakage<2>& b = *effect;
+  w.addEffect(std::move(effect));
+  const double mass = w.particleMass();
+  Mat<2> rotation = Mat<2>::Identity();
+  Vec<2> position = Vec<2>::Zero();
+  while (b.breakages() == 0 && w.steps() < 20000) {
+    rotation = w.particles().rotation(0);
+    position = w.particles().position[0] + w.particles().velocity[0] * w.dt();
+    w.step();
+  }
+  ASSERT_EQ(b.chips(), 1u);
+  const BreakageEvent<2>& ev = b.events()[0];
+  ASSERT_EQ(ev.childVolumes.size(), 2u);
+  EXPECT_NEAR(ev.fragmentMass, ev.parentMass, 1e-14 * ev.parentMass);
+  EXPECT_NEAR(w.particleMass() + w.removedMass(), mass, 1e-14 * mass);
+  // The plane in the square's own axes; the triangle it cuts off the corner.
+  const Vec<2> nBody = rotation.transpose() * ev.planeNormal;
+  const Vec<2> nGrid = square->bodyToGrid().rotation * nBody;
+  const double d = nBody.dot(corner) - (ev.planeOffset - ev.planeNormal.dot(position));
+  const double h = square->grid().spacing();
+  EXPECT_NEAR(ev.chipDepth, 0.2 * corner.norm(), 0.25 * h);
+  EXPECT_NEAR(d, ev.chipDepth, 0.5 * h);
+  const double triangle = d * d / (2.0 * nGrid[0] * nGrid[1]);
+  const double chip = std::min(ev.childVolumes[0], ev.childVolumes[1]);
+  std::printf("[ chip 2D ] depth %.2f cells, chip %.5g m^2, corner triangle %.5g m^2 (%+.2f %%)\n", ev.chipDepth / h,
+              chip, triangle, 100.0 * (chip / triangle - 1.0));
+  EXPECT_NEAR(chip, triangle, 0.03 * triangle);
+  // Circularity 4 pi A / P^2 rises: legs L_k = d / n_k off a side of 2a.
+  const double l0 = d / nGrid[0], l1 = d / nGrid[1];
+  const double area = 4.0 * a * a - 0.5 * l0 * l1;
+  const double perimeter = 8.0 * a - l0 - l1 + std::hypot(l0, l1);
+  const double expected = (area / (perimeter * perimeter)) / (4.0 * a * a / (64.0 * a * a));
+  const std::uint64_t bigger = ev.childVolumes[0] > ev.childVolumes[1] ? ev.children[0] : ev.children[1];
+  const auto& rest = *w.particles().shape[indexOf(w.particles(), bigger)];
+  const double ratio = rest.descriptors().circularity / square->descriptors().circularity;
+  std::printf("[ chip 2D ] circularity %.4f -> %.4f (ratio %.4f, analytic %.4f)\n", square->descriptors().circularity,
+              rest.descriptors().circularity, ratio, expected);
+  EXPECT_NEAR(ratio, expected, 0.003);
+}
+
 // A chipping declaration that never chips leaves the run bitwise the run
 // without it (the criterion only reads), and a checkpoint of a run without
 // chipping has the section of the release before chips ("breakage 3").

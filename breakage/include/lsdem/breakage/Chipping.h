@@ -1,7 +1,7 @@
 #pragma once
 /// @file Chipping.h
 /// @brief Chipping: a small breakage at one contact that shaves the grain
-/// where it is pressed (paper section 4, discussion of Fig. 14: "very small
+/// where it is pressed (paper section 5.2, discussion of Fig. 14: "very small
 /// breakages focused around a single contact point", the dominant mode at
 /// low stress, which the paper's splitting alone cannot reproduce).
 ///
