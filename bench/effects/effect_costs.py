@@ -82,6 +82,8 @@ def variants(text):
             # the discharge classifies what the outflow removes: it goes too
             variant = without_key(text, "effects", key)
             out.append((f"effect `{key}`", without_key(variant, "effects", "discharge") if key == "outflow" else variant))
+    if has_section(text, "effects.breakage.chipping"):
+        out.append(("chipping (`[effects.breakage.chipping]`)", without_section(text, "effects.breakage.chipping")))
     if has_section(text, "effects.breakage"):
         out.append(("effect `breakage`", without_section(text, "effects.breakage")))
     if has_section(text, "effects"):

@@ -49,6 +49,16 @@ double kineticEnergyOf(const ParticleDef<D>& def) {
 
 }  // namespace
 
+const char* breakageModeName(BreakageMode mode) {
+  switch (mode) {
+    case BreakageMode::Split: return "split";
+    case BreakageMode::Buckling: return "buckling";
+    case BreakageMode::Manual: return "manual";
+    case BreakageMode::Chip: return "chip";
+  }
+  return "split";
+}
+
 template <int D>
 Breakage<D>::Breakage(const BreakageDef<D>& def) : def_(def), criterion_(makeCriterion(def.criterion)) {
   validateWeibull(def.weibull);
@@ -76,6 +86,7 @@ Breakage<D>::Breakage(const BreakageDef<D>& def) : def_(def), criterion_(makeCri
                                   " needs a finite plane with a nonzero normal");
     }
   }
+  if (def.chipping) validateChipping(*def.chipping);
   manualDone_.assign(def.manual.size(), false);
 }
 
@@ -98,6 +109,7 @@ void Breakage<D>::afterStep(World<D>& world) {
   // (ii) Failures of this step and manual breaks that are due.
   queue_.clear();
   queueFailures(world);
+  if (def_.chipping) queueChips(world);
 
   // (iii)-(iv) Splits between steps, then one re-check of the time step.
   if (!queue_.empty()) applyQueue(world);
@@ -132,7 +144,7 @@ void Breakage<D>::queueFailures(World<D>& world) {
       plane = fracturePlane<D>(p.position[i], points_.of(i), shape.descriptors().equivalentDiameter);
     }
     if (!plane) continue;
-    queue_.push_back({p.id[i], i, criterion_->characteristicStress(principal), *plane, false, buckling, nullptr});
+    queue_.push_back({p.id[i], i, criterion_->characteristicStress(principal), *plane, false, buckling, nullptr, false, 0.0, 0.0});
   }
 
   // Manual breaks that are due (they replace a natural failure of the same particle).
@@ -159,7 +171,51 @@ void Breakage<D>::queueFailures(World<D>& world) {
       plane.offset /= n;
     }
     std::erase_if(queue_, [&](const Pending& q) { return q.id == mb.particle; });
-    queue_.push_back({mb.particle, i, value, plane, true, false, mb.surface ? &mb : nullptr});
+    queue_.push_back({mb.particle, i, value, plane, true, false, mb.surface ? &mb : nullptr, false, 0.0, 0.0});
+  }
+}
+
+template <int D>
+void Breakage<D>::queueChips(const World<D>& world) {
+  const ChippingDef& chip = *def_.chipping;
+  const Particles<D>& p = world.particles();
+  contactLoads(p, world.contacts(), loads_);
+  const std::size_t queued = queue_.size();  // splits and manual breaks of this step come first
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const std::span<const ContactLoad<D>> loads = loads_.of(i);
+    if (loads.empty() || !std::isfinite(p.strength[i])) continue;  // no contact; unsplittable
+    const Shape<D>& shape = *p.shape[i];
+    const double shallowest = chip.minDepthCells * shape.grid().spacing();
+    // The contact whose pressure exceeds its chipping strength the most,
+    // among those whose cap is a chip (Chipping.h: not a face's slab).
+    double worst = 1.0;
+    const ContactLoad<D>* at = nullptr;
+    double depth = 0.0, strength = 0.0;
+    HalfSpace<D> plane;
+    for (const ContactLoad<D>& load : loads) {
+      if (!(load.force > 0.0)) continue;
+      const double d = chipDepth<D>(chip, load.force, load.localRadius);
+      if (d < shallowest) continue;  // not resolved by the grain's grid
+      const double s = chipStrength(chip, d, chipUniform(def_.seed, p.id[i], load.partner));
+      const double ratio = load.pressure() / s;
+      if (ratio < worst) continue;
+      // The chip plane: normal to the contact, depth d below its tip.
+      const HalfSpace<D> cut{load.normal, load.normal.dot(p.position[i]) + load.localRadius - d};
+      if (capWidth<D>(shape, p.rotation(i), p.position[i], cut.normal, cut.offset) > chip.maxWidthToDepth * d) continue;
+      worst = ratio;
+      at = &load;
+      depth = d;
+      strength = s;
+      plane = cut;
+    }
+    if (!at) continue;
+    if (def_.haltBelowMinimum && isBelowMinimum(shape)) continue;
+    if (shape.volume() < def_.minBreakableVolume) continue;
+    // A particle that splits (or is broken by hand) this step does not chip.
+    const auto split = std::find_if(queue_.begin(), queue_.begin() + std::ptrdiff_t(queued),
+                                    [&](const Pending& q) { return q.index == i; });
+    if (split != queue_.begin() + std::ptrdiff_t(queued)) continue;
+    queue_.push_back({p.id[i], i, at->pressure(), plane, false, false, nullptr, true, depth, strength});
   }
 }
 
@@ -276,6 +332,11 @@ void Breakage<D>::applyQueue(World<D>& world) {
           {now, q.id, q.curved ? "the surface does not cut the particle at its grid resolution"
                                : "the plane does not cut the particle at its grid resolution"});
     }
+    if (!split.isSplit && q.chip) {
+      // Too shallow or grazing at this grid: the grain stays whole this step.
+      ++unresolvedChips_;
+      continue;
+    }
     if (!split.isSplit && !q.curved && !q.manual) {
       // The plane through the contacts grazes the grain (one side holds no
       // interior grid node): the same orientation through the centroid.
@@ -298,9 +359,12 @@ void Breakage<D>::applyQueue(World<D>& world) {
     ev.time = now;
     ev.parent = q.id;
     ev.criterionValue = q.criterionValue;
-    ev.strength = p.strength[i];
+    ev.strength = q.chip ? q.chipStrength : p.strength[i];
     ev.manual = q.manual;
     ev.buckling = q.buckling;
+    ev.chip = q.chip;
+    ev.chipDepth = q.chipDepth;
+    if (q.chip) ++chips_;
     ev.planeNormal = q.plane.normal;
     ev.planeOffset = q.plane.offset;
     ev.rawVolumeError = split.rawRelativeError;
@@ -466,7 +530,11 @@ void Breakage<D>::checkEnergy(World<D>& world, std::size_t firstEvent) {
 
 template <int D>
 void Breakage<D>::saveState(dynamics::StateWriter& out) const {
-  out.putTag("breakage 3");  // 2: with the manual breaks not applied; 3: the energy check
+  // 2: with the manual breaks not applied; 3: the energy check; 4: chips
+  // (written only when chipping is declared: without it the bytes are those
+  // of the release before chips).
+  const bool withChips = def_.chipping.has_value();
+  out.putTag(withChips ? "breakage 4" : "breakage 3");
   std::vector<std::uint8_t> done(manualDone_.begin(), manualDone_.end());
   out.putVector(done);
   out.put(std::uint64_t(manualNotApplied_.size()));
@@ -505,15 +573,27 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
     out.put(e.fragmentKineticEnergy);
     out.put(e.parentSpringEnergy);
     out.put(e.fragmentSpringEnergy);
+    if (!withChips) continue;
+    out.put(e.chip);
+    out.put(e.chipDepth);
   }
   out.put(largestGain_);
   out.put(largestGainJoules_);
   out.put(std::uint64_t(unchecked_));
+  if (!withChips) return;
+  out.put(std::uint64_t(chips_));
+  out.put(std::uint64_t(unresolvedChips_));
 }
 
 template <int D>
 void Breakage<D>::loadState(dynamics::StateReader& in) {
-  in.expectTag("breakage 3");
+  // A checkpoint of the release before chips ("breakage 3") holds none.
+  const std::string tag = in.getString();
+  if (tag != "breakage 3" && tag != "breakage 4") {
+    throw std::runtime_error("checkpoint state is truncated or corrupt: expected section 'breakage 4', found '" + tag +
+                             "'");
+  }
+  const bool withChips = tag == "breakage 4";
   std::vector<std::uint8_t> done;
   in.getVector(done);
   manualNotApplied_.resize(std::size_t(in.get<std::uint64_t>()));
@@ -557,10 +637,14 @@ void Breakage<D>::loadState(dynamics::StateReader& in) {
     e.fragmentKineticEnergy = in.get<double>();
     e.parentSpringEnergy = in.get<double>();
     e.fragmentSpringEnergy = in.get<double>();
+    e.chip = withChips ? in.get<bool>() : false;
+    e.chipDepth = withChips ? in.get<double>() : 0.0;
   }
   largestGain_ = in.get<double>();
   largestGainJoules_ = in.get<double>();
   unchecked_ = std::size_t(in.get<std::uint64_t>());
+  chips_ = withChips ? std::size_t(in.get<std::uint64_t>()) : 0;
+  unresolvedChips_ = withChips ? std::size_t(in.get<std::uint64_t>()) : 0;
 }
 
 template class Breakage<2>;

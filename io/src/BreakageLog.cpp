@@ -32,7 +32,8 @@ void writeBreakageLogHeader(std::ostream& out) {
   out << "time_s,parent_id,child_ids,criterion_value_Pa,strength_Pa,manual,buckling,normal_x,normal_y";
   if (D == 3) out << ",normal_z";
   out << ",plane_offset_m,child_volumes_" << unit << ",fines_volumes_" << unit
-      << ",raw_volume_error,parent_mass_kg,fragment_mass_kg,parent_energy_J,fragment_energy_J,energy_gain_J\n";
+      << ",raw_volume_error,parent_mass_kg,fragment_mass_kg,parent_energy_J,fragment_energy_J,energy_gain_J,mode,"
+         "chip_depth_m\n";
 }
 
 template <int D>
@@ -45,11 +46,15 @@ void writeBreakageLogRows(std::span<const breakage::BreakageEvent<D>> events, st
         << numberText(e.rawVolumeError) << ',' << numberText(e.parentMass) << ',' << numberText(e.fragmentMass);
     // The energy check (BreakageEvent::energyGain): empty cells when it was not made.
     if (std::isnan(e.parentSpringEnergy)) {
-      out << ",,,\n";
+      out << ",,,";
     } else {
       out << ',' << numberText(e.parentKineticEnergy + e.parentSpringEnergy) << ','
-          << numberText(e.fragmentKineticEnergy + e.fragmentSpringEnergy) << ',' << numberText(e.energyGain()) << '\n';
+          << numberText(e.fragmentKineticEnergy + e.fragmentSpringEnergy) << ',' << numberText(e.energyGain());
     }
+    // How it broke, and a chip's depth (empty for the other modes).
+    out << ',' << breakage::breakageModeName(e.mode()) << ',';
+    if (e.chip) out << numberText(e.chipDepth);
+    out << '\n';
   }
 }
 

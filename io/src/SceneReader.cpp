@@ -627,8 +627,54 @@ class SceneReader {
       mr.finish();
       def.manual.push_back(b);
     }
+    if (const toml::table* c = r.optionalTable("chipping")) def.chipping = readChipping(*c);
     r.finish();
     scene_.breakage = def;
+  }
+
+  // [effects.breakage.chipping]: chipping at single contacts (breakage/Chipping.h).
+  breakage::ChippingDef readChipping(const toml::table& t) {
+    TomlReader r(t, file_, "effects.breakage.chipping");
+    breakage::ChippingDef c;
+    c.weibull.referenceStrength = r.positive("reference_strength", c.weibull.referenceStrength);
+    c.weibull.referenceDiameter = r.positive("reference_depth", c.weibull.referenceDiameter);
+    c.weibull.modulus = r.positive("weibull_modulus", c.weibull.modulus);
+    const std::string depth = r.string("depth", "fraction");
+    if (depth == "fraction") {
+      c.depth = breakage::ChipDepthMode::Fraction;
+    } else if (depth == "hertz") {
+      c.depth = breakage::ChipDepthMode::Hertz;
+    } else {
+      r.fail("depth", "must be \"fraction\" or \"hertz\", got \"" + depth + "\"");
+    }
+    const auto openUnit = [&](const char* key, double fallback) {
+      const double v = r.number(key, fallback);
+      if (!(v > 0.0 && v < 1.0)) r.fail(key, "must be in (0, 1), got " + std::to_string(v));
+      return v;
+    };
+    if (c.depth == breakage::ChipDepthMode::Fraction) {
+      c.depthFraction = openUnit("depth_fraction", c.depthFraction);
+    } else {
+      if (r.has("depth_fraction")) r.fail("depth_fraction", "has no meaning with depth = \"hertz\" (use hertz_factor)");
+      c.hertzFactor = r.positive("hertz_factor", c.hertzFactor);
+      // The grain's elastic constants: its own, or the Hertz contact law's.
+      const dynamics::ContactLawDef& law = scene_.world.contact;
+      const bool lawIsHertz = law.normal == dynamics::NormalModel::Hertz;
+      if (!r.has("youngs_modulus") && !lawIsHertz) {
+        r.fail("", "missing key 'youngs_modulus' (depth = \"hertz\" with a linear contact law)");
+      }
+      c.youngsModulus = r.positive("youngs_modulus", law.youngsModulus);
+      c.poissonRatio = r.inRange("poisson_ratio", 0.0, 0.499, lawIsHertz ? law.poissonRatio : c.poissonRatio);
+    }
+    if (c.depth == breakage::ChipDepthMode::Fraction && r.has("hertz_factor")) {
+      r.fail("hertz_factor", "has no meaning with depth = \"fraction\" (use depth_fraction)");
+    }
+    c.maxDepthFraction = openUnit("max_depth_fraction", c.maxDepthFraction);
+    c.minDepthCells = r.number("min_depth_cells", c.minDepthCells);
+    if (!(c.minDepthCells >= 0.5 && c.minDepthCells <= 1000.0)) r.fail("min_depth_cells", "must be in [0.5, 1000]");
+    c.maxWidthToDepth = r.positive("max_width_to_depth", c.maxWidthToDepth);
+    r.finish();
+    return c;
   }
 
   void readGroups(TomlReader& top) {

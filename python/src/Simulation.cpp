@@ -425,6 +425,8 @@ class SimulationOf final : public Simulation {
       d["strength"] = e.strength;
       d["manual"] = e.manual;
       d["buckling"] = e.buckling;
+      d["mode"] = breakage::breakageModeName(e.mode());
+      d["chip_depth"] = e.chipDepth;
       d["plane_normal"] = listOf<D>(e.planeNormal);
       d["plane_offset"] = e.planeOffset;
       d["child_volumes"] = e.childVolumes;

@@ -97,12 +97,25 @@ min_volume = 8e-8
 struct FinalState {
   std::size_t particles = 0;
   std::size_t breakages = 0;
+  std::size_t chips = 0;
   std::size_t mostPairs = 0;     // the most touching pairs in a step
   std::string kinematics;        // id, position, velocity, orientation, angular velocity of every particle, in store order
   std::string books;             // energy ledger, time step, removed particles (id, mass, size)
 };
 
-FinalState run(int threads, std::size_t steps) {
+// The same collision with chipping declared (corners and asperities of the
+// grains chip where the blocks meet).
+std::string chippingScene() {
+  return std::string(kCollisionScene) + R"(
+[effects.breakage.chipping]
+reference_strength = 1e5
+reference_depth = 1e-3
+depth_fraction = 0.3
+max_width_to_depth = 8.0
+)";
+}
+
+FinalState run(int threads, std::size_t steps, const std::string& text = kCollisionScene) {
 #ifdef LSDEM_HAVE_OPENMP
   omp_set_num_threads(threads);
   EXPECT_EQ(omp_get_max_threads(), threads);
@@ -110,7 +123,7 @@ FinalState run(int threads, std::size_t steps) {
   (void)threads;
 #endif
   const fs::path file = lsdem::test::tempPath("lsdem_test_determinism.toml");
-  std::ofstream(file) << kCollisionScene;
+  std::ofstream(file) << text;
   const io::SceneDef<2> scene = std::get<io::SceneDef<2>>(io::readScene(file.string()));
   fs::remove(file);
   io::SceneWorld<2> sw = io::buildWorld(scene);
@@ -123,6 +136,7 @@ FinalState run(int threads, std::size_t steps) {
   const auto& p = w.particles();
   s.particles = p.size();
   s.breakages = sw.breakage ? sw.breakage->breakages() : 0;
+  s.chips = sw.breakage ? sw.breakage->chips() : 0;
   const auto put = [&](const void* data, std::size_t n) { s.kinematics.append(static_cast<const char*>(data), n); };
   for (std::size_t i = 0; i < p.size(); ++i) {
     put(&p.id[i], sizeof(p.id[i]));
@@ -164,6 +178,24 @@ TEST(Determinism, WorldWithBreakageIsBitwiseTheSameAt1And2And4Threads) {
     EXPECT_TRUE(n.kinematics == one.kinematics) << threads << " threads: positions or velocities differ";
     EXPECT_TRUE(n.books == one.books) << threads << " threads: energies, time step or removals differ";
   }
+#ifdef LSDEM_HAVE_OPENMP
+  omp_set_num_threads(2);
+#endif
+}
+
+// Chips are applied with the splits in ascending global id, their strengths
+// keyed by grain and partner: the same chips and states at any thread count.
+TEST(Determinism, ChippingIsBitwiseTheSameAt1And2Threads) {
+  const std::size_t steps = 800;
+  const FinalState one = run(1, steps, chippingScene());
+  ASSERT_GT(one.chips, 5u);
+  RecordProperty("chips", std::to_string(one.chips));
+  const FinalState two = run(2, steps, chippingScene());
+  EXPECT_EQ(two.chips, one.chips);
+  EXPECT_EQ(two.breakages, one.breakages);
+  EXPECT_EQ(two.particles, one.particles);
+  EXPECT_TRUE(two.kinematics == one.kinematics) << "positions or velocities differ";
+  EXPECT_TRUE(two.books == one.books) << "energies, time step or removals differ";
 #ifdef LSDEM_HAVE_OPENMP
   omp_set_num_threads(2);
 #endif

@@ -235,6 +235,45 @@ TEST(Run, ResumedRunEqualsUninterruptedRun) {
   }
 }
 
+// The shipped chipping scene stopped after its first chip and resumed ends
+// with every output of the uninterrupted run: the chip events, their mode
+// and depth and the chip counters travel in the checkpoint.
+TEST(Run, ResumedRunWithChipsEqualsUninterruptedRun) {
+  TempDir dir("resume_chips");
+  // The shipped scene with a progress call every step (to stop it where wanted).
+  std::string text = readFile(fs::path(LSDEM_SOURCE_DIR) / "apps/scenes/chipping/single_grain_2d.toml");
+  const std::size_t output = text.find("[output]\n");
+  ASSERT_NE(output, std::string::npos);
+  text.insert(output + 9, "progress_seconds = 1e-9\n");
+  const std::string scene = writeScene(dir.path, text).string();
+  io::RunOptions straight;
+  straight.scene = scene;
+  straight.outDir = (dir.path / "straight").string();
+  const io::RunResult a = io::runScene(straight);
+  std::atomic<bool> stop{false};
+  io::RunOptions first;
+  first.scene = scene;
+  first.outDir = (dir.path / "resumed").string();
+  first.stop = &stop;
+  first.progress = [&](const io::RunProgress& p) {
+    if (p.time > 0.0125) stop = true;  // after the first chip (0.0113 s), before the first split
+  };
+  const io::RunResult b1 = io::runScene(first);
+  ASSERT_TRUE(b1.stopped);
+  ASSERT_GE(b1.breakages, 1u);
+  io::RunOptions second;
+  second.resumeDir = first.outDir;
+  const io::RunResult b = io::runScene(second);
+  EXPECT_EQ(a.steps, b.steps);
+  EXPECT_EQ(a.breakages, b.breakages);
+  const std::string log = readFile(dir.path / "straight" / "breakage_log.csv");
+  EXPECT_NE(log.find(",chip,"), std::string::npos);
+  EXPECT_NE(log.find(",split,"), std::string::npos);
+  for (const char* file : {"history.csv", "psd.csv", "breakage_log.csv", "removed.csv", "shape_stats.csv"}) {
+    EXPECT_EQ(readFile(dir.path / "straight" / file), readFile(dir.path / "resumed" / file)) << file;
+  }
+}
+
 // A run killed after a periodic checkpoint (at 0.004 s, where a frame and a
 // history row fall too) and resumed from it ends with every output equal to
 // the uninterrupted run's: the files as they were at the kill (rows written

@@ -142,6 +142,23 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "effects.breakage.relax_new_contacts", "expected true or false"},
       {"negative_min_volume", std::string(kBase) + "[effects.breakage]\nmin_volume = -1e-9\n", 22,
        "effects.breakage.min_volume", "must be >= 0"},
+      // Chipping (docs/scenes.md, [effects.breakage.chipping]).
+      {"bad_chip_depth_mode", std::string(kBase) + "[effects.breakage]\n[effects.breakage.chipping]\ndepth = \"deep\"\n",
+       23, "effects.breakage.chipping.depth", "must be \"fraction\" or \"hertz\""},
+      {"chip_fraction_one", std::string(kBase) + "[effects.breakage.chipping]\ndepth_fraction = 1.0\n", 22,
+       "effects.breakage.chipping.depth_fraction", "must be in (0, 1)"},
+      {"chip_negative_strength", std::string(kBase) + "[effects.breakage.chipping]\nreference_strength = -1.0\n", 22,
+       "effects.breakage.chipping.reference_strength", "must be positive"},
+      {"chip_hertz_without_e", std::string(kBase) + "[effects.breakage.chipping]\ndepth = \"hertz\"\n", 21,
+       "effects.breakage.chipping", "missing key 'youngs_modulus'"},
+      {"chip_hertz_factor_with_fraction", std::string(kBase) + "[effects.breakage.chipping]\nhertz_factor = 2.0\n", 22,
+       "effects.breakage.chipping.hertz_factor", "no meaning with depth = \"fraction\""},
+      {"chip_min_depth_cells", std::string(kBase) + "[effects.breakage.chipping]\nmin_depth_cells = 0.1\n", 22,
+       "effects.breakage.chipping.min_depth_cells", "must be in [0.5, 1000]"},
+      {"chip_unknown_key", std::string(kBase) + "[effects.breakage.chipping]\nstrength = 1e6\n", 22,
+       "effects.breakage.chipping.strength", "unknown key"},
+      {"chip_not_a_table", std::string(kBase) + "[effects.breakage]\nchipping = true\n", 22,
+       "effects.breakage.chipping", "expected a table"},
       {"negative_min_breakable_volume", std::string(kBase) + "[effects.breakage]\nmin_breakable_volume = -1e-9\n", 22,
        "effects.breakage.min_breakable_volume", "must be >= 0"},
       {"bad_motion", std::string(kBase) + "[[tools]]\nshape = \"disc\"\n[tools.motion]\ntype = \"wobble\"\n", 24,
@@ -418,6 +435,35 @@ criterion = "tresca"
   ASSERT_NE(w.breakage, nullptr);
   EXPECT_EQ(w.breakage->criterion().name(), "tresca");
   ASSERT_EQ(w.feeds.size(), 1u);
+}
+
+// Chipping is declared by its table; its keys reach the effect, and the
+// Hertz depth takes the contact law's E and nu when the law is Hertz.
+TEST(Scene, ChippingOnlyWhenDeclared) {
+  const auto def = [](const std::string& text) {
+    return as<2>(io::readScene(writeScene("chipping", text).string())).breakage;
+  };
+  const auto off = def(std::string(kBase) + "[effects.breakage]\n");
+  ASSERT_TRUE(off.has_value());
+  EXPECT_FALSE(off->chipping.has_value());
+  const auto on = def(std::string(kBase) +
+                      "[effects.breakage.chipping]\nreference_strength = 3e7\nreference_depth = 2e-4\n"
+                      "weibull_modulus = 5.0\ndepth_fraction = 0.15\nmax_depth_fraction = 0.2\nmin_depth_cells = 2.0\n");
+  ASSERT_TRUE(on && on->chipping);
+  EXPECT_EQ(on->chipping->weibull.referenceStrength, 3e7);
+  EXPECT_EQ(on->chipping->weibull.referenceDiameter, 2e-4);
+  EXPECT_EQ(on->chipping->weibull.modulus, 5.0);
+  EXPECT_EQ(on->chipping->depth, breakage::ChipDepthMode::Fraction);
+  EXPECT_EQ(on->chipping->depthFraction, 0.15);
+  EXPECT_EQ(on->chipping->maxDepthFraction, 0.2);
+  EXPECT_EQ(on->chipping->minDepthCells, 2.0);
+  const auto hertz = def(edit("kn = 1e5", "model = \"hertz\"\nyoungs_modulus = 7e10\npoisson_ratio = 0.2") +
+                         "[effects.breakage.chipping]\ndepth = \"hertz\"\nhertz_factor = 1.5\n");
+  ASSERT_TRUE(hertz && hertz->chipping);
+  EXPECT_EQ(hertz->chipping->depth, breakage::ChipDepthMode::Hertz);
+  EXPECT_EQ(hertz->chipping->hertzFactor, 1.5);
+  EXPECT_EQ(hertz->chipping->youngsModulus, 7e10);
+  EXPECT_EQ(hertz->chipping->poissonRatio, 0.2);
 }
 
 TEST(Scene, ScaledShapesScaleExactly) {

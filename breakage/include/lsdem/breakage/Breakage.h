@@ -15,6 +15,11 @@
 ///      the buckling mode is on; held, not queued, when no plane is defined),
 ///      unless it is smaller than minBreakableVolume; each manual break that
 ///      is due is queued too;
+///   2b. with chipping declared (BreakageDef::chipping, Chipping.h), each
+///      particle not already queued whose contact pressure exceeds its
+///      chipping strength at one of its contacts is queued with the chip
+///      plane of the contact that exceeds it most (one chip per particle and
+///      step; the same size limits as splits);
 ///   3. the queue is applied in ascending global id: the parent is split by
 ///      its plane (mapped to the parent's body frame); a contact plane that
 ///      only grazes the grain is moved, parallel, to the centroid; if that
@@ -26,7 +31,9 @@
 ///      the rigid-body pose and velocity of fragmentState(), generation + 1,
 ///      birth time now and strength childStrength() (eq. 13; a parent made
 ///      unbreakable, strength infinite, gives its fragments none, so step 1
-///      samples theirs); a fragment below
+///      samples theirs); a chip plane that does not cut the grain at its
+///      grid resolution leaves it whole (counted in unresolvedChips(); no
+///      fall-back plane); a fragment below
 ///      minVolume or minNodes is recorded as removed ("fines") with its
 ///      kinetic energy instead;
 ///   4. the batch goes to the world in one World::replace (parents out,
@@ -71,6 +78,7 @@
 /// walks the particles and the contact records once per step into buffers it
 /// reuses; it allocates only when it breaks something.
 
+#include "lsdem/breakage/Chipping.h"
 #include "lsdem/breakage/Criteria.h"
 #include "lsdem/breakage/FracturePlane.h"
 #include "lsdem/breakage/GrainStress.h"
@@ -84,6 +92,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -135,7 +144,21 @@ struct BreakageDef {
   /// How grains are split: fragment node density, re-gridding of small
   /// fragments (SplitOptions::regridCells, on by default) and its bounds.
   SplitOptions split;
+  /// Chipping at single contacts (Chipping.h); empty: no chipping, and the
+  /// effect does not look at it (a run is bitwise the one without the key).
+  std::optional<ChippingDef> chipping;
 };
+
+/// How a particle broke (BreakageEvent::mode).
+enum class BreakageMode {
+  Split,     ///< the criterion failed: a cut through the strongest contacts (eq. 18-20)
+  Buckling,  ///< the criterion failed, cut by the buckling plane (eq. 21)
+  Manual,    ///< a prescribed break (ManualBreak)
+  Chip,      ///< chipping at one contact (Chipping.h)
+};
+
+/// @brief The mode's name in the breakage log: "split", "buckling", "manual", "chip".
+const char* breakageModeName(BreakageMode mode);
 
 /// One breakage, as kept in the effect's log.
 template <int D>
@@ -147,6 +170,10 @@ struct BreakageEvent {
   double strength = 0.0;                       ///< the parent's critical stress, Pa
   bool manual = false;                         ///< a prescribed break (ManualBreak)
   bool buckling = false;                       ///< cut by the buckling plane (eq. 21)
+  /// A chip (Chipping.h): criterionValue is then the contact pressure over
+  /// its node patch and strength the chipping strength of a chip of depth chipDepth.
+  bool chip = false;
+  double chipDepth = 0.0;                      ///< chips: the chip's depth below the contact's tip, m (0 otherwise)
   geometry::Vec<D> planeNormal = geometry::Vec<D>::Zero();  ///< unit normal of the fracture plane, world frame (zero for a curved manual surface)
   double planeOffset = 0.0;                    ///< normal . x on the plane, world frame, m
   std::vector<double> childVolumes;            ///< corrected volumes of the kept fragments, m^D
@@ -178,6 +205,11 @@ struct BreakageEvent {
   double energyGain() const {
     return fragmentKineticEnergy + fragmentSpringEnergy - parentKineticEnergy - parentSpringEnergy -
            inertiaEnergyBound;
+  }
+  /// @brief How the particle broke.
+  BreakageMode mode() const {
+    return chip ? BreakageMode::Chip
+                : manual ? BreakageMode::Manual : buckling ? BreakageMode::Buckling : BreakageMode::Split;
   }
 };
 
@@ -211,8 +243,13 @@ class Breakage final : public dynamics::Effect<D> {
   const Criterion& criterion() const { return *criterion_; }
   /// @brief Every breakage so far, in the order applied.
   const std::vector<BreakageEvent<D>>& events() const { return events_; }
-  /// @brief Number of breakages so far.
+  /// @brief Number of breakages so far (chips included).
   std::size_t breakages() const { return events_.size(); }
+  /// @brief Number of chips so far (events whose mode() is Chip).
+  std::size_t chips() const { return chips_; }
+  /// @brief Chips whose plane did not cut the grain at its grid resolution
+  /// (the grain was left whole).
+  std::size_t unresolvedChips() const { return unresolvedChips_; }
   /// @brief Sum over breakages of |rawVolumeError| x parent volume: the volume
   /// the exact-mass correction redistributed, m^D.
   double rawVolumeError() const { return rawVolumeError_; }
@@ -252,10 +289,15 @@ class Breakage final : public dynamics::Effect<D> {
     bool manual;
     bool buckling;
     const ManualBreak<D>* curved;  // a manual break with a curved surface, or null
+    bool chip = false;
+    double chipDepth = 0.0;        // m
+    double chipStrength = 0.0;     // Pa
   };
 
   bool isBelowMinimum(const geometry::Shape<D>& shape) const;
   void queueFailures(dynamics::World<D>& world);
+  /// Queues the chips of this step (file comment, 2b): particles not queued yet.
+  void queueChips(const dynamics::World<D>& world);
   void applyQueue(dynamics::World<D>& world);
   /// The springs' energy of the current contacts per particle, into springs_.
   void springsPerParticle(const dynamics::World<D>& world);
@@ -275,6 +317,7 @@ class Breakage final : public dynamics::Effect<D> {
   // Reused buffers.
   std::vector<geometry::Mat<D>> stress_;
   GrainContactPoints<D> points_;
+  GrainContactLoads<D> loads_;
   /// A body near a grain being split: its shape placed in the world (or a plane).
   struct Neighbour {
     const geometry::Shape<D>* shape = nullptr;  ///< nullptr: a plane
@@ -305,6 +348,8 @@ class Breakage final : public dynamics::Effect<D> {
   double finesMass_ = 0.0;
   std::size_t unsplit_ = 0;
   std::size_t unsplittable_ = 0;
+  std::size_t chips_ = 0;
+  std::size_t unresolvedChips_ = 0;
   std::vector<ManualBreakNotApplied> manualNotApplied_;
   // Energy check.
   std::vector<double> springs_;    // per particle: elastic energy of its contacts
