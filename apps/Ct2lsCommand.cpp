@@ -24,6 +24,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -42,6 +43,7 @@ struct Ct2lsOptions {
   std::vector<double> spacing;
   std::vector<double> origin;
   double scale = 1.0;
+  bool scaleGiven = false;  // --scale on the command line (else from the file's units)
   long long minVoxels = 100;
   bool keepBorder = false;
   long long background = 0;
@@ -98,6 +100,16 @@ io::VolumeReadOptions readOptions(const Ct2lsOptions& o) {
   return r;
 }
 
+// Metres per unit of the lengths a file names ("mm", ...); nullopt for others.
+std::optional<double> metresPer(const std::string& unit) {
+  if (unit == "m") return 1.0;
+  if (unit == "cm") return 1e-2;
+  if (unit == "mm") return 1e-3;
+  if (unit == "um" || unit == "\u00b5m" || unit == "micron" || unit == "microns") return 1e-6;
+  if (unit == "nm") return 1e-9;
+  return std::nullopt;
+}
+
 // Rotation angles [rx, ry, rz] in degrees with R = Rz Ry Rx (a scene's `rotations_deg`).
 Vec<3> rotationDegrees(const geometry::Mat<3>& r) {
   const Vec<3> zyx = r.eulerAngles(2, 1, 0);
@@ -111,7 +123,7 @@ void run(const Ct2lsOptions& o) {
   } else {
     requirePositive("--cells-across", o.cellsAcross);
   }
-  requirePositive("--scale", o.scale);
+  if (o.scaleGiven) requirePositive("--scale", o.scale);
   requirePositive("--max-memory", o.maxMemoryMb);
   requirePositive("--nodes-per-cell", o.nodesPerCell);
   if (o.minVoxels < 1) throw io::InputError("--min-voxels", 0, "", "must be >= 1");
@@ -133,8 +145,18 @@ void run(const Ct2lsOptions& o) {
     throw io::InputError(o.image, 0, "", "the " + read.format + " file gives no voxel spacing; give --spacing");
   }
   if (!o.origin.empty()) volume.origin = Vec<3>(o.origin[0], o.origin[1], o.origin[2]);
-  volume.spacing *= o.scale;
-  volume.origin *= o.scale;
+  // To metres: --scale, else the unit the file names, else metres.
+  double scale = o.scale;
+  if (!o.scaleGiven && !read.units.empty()) {
+    const auto factor = metresPer(read.units);
+    if (!factor) {
+      throw io::InputError(o.image, 0, "space units",
+                           "unknown unit '" + read.units + "'; give --scale (the factor to metres)");
+    }
+    scale = *factor;
+  }
+  volume.spacing *= scale;
+  volume.origin *= scale;
   const double readSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // The labels, and which of them become grains.
@@ -143,9 +165,12 @@ void run(const Ct2lsOptions& o) {
   if (labels.empty()) {
     throw io::InputError(o.image, 0, "", "holds no label other than the background " + std::to_string(o.background));
   }
-  std::printf("ct2ls %s (%s, %d x %d x %d voxels of %s x %s x %s m, read in %.2f s): %zu labels\n", o.image.c_str(),
+  const std::string unitNote =
+      !o.scaleGiven && !read.units.empty() ? ", lengths in " + read.units + " -> scale " + fixed(scale) : "";
+  std::printf("ct2ls %s (%s, %d x %d x %d voxels of %s x %s x %s m%s, read in %.2f s): %zu labels\n", o.image.c_str(),
               read.format.c_str(), volume.dims[0], volume.dims[1], volume.dims[2], fixed(volume.spacing[0]).c_str(),
-              fixed(volume.spacing[1]).c_str(), fixed(volume.spacing[2]).c_str(), readSeconds, labels.size());
+              fixed(volume.spacing[1]).c_str(), fixed(volume.spacing[2]).c_str(), unitNote.c_str(), readSeconds,
+              labels.size());
   std::fflush(stdout);  // before any error line on stderr
   std::error_code ec;
   fs::create_directories(o.outDir, ec);
@@ -276,7 +301,9 @@ void addCt2lsCommand(CLI::App& app) {
   cmd->add_option("--spacing", opts->spacing, "voxel size SX[,SY,SZ] in image units (overrides the file's)")->delimiter(',');
   cmd->add_option("--origin", opts->origin, "centre of the first voxel X,Y,Z in image units (overrides the file's)")
       ->delimiter(',');
-  cmd->add_option("--scale", opts->scale, "factor from image units to metres (default 1; 0.001 for millimetres)");
+  CLI::Option* scale = cmd->add_option(
+      "--scale", opts->scale,
+      "factor from image units to metres (default: from the NRRD 'space units' if given, else 1; 0.001 for mm)");
   cmd->add_option("--min-voxels", opts->minVoxels, "skip labels with fewer voxels (default 100)");
   cmd->add_flag("--keep-border", opts->keepBorder, "keep labels that touch the image border (skipped by default)");
   cmd->add_option("--background", opts->background, "the label of the space between grains (default 0)");
@@ -288,7 +315,10 @@ void addCt2lsCommand(CLI::App& app) {
   cmd->add_option("--raw-type", opts->rawType, "raw voxel type: uint8, uint16, uint32, int8, int16, int32");
   cmd->add_option("--raw-endian", opts->rawEndian, "raw byte order: little (default) or big");
   cmd->add_option("--raw-header-bytes", opts->rawHeaderBytes, "bytes before the raw voxels (default 0)");
-  cmd->callback([opts] { run(*opts); });
+  cmd->callback([opts, scale] {
+    opts->scaleGiven = scale->count() > 0;
+    run(*opts);
+  });
 }
 
 }  // namespace lsdem::apps

@@ -253,7 +253,7 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
 
   // The header: "key: value" lines up to a blank line (or the end of a detached header).
   std::optional<VoxelType> type;
-  std::string typeName, encoding = "", endian, dataFile;
+  std::string typeName, encoding = "", endian, dataFile, units;
   int dimension = 0, lineNo = 1, keyLine[8] = {};
   long long byteSkip = 0, lineSkip = 0;
   std::vector<double> sizes, spacings;
@@ -319,6 +319,20 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
       const auto v = numbers(file, lineNo, key, value);
       if (v.size() != 1 || v[0] < 0 || v[0] != std::floor(v[0])) throw InputError(file, lineNo, key, "must be >= 0");
       lineSkip = (long long)v[0];
+    } else if (key == "space units") {
+      // Quoted names, one per axis: "mm" "mm" "mm".
+      std::vector<std::string> names;
+      for (std::size_t q = value.find('"'); q != std::string::npos; q = value.find('"', q + 1)) {
+        const std::size_t close = value.find('"', q + 1);
+        if (close == std::string::npos) throw InputError(file, lineNo, key, "unterminated quoted unit");
+        names.push_back(value.substr(q + 1, close - q - 1));
+        q = close;
+      }
+      if (names.size() != 3) throw InputError(file, lineNo, key, "must name 3 quoted units");
+      if (names[1] != names[0] || names[2] != names[0]) {
+        throw InputError(file, lineNo, key, "axes in different units are not supported");
+      }
+      units = names[0];
     } else if (key == "space") {
       // Named spaces (left-posterior-superior, ...) are 3D; their axes are used as given.
     } else if (key == "space dimension") {
@@ -348,6 +362,7 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
   VolumeRead r;
   r.format = "nrrd";
   r.volume.dims = dims;
+  r.units = units;
   if (!spacings.empty() && !directions.empty()) {
     throw InputError(file, keyLine[1], "spacings", "give either spacings or space directions, not both");
   }

@@ -18,6 +18,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 using namespace lsdem;
@@ -93,6 +94,13 @@ TEST(Ct2ls, SphereBecomesAGrainWhereItWasScanned) {
   const std::string toml = test::readFile(dir / "grains" / "particles.toml");
   EXPECT_NE(toml.find("[shapes.label_5]\nkind = \"grain_file\"\npath = \"grain_5.lsg\""), std::string::npos) << toml;
   EXPECT_NE(toml.find("positions = [[" + cells[4] + ", "), std::string::npos) << toml;
+  // rotations_deg [rx, ry, rz] turn the body frame as the grain lay: Rz Ry Rx = bodyToGrid.
+  const double deg = M_PI / 180.0;
+  const geometry::Mat<3> turn = (Eigen::AngleAxisd(std::stod(cells[9]) * deg, Vec<3>::UnitZ()) *
+                                 Eigen::AngleAxisd(std::stod(cells[8]) * deg, Vec<3>::UnitY()) *
+                                 Eigen::AngleAxisd(std::stod(cells[7]) * deg, Vec<3>::UnitX()))
+                                    .toRotationMatrix();
+  EXPECT_LT((turn - shape->bodyToGrid().rotation).norm(), 1e-7);
 
   // --keep-border keeps label 2 (a block: 6 x 8 x 8 voxels, its volume exact to 2 %).
   const test::ProcessResult k = test::runCaptured({LSDEM_BINARY, "ct2ls", (dir / "scan.nrrd").string(), "-o",
@@ -170,4 +178,46 @@ TEST(Ct2ls, RawAndTiffGiveTheSameGrain) {
   }
   EXPECT_NEAR(volumes[1] / volumes[0], 1.0, 1e-9);
   EXPECT_NEAR(volumes[2] / volumes[0], 1.0, 1e-9);
+}
+
+// The shipped example (apps/scenes/ct_grains) is what ct2ls makes of the
+// shipped volume: the command in the scene's header gives grains.csv again
+// (volumes and places to 1e-6; the NRRD names its lengths in mm, so no --scale).
+TEST(Ct2ls, ShippedExampleIsReproduced) {
+  const fs::path dir = tempDir("shipped");
+  const fs::path scene = fs::path(LSDEM_SOURCE_DIR) / "apps" / "scenes" / "ct_grains";
+  const test::ProcessResult r =
+      test::runCaptured({LSDEM_BINARY, "ct2ls", (scene / "ct_grains.nrrd").string(), "-o", dir.string(),
+                         "--cells-across", "10", "--nodes-per-cell", "1", "--binary"});
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("lengths in mm -> scale 0.001"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("label 7: skipped: touches the image border"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("label 8: skipped: 12 voxels"), std::string::npos) << r.output;
+  const auto table = [](const fs::path& p) {
+    std::vector<std::vector<std::string>> rows;
+    std::istringstream in(test::readFile(p));
+    for (std::string line; std::getline(in, line);) {
+      std::vector<std::string> cells;
+      std::stringstream cellStream(line);
+      for (std::string c; std::getline(cellStream, c, ',');) cells.push_back(c);
+      rows.push_back(cells);
+    }
+    return rows;
+  };
+  const auto made = table(dir / "grains.csv"), shipped = table(scene / "grains" / "grains.csv");
+  ASSERT_EQ(made.size(), 7u);
+  ASSERT_EQ(made.size(), shipped.size());
+  EXPECT_EQ(made[0], shipped[0]);
+  for (std::size_t i = 1; i < made.size(); ++i) {
+    ASSERT_EQ(made[i].size(), 12u);
+    EXPECT_EQ(made[i][0], shipped[i][0]);    // label
+    EXPECT_EQ(made[i][1], shipped[i][1]);    // voxels
+    EXPECT_EQ(made[i][11], shipped[i][11]);  // file
+    for (const int c : {2, 4, 5, 6}) {
+      EXPECT_NEAR(std::stod(made[i][std::size_t(c)]) / std::stod(shipped[i][std::size_t(c)]), 1.0, 1e-6)
+          << "row " << i << " column " << c;
+    }
+    // The level set's volume is the voxel count's to 1 %.
+    EXPECT_NEAR(std::stod(made[i][2]) / std::stod(made[i][3]), 1.0, 0.01) << "row " << i;
+  }
 }

@@ -111,6 +111,20 @@ TEST(VolumeFile, NrrdDetachedHeaderBigEndian) {
   EXPECT_EQ(r.volume.labels[3], 65535u);
   EXPECT_DOUBLE_EQ(r.volume.spacing[2], 0.3);
   EXPECT_FALSE(r.hasOrigin);
+  EXPECT_EQ(r.units, "");
+  // "space units" are read (one unit for all axes).
+  writeText(dir / "mm.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1 1 1\nspace units: \"mm\" \"mm\" \"mm\"\n"
+                             "encoding: raw\n\n\1");
+  EXPECT_EQ(io::readLabelVolume((dir / "mm.nrrd").string()).units, "mm");
+  writeText(dir / "mixed.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1 1 1\nspace units: \"mm\" \"mm\" \"m\"\n");
+  try {
+    io::readLabelVolume((dir / "mixed.nrrd").string());
+    ADD_FAILURE() << "mixed units read";
+  } catch (const io::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("mixed.nrrd:5: space units: axes in different units are not supported"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(VolumeFile, TiffMultiPageRoundTrips) {

@@ -52,6 +52,9 @@ struct VolumeRead {
   std::string format;            ///< "nrrd", "tiff", "tiff slices" or "raw"
   bool hasSpacing = false;       ///< the file gave the voxel spacing (NRRD "spacings" / "space directions")
   bool hasOrigin = false;        ///< the file gave the origin (NRRD "space origin")
+  /// The length unit of spacing and origin the file names (NRRD "space
+  /// units", one for all axes, e.g. "mm"); empty when it names none.
+  std::string units;
   int files = 1;                 ///< files read (slices of a folder)
 };
 
