@@ -214,9 +214,11 @@ void run(const Ct2lsOptions& o) {
     // Memory: estimated before anything of the label is allocated.
     const std::size_t need = geometry::labelLevelSetBytes(volume, s, gridOptions);
     if (double(need) > o.maxMemoryMb * 1048576.0) {
+      char mb[64];
+      std::snprintf(mb, sizeof mb, "%.3g MB, over --max-memory %g MB", double(need) / 1048576.0, o.maxMemoryMb);
       throw io::InputError(o.image, 0, key,
-                           "needs about " + std::to_string(need / 1048576) + " MB for its distance transform and grid, over --max-memory " +
-                               fixed(o.maxMemoryMb) + " MB (raise it, or give a coarser --grid-spacing)");
+                           std::string("needs about ") + mb +
+                               " for its distance transform and grid (raise it, or lower --cells-across)");
     }
     // Level set, shape and grain file.
     const auto start = std::chrono::steady_clock::now();

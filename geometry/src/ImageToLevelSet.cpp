@@ -27,9 +27,15 @@ Box<3> labelBox(const LabelVolume& volume, const LabelStats& label) {
   return {volume.voxelCentre(label.lower) - half, volume.voxelCentre(label.upper) + half};
 }
 
-/// The new grid (values unset) and the voxel crop [lower, upper] that holds
-/// every node of it with a voxel to spare on each side (the crop may reach
-/// past the image: voxels there are outside the label).
+/// The new grid (values unset) and the voxel crop: the label's bounding box
+/// grown on each side by two grid cells (at most the label's own extent) and
+/// three voxels, so every grid node next to the zero level set and the
+/// tricubic stencils about it fall inside. Nodes farther out, in the padding,
+/// get the value at the nearest crop point plus the distance to it (positive,
+/// as the crop's border voxels are outside the label); the reinitialisation
+/// then makes them distances. So the crop, and the memory, grows with the
+/// label, not with the padding. The crop may reach past the image: voxels
+/// there are outside the label.
 struct Layout {
   Grid<3> grid;
   Index<3> cropLower;
@@ -38,13 +44,14 @@ struct Layout {
 
 Layout layoutFor(const LabelVolume& volume, const LabelStats& label, const LabelGridOptions& options) {
   Layout l;
-  l.grid = Grid<3>::covering(labelBox(volume, label), labelGridSpacing(volume, label, options), options.paddingCells);
-  const Box<3> b = l.grid.bounds();
+  const double h = labelGridSpacing(volume, label, options);
+  l.grid = Grid<3>::covering(labelBox(volume, label), h, options.paddingCells);
   for (int a = 0; a < 3; ++a) {
-    const double lo = std::floor((b.lower[a] - volume.origin[a]) / volume.spacing[a]) - 1.0;
-    const double hi = std::ceil((b.upper[a] - volume.origin[a]) / volume.spacing[a]) + 1.0;
-    l.cropLower[a] = std::min(int(lo), label.lower[a] - 1);
-    l.cropDims[a] = std::max(int(hi), label.upper[a] + 1) - l.cropLower[a] + 1;
+    const int extent = label.upper[a] - label.lower[a] + 1;
+    const double cells = std::min(std::ceil(2.0 * h / volume.spacing[a]), double(extent));
+    const int margin = int(cells) + 3;
+    l.cropLower[a] = label.lower[a] - margin;
+    l.cropDims[a] = extent + 2 * margin;
   }
   return l;
 }
@@ -91,11 +98,12 @@ Grid<3> labelLevelSet(const LabelVolume& volume, const LabelStats& label, const 
   const std::vector<float> voxelPhi = maskSignedDistance(mask, n, volume.spacing);
   mask = {};
 
-  // Catmull-Rom (tricubic) resampling onto the new grid's nodes (all inside
-  // the crop; stencil indices past it take the crop's border voxel). It
-  // reproduces quadratics, so it does not pull a curved surface inwards by
-  // the s^2 / (8 R) of trilinear resampling (measured: -0.8 % of a sphere's
-  // volume at 20 voxels across with trilinear, see docs/tomography.md).
+  // Catmull-Rom (tricubic) resampling onto the new grid's nodes (stencil
+  // indices past the crop take its border voxel; nodes outside it take the
+  // value at the nearest crop point plus the distance to it). It reproduces
+  // quadratics, so it does not pull a curved surface inwards by the
+  // s^2 / (8 R) of trilinear resampling (measured: -0.8 % of a sphere's volume
+  // at 20 voxels across with trilinear, see docs/tomography.md).
   Grid<3>& grid = l.grid;
   const Vec<3> cropOrigin = volume.voxelCentre(l.cropLower);
   const std::size_t stride[3] = {1, std::size_t(n[0]), std::size_t(n[0]) * std::size_t(n[1])};
@@ -106,8 +114,10 @@ Grid<3> labelLevelSet(const LabelVolume& volume, const LabelStats& label, const 
     const Vec<3> u = (grid.nodePosition(idx) - cropOrigin).cwiseQuotient(volume.spacing);
     double w[3][4];
     std::size_t offset[3][4];
+    double outside2 = 0.0;  // squared distance from the node to the crop, world units
     for (int a = 0; a < 3; ++a) {
       const double ua = std::clamp(u[a], 0.0, double(n[a] - 1));
+      outside2 += (u[a] - ua) * (u[a] - ua) * volume.spacing[a] * volume.spacing[a];
       const int c = std::clamp(int(ua), 0, n[a] - 2);
       detail::catmullRomWeights(ua - c, w[a]);
       for (int k = 0; k < 4; ++k) offset[a][k] = stride[a] * std::size_t(std::clamp(c + k - 1, 0, n[a] - 1));
@@ -122,7 +132,7 @@ Grid<3> labelLevelSet(const LabelVolume& volume, const LabelStats& label, const 
       }
       value += w[2][k] * plane;
     }
-    grid[std::size_t(node)] = float(value);
+    grid[std::size_t(node)] = float(value + std::sqrt(outside2));
   }
 
   // A distance again, the zero level set kept in place.
