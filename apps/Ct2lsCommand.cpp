@@ -53,6 +53,7 @@ struct Ct2lsOptions {
   std::vector<int> rawDims;
   std::string rawType;
   std::string rawEndian = "little";
+  bool rawEndianGiven = false;
   long long rawHeaderBytes = 0;
 };
 
@@ -76,8 +77,11 @@ io::VolumeReadOptions readOptions(const Ct2lsOptions& o) {
   r.maxBytes = std::size_t(o.maxMemoryMb * 1048576.0);
   if (o.rawDims.empty()) {
     if (!o.rawType.empty()) throw io::InputError("--raw-type", 0, "", "needs --raw-dims");
+    if (o.rawEndianGiven) throw io::InputError("--raw-endian", 0, "", "needs --raw-dims");
+    if (o.rawHeaderBytes != 0) throw io::InputError("--raw-header-bytes", 0, "", "needs --raw-dims");
     return r;
   }
+  if (o.rawType.empty()) throw io::InputError("--raw-dims", 0, "", "needs --raw-type");
   if (o.rawDims.size() != 3) throw io::InputError("--raw-dims", 0, "", "needs three sizes NX,NY,NZ");
   io::RawLayout layout;
   for (int a = 0; a < 3; ++a) {
@@ -127,7 +131,8 @@ void run(const Ct2lsOptions& o) {
   requirePositive("--max-memory", o.maxMemoryMb);
   requirePositive("--nodes-per-cell", o.nodesPerCell);
   if (o.minVoxels < 1) throw io::InputError("--min-voxels", 0, "", "must be >= 1");
-  if (o.background < 0 || o.background > 0xFFFFFFFFLL) throw io::InputError("--background", 0, "", "must be a label >= 0");
+  if (o.background < 0 || o.background > 0xFFFFFFFFLL)
+    throw io::InputError("--background", 0, "", "must be a label >= 0");
   if (!o.spacing.empty() && o.spacing.size() != 1 && o.spacing.size() != 3) {
     throw io::InputError("--spacing", 0, "", "needs one spacing or three (SX,SY,SZ)");
   }
@@ -140,7 +145,8 @@ void run(const Ct2lsOptions& o) {
   io::VolumeRead read = io::readLabelVolume(o.image, readOpts);
   geometry::LabelVolume& volume = read.volume;
   if (!o.spacing.empty()) {
-    volume.spacing = o.spacing.size() == 1 ? Vec<3>::Constant(o.spacing[0]) : Vec<3>(o.spacing[0], o.spacing[1], o.spacing[2]);
+    volume.spacing =
+        o.spacing.size() == 1 ? Vec<3>::Constant(o.spacing[0]) : Vec<3>(o.spacing[0], o.spacing[1], o.spacing[2]);
   } else if (!read.hasSpacing) {
     throw io::InputError(o.image, 0, "", "the " + read.format + " file gives no voxel spacing; give --spacing");
   }
@@ -160,8 +166,7 @@ void run(const Ct2lsOptions& o) {
   const double readSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // The labels, and which of them become grains.
-  const std::vector<geometry::LabelStats> labels =
-      geometry::labelStatistics(volume, std::uint32_t(o.background));
+  const std::vector<geometry::LabelStats> labels = geometry::labelStatistics(volume, std::uint32_t(o.background));
   if (labels.empty()) {
     throw io::InputError(o.image, 0, "", "holds no label other than the background " + std::to_string(o.background));
   }
@@ -244,21 +249,24 @@ void run(const Ct2lsOptions& o) {
                     shape->nodes().size(),
                     name};
     written.push_back(w);
-    std::printf("  label %u -> %s: %zu voxels, volume %.6g m^3 (voxels %.6g), centroid (%.6g, %.6g, %.6g) m, %zu nodes, "
-                "grid %d x %d x %d, %.2f s\n",
-                s.label, name.c_str(), s.voxels, w.volume, w.voxelVolume, w.centroid[0], w.centroid[1], w.centroid[2],
-                w.nodes, shape->grid().dims()[0], shape->grid().dims()[1], shape->grid().dims()[2], seconds);
+    std::printf(
+        "  label %u -> %s: %zu voxels, volume %.6g m^3 (voxels %.6g), centroid (%.6g, %.6g, %.6g) m, %zu nodes, "
+        "grid %d x %d x %d, %.2f s\n",
+        s.label, name.c_str(), s.voxels, w.volume, w.voxelVolume, w.centroid[0], w.centroid[1], w.centroid[2], w.nodes,
+        shape->grid().dims()[0], shape->grid().dims()[1], shape->grid().dims()[2], seconds);
     std::fflush(stdout);
   }
   if (written.empty()) {
-    throw io::InputError(o.image, 0, "", "no grain written: all " + std::to_string(labels.size()) + " labels skipped (" +
-                                             std::to_string(skippedBorder) + " on the border, " +
-                                             std::to_string(skippedSmall) + " below --min-voxels)");
+    throw io::InputError(o.image, 0, "",
+                         "no grain written: all " + std::to_string(labels.size()) + " labels skipped (" +
+                             std::to_string(skippedBorder) + " on the border, " + std::to_string(skippedSmall) +
+                             " below --min-voxels)");
   }
 
   // Where each grain was scanned: a table and a scene fragment placing them there.
   std::ostringstream csv, toml;
-  csv << "label,voxels,volume_m3,voxel_volume_m3,centroid_x_m,centroid_y_m,centroid_z_m,rx_deg,ry_deg,rz_deg,nodes,file\n";
+  csv << "label,voxels,volume_m3,voxel_volume_m3,centroid_x_m,centroid_y_m,centroid_z_m,rx_deg,ry_deg,rz_deg,nodes,"
+         "file\n";
   toml << "# Grains of " << o.image << " where they were scanned (lsdem ct2ls). Paths are relative to\n"
        << "# this folder: copy these tables into a scene placed beside it (or fix the paths),\n"
        << "# and give the particles a material or density.\n";
@@ -272,8 +280,10 @@ void run(const Ct2lsOptions& o) {
     toml << "\n[shapes.label_" << w.label << "]\nkind = \"grain_file\"\npath = \"" << w.file << "\"\n";
     const char* sep = i == 0 ? "" : ", ";
     shapes << sep << "\"label_" << w.label << '"';
-    positions << sep << '[' << fixed(w.centroid[0]) << ", " << fixed(w.centroid[1]) << ", " << fixed(w.centroid[2]) << ']';
-    rotations << sep << '[' << fixed(w.rotation[0]) << ", " << fixed(w.rotation[1]) << ", " << fixed(w.rotation[2]) << ']';
+    positions << sep << '[' << fixed(w.centroid[0]) << ", " << fixed(w.centroid[1]) << ", " << fixed(w.centroid[2])
+              << ']';
+    rotations << sep << '[' << fixed(w.rotation[0]) << ", " << fixed(w.rotation[1]) << ", " << fixed(w.rotation[2])
+              << ']';
   }
   toml << "\n[[particles]]\nshapes = [" << shapes.str() << "]\nplacement = \"list\"\npositions = [" << positions.str()
        << "]\nrotations_deg = [" << rotations.str() << "]\n";
@@ -282,16 +292,18 @@ void run(const Ct2lsOptions& o) {
     f << text;
     if (!f) throw io::InputError((fs::path(o.outDir) / file).string(), 0, "", "cannot write");
   }
-  std::printf("ct2ls: %zu grains written to %s (%.2f s), %d skipped on the border, %d below --min-voxels; "
-              "grains.csv and particles.toml list where they were scanned\n",
-              written.size(), o.outDir.c_str(), labelSeconds, skippedBorder, skippedSmall);
+  std::printf(
+      "ct2ls: %zu grains written to %s (%.2f s), %d skipped on the border, %d below --min-voxels; "
+      "grains.csv and particles.toml list where they were scanned\n",
+      written.size(), o.outDir.c_str(), labelSeconds, skippedBorder, skippedSmall);
 }
 
 }  // namespace
 
 void addCt2lsCommand(CLI::App& app) {
   auto opts = std::make_shared<Ct2lsOptions>();
-  CLI::App* cmd = app.add_subcommand("ct2ls", "Convert a labelled 3D image (segmented CT: NRRD, TIFF, raw) to grain files");
+  CLI::App* cmd =
+      app.add_subcommand("ct2ls", "Convert a labelled 3D image (segmented CT: NRRD, TIFF, raw) to grain files");
   cmd->add_option("image", opts->image,
                   "labelled volume: .nrrd/.nhdr, multi-page .tif/.tiff, a folder or pattern ('slices/z*.tif') of 2D "
                   "TIFF slices, or raw with --raw-dims")
@@ -299,8 +311,10 @@ void addCt2lsCommand(CLI::App& app) {
   cmd->add_option("-o,--out", opts->outDir, "folder for the grain files, grains.csv and particles.toml")->required();
   cmd->add_option("--cells-across", opts->cellsAcross,
                   "grid cells across the smallest extent of each grain's voxel box (default 20)");
-  cmd->add_option("--grid-spacing", opts->gridSpacing, "grid spacing in metres for every grain (instead of --cells-across)");
-  cmd->add_option("--spacing", opts->spacing, "voxel size SX[,SY,SZ] in image units (overrides the file's)")->delimiter(',');
+  cmd->add_option("--grid-spacing", opts->gridSpacing,
+                  "grid spacing in metres for every grain (instead of --cells-across)");
+  cmd->add_option("--spacing", opts->spacing, "voxel size SX[,SY,SZ] in image units (overrides the file's)")
+      ->delimiter(',');
   cmd->add_option("--origin", opts->origin, "centre of the first voxel X,Y,Z in image units (overrides the file's)")
       ->delimiter(',');
   CLI::Option* scale = cmd->add_option(
@@ -315,10 +329,11 @@ void addCt2lsCommand(CLI::App& app) {
   cmd->add_flag("--binary", opts->binary, "write the binary grain form instead of text");
   cmd->add_option("--raw-dims", opts->rawDims, "headerless raw file of NX,NY,NZ voxels (x fastest)")->delimiter(',');
   cmd->add_option("--raw-type", opts->rawType, "raw voxel type: uint8, uint16, uint32, int8, int16, int32");
-  cmd->add_option("--raw-endian", opts->rawEndian, "raw byte order: little (default) or big");
+  CLI::Option* endian = cmd->add_option("--raw-endian", opts->rawEndian, "raw byte order: little (default) or big");
   cmd->add_option("--raw-header-bytes", opts->rawHeaderBytes, "bytes before the raw voxels (default 0)");
-  cmd->callback([opts, scale] {
+  cmd->callback([opts, scale, endian] {
     opts->scaleGiven = scale->count() > 0;
+    opts->rawEndianGiven = endian->count() > 0;
     run(*opts);
   });
 }

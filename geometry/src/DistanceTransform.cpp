@@ -12,10 +12,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 /// Scratch of one line's transform, reused across lines.
 struct LineScratch {
-  std::vector<double> f;       // the line's input values
-  std::vector<int> vertex;     // envelope parabolas: their sample index
-  std::vector<double> bound;   // envelope: parabola k is lowest on [bound[k], bound[k+1]]
-  std::vector<double> out;     // the transformed line
+  std::vector<double> f;                          // the line's input values
+  std::vector<int> vertex;                        // envelope parabolas: their sample index
+  std::vector<double> bound;                      // envelope: parabola k is lowest on [bound[k], bound[k+1]]
+  std::vector<double> out;                        // the transformed line
   std::vector<std::int32_t> feature, featureOut;  // nearest source per sample (when tracked)
   void resize(int n) {
     f.resize(std::size_t(n));
@@ -145,7 +145,8 @@ std::vector<float> maskSignedDistance(const std::vector<std::uint8_t>& mask, con
   std::vector<float> phi(mask.size());
   for (std::size_t i = 0; i < mask.size(); ++i) {
     const std::size_t j = std::size_t(mask[i] ? nearestOutside[i] : nearestInside[i]);
-    const Vec<3> offset(double(long(i % nx) - long(j % nx)), double(long(i / nx % std::size_t(dims[1])) - long(j / nx % std::size_t(dims[1]))),
+    const Vec<3> offset(double(long(i % nx) - long(j % nx)),
+                        double(long(i / nx % std::size_t(dims[1])) - long(j / nx % std::size_t(dims[1]))),
                         double(long(i / nxy) - long(j / nxy)));
     const Vec<3> gap = (offset.cwiseAbs().cwiseProduct(spacing) - half).cwiseMax(0.0);
     phi[i] = mask[i] ? -float(gap.norm()) : float(gap.norm());

@@ -76,6 +76,10 @@ std::size_t labelLevelSetBytes(const LabelVolume& volume, const LabelStats& labe
 
 Grid<3> labelLevelSet(const LabelVolume& volume, const LabelStats& label, const LabelGridOptions& options) {
   if (label.voxels == 0) throw std::invalid_argument("label " + std::to_string(label.label) + " holds no voxel");
+  if ((label.lower < 0).any() || (label.upper >= volume.dims).any() || (label.lower > label.upper).any() ||
+      volume.labels.size() != volume.voxelCount()) {
+    throw std::invalid_argument("label " + std::to_string(label.label) + ": bounding box outside the volume");
+  }
   Layout l = layoutFor(volume, label, options);
   const Index<3>& n = l.cropDims;
 
@@ -86,9 +90,9 @@ Grid<3> labelLevelSet(const LabelVolume& volume, const LabelStats& label, const 
     for (int j = label.lower[1]; j <= label.upper[1]; ++j) {
       for (int i = label.lower[0]; i <= label.upper[0]; ++i) {
         if (volume.labels[volume.linear(i, j, k)] != label.label) continue;
-        const std::size_t c = std::size_t(i - l.cropLower[0]) +
-                              std::size_t(n[0]) * (std::size_t(j - l.cropLower[1]) +
-                                                   std::size_t(n[1]) * std::size_t(k - l.cropLower[2]));
+        const std::size_t c =
+            std::size_t(i - l.cropLower[0]) +
+            std::size_t(n[0]) * (std::size_t(j - l.cropLower[1]) + std::size_t(n[1]) * std::size_t(k - l.cropLower[2]));
         mask[c] = 1;
       }
     }

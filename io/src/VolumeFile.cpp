@@ -30,11 +30,14 @@ using geometry::Vec;
 std::size_t voxelBytes(VoxelType type) {
   switch (type) {
     case VoxelType::UInt8:
-    case VoxelType::Int8: return 1;
+    case VoxelType::Int8:
+      return 1;
     case VoxelType::UInt16:
-    case VoxelType::Int16: return 2;
+    case VoxelType::Int16:
+      return 2;
     case VoxelType::UInt32:
-    case VoxelType::Int32: return 4;
+    case VoxelType::Int32:
+      return 4;
   }
   return 1;
 }
@@ -78,8 +81,9 @@ std::string megabytes(double bytes) {
 std::size_t checkedVoxelCount(const std::string& file, const Index<3>& dims, std::size_t fileBytesPerVoxel,
                               const VolumeReadOptions& options) {
   if ((dims < 1).any()) {
-    throw InputError(file, 0, "", "volume size " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
-                                      std::to_string(dims[2]) + " is empty");
+    throw InputError(file, 0, "",
+                     "volume size " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
+                         std::to_string(dims[2]) + " is empty");
   }
   const double count = double(dims[0]) * double(dims[1]) * double(dims[2]);
   const double bytes = count * double(4 + fileBytesPerVoxel);
@@ -132,8 +136,9 @@ std::vector<unsigned char> readBytes(const std::string& file, std::uintmax_t off
   in.seekg(std::streamoff(offset));
   in.read(reinterpret_cast<char*>(data.data()), std::streamsize(length));
   if (std::size_t(in.gcount()) != length) {
-    throw InputError(file, 0, "", "truncated: expected " + std::to_string(length) + " bytes of voxels, read " +
-                                      std::to_string(in.gcount()));
+    throw InputError(
+        file, 0, "",
+        "truncated: expected " + std::to_string(length) + " bytes of voxels, read " + std::to_string(in.gcount()));
   }
   return data;
 }
@@ -161,8 +166,9 @@ std::vector<unsigned char> inflateExactly(const std::string& file, const std::ve
       inLeft -= inChunk - z.avail_in;
       if (rc == Z_OK && z.avail_out == 0) {
         inflateEnd(&z);
-        throw InputError(file, 0, "", "gzip data holds more than the " + std::to_string(expected) +
-                                          " bytes the header's sizes and type give");
+        throw InputError(
+            file, 0, "",
+            "gzip data holds more than the " + std::to_string(expected) + " bytes the header's sizes and type give");
       }
       break;
     }
@@ -180,8 +186,9 @@ std::vector<unsigned char> inflateExactly(const std::string& file, const std::ve
     throw InputError(file, 0, "", std::string("gzip data is corrupt (") + (z.msg ? z.msg : "zlib error") + ")");
   }
   if (outDone < expected) {
-    throw InputError(file, 0, "", "truncated: gzip data holds " + std::to_string(outDone) + " bytes, the header's sizes and type give " +
-                                      std::to_string(expected));
+    throw InputError(file, 0, "",
+                     "truncated: gzip data holds " + std::to_string(outDone) +
+                         " bytes, the header's sizes and type give " + std::to_string(expected));
   }
   if (rc != Z_STREAM_END) throw InputError(file, 0, "", "truncated: gzip stream does not end");
   return out;
@@ -277,12 +284,14 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
       typeName = value;
       type = nrrdType(value);
       if (!type) {
-        throw InputError(file, lineNo, key, "unsupported type '" + value +
-                                                "': labels must be 8, 16 or 32-bit integers (uchar, ushort, uint, ...)");
+        throw InputError(
+            file, lineNo, key,
+            "unsupported type '" + value + "': labels must be 8, 16 or 32-bit integers (uchar, ushort, uint, ...)");
       }
     } else if (key == "dimension") {
       const std::vector<double> d = numbers(file, lineNo, key, value);
-      if (d.size() != 1 || d[0] != 3.0) throw InputError(file, lineNo, key, "must be 3 (a 3D volume), got '" + value + "'");
+      if (d.size() != 1 || d[0] != 3.0)
+        throw InputError(file, lineNo, key, "must be 3 (a 3D volume), got '" + value + "'");
       dimension = 3;
     } else if (key == "sizes") {
       sizes = numbers(file, lineNo, key, value);
@@ -313,7 +322,8 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
       }
     } else if (key == "byte skip") {
       const auto v = numbers(file, lineNo, key, value);
-      if (v.size() != 1 || v[0] < -1 || v[0] != std::floor(v[0])) throw InputError(file, lineNo, key, "must be -1 or >= 0");
+      if (v.size() != 1 || v[0] < -1 || v[0] != std::floor(v[0]))
+        throw InputError(file, lineNo, key, "must be -1 or >= 0");
       byteSkip = (long long)v[0];
     } else if (key == "line skip") {
       const auto v = numbers(file, lineNo, key, value);
@@ -378,8 +388,9 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
       if (d.size() != 3) throw InputError(file, keyLine[2], "space directions", "every axis needs a vector (x,y,z)");
       for (int c = 0; c < 3; ++c) {
         if (c != a && d[std::size_t(c)] != 0.0) {
-          throw InputError(file, keyLine[2], "space directions",
-                           "axes are not along x, y, z (a rotated or sheared scan); resample it to axis-aligned voxels");
+          throw InputError(
+              file, keyLine[2], "space directions",
+              "axes are not along x, y, z (a rotated or sheared scan); resample it to axis-aligned voxels");
         }
       }
       r.volume.spacing[a] = std::abs(d[std::size_t(a)]);
@@ -425,8 +436,9 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
   if (encoding == "raw") {
     if (byteSkip == -1) {
       if (total < offset + expected) {
-        throw InputError(dataPath, 0, "", "truncated: holds " + std::to_string(total - std::min(total, offset)) +
-                                              " bytes of data, the header's sizes and type give " + std::to_string(expected));
+        throw InputError(dataPath, 0, "",
+                         "truncated: holds " + std::to_string(total - std::min(total, offset)) +
+                             " bytes of data, the header's sizes and type give " + std::to_string(expected));
       }
       offset = total - expected;
     } else {
@@ -524,22 +536,31 @@ TiffPage tiffPage(TIFF* t, const std::string& file, int page) {
     throw InputError(file, 0, where, "image size " + std::to_string(w) + " x " + std::to_string(h) + " is not usable");
   }
   if (samples != 1) {
-    throw InputError(file, 0, where, std::to_string(samples) + " samples per pixel: a label image has one (grey, not colour)");
+    throw InputError(file, 0, where,
+                     std::to_string(samples) + " samples per pixel: a label image has one (grey, not colour)");
   }
   if (format != SAMPLEFORMAT_UINT && format != SAMPLEFORMAT_INT) {
-    throw InputError(file, 0, where, "pixels are not integers (sample format " + std::to_string(format) +
-                                         "): labels must be 8, 16 or 32-bit integers");
+    throw InputError(file, 0, where,
+                     "pixels are not integers (sample format " + std::to_string(format) +
+                         "): labels must be 8, 16 or 32-bit integers");
   }
   TiffPage p;
   p.width = int(w);
   p.height = int(h);
   const bool s = format == SAMPLEFORMAT_INT;
   switch (bits) {
-    case 8: p.type = s ? VoxelType::Int8 : VoxelType::UInt8; break;
-    case 16: p.type = s ? VoxelType::Int16 : VoxelType::UInt16; break;
-    case 32: p.type = s ? VoxelType::Int32 : VoxelType::UInt32; break;
+    case 8:
+      p.type = s ? VoxelType::Int8 : VoxelType::UInt8;
+      break;
+    case 16:
+      p.type = s ? VoxelType::Int16 : VoxelType::UInt16;
+      break;
+    case 32:
+      p.type = s ? VoxelType::Int32 : VoxelType::UInt32;
+      break;
     default:
-      throw InputError(file, 0, where, "unsupported " + std::to_string(bits) + "-bit pixels: labels must be 8, 16 or 32-bit");
+      throw InputError(file, 0, where,
+                       "unsupported " + std::to_string(bits) + "-bit pixels: labels must be 8, 16 or 32-bit");
   }
   return p;
 }
@@ -561,7 +582,8 @@ void readTiffPage(TIFF* t, const std::string& file, int page, const TiffPage& p,
   auto store = [&](const unsigned char* bytes, int x0, int y, int n) {
     Index<3> d(n, 1, 1);
     decodeVoxels(file, bytes, std::size_t(n), p.type, hostBig, d, row);
-    std::copy(row.begin(), row.end(), labels.begin() + std::ptrdiff_t(sliceOffset + std::size_t(y) * std::size_t(dims[0]) + std::size_t(x0)));
+    std::copy(row.begin(), row.end(),
+              labels.begin() + std::ptrdiff_t(sliceOffset + std::size_t(y) * std::size_t(dims[0]) + std::size_t(x0)));
   };
   tiffLastError.clear();
   if (TIFFIsTiled(t)) {
@@ -574,7 +596,8 @@ void readTiffPage(TIFF* t, const std::string& file, int page, const TiffPage& p,
     for (std::uint32_t y0 = 0; y0 < std::uint32_t(p.height); y0 += th) {
       for (std::uint32_t x0 = 0; x0 < std::uint32_t(p.width); x0 += tw) {
         if (TIFFReadTile(t, tile.data(), x0, y0, 0, 0) < 0) {
-          throw InputError(file, 0, where, "cannot read a tile" + (tiffLastError.empty() ? "" : " (" + tiffLastError + ")"));
+          throw InputError(file, 0, where,
+                           "cannot read a tile" + (tiffLastError.empty() ? "" : " (" + tiffLastError + ")"));
         }
         const int n = int(std::min<std::uint32_t>(tw, std::uint32_t(p.width) - x0));
         for (std::uint32_t y = y0; y < std::min<std::uint32_t>(y0 + th, std::uint32_t(p.height)); ++y) {
@@ -584,12 +607,14 @@ void readTiffPage(TIFF* t, const std::string& file, int page, const TiffPage& p,
     }
   } else {
     const tmsize_t lineBytes = TIFFScanlineSize(t);
-    if (lineBytes < tmsize_t(std::size_t(p.width) * b)) throw InputError(file, 0, where, "scanline size is inconsistent");
+    if (lineBytes < tmsize_t(std::size_t(p.width) * b))
+      throw InputError(file, 0, where, "scanline size is inconsistent");
     std::vector<unsigned char> line(static_cast<std::size_t>(lineBytes));
     for (int y = 0; y < p.height; ++y) {
       if (TIFFReadScanline(t, line.data(), std::uint32_t(y), 0) < 0) {
-        throw InputError(file, 0, where, "truncated or corrupt at row " + std::to_string(y) +
-                                             (tiffLastError.empty() ? "" : " (" + tiffLastError + ")"));
+        throw InputError(file, 0, where,
+                         "truncated or corrupt at row " + std::to_string(y) +
+                             (tiffLastError.empty() ? "" : " (" + tiffLastError + ")"));
       }
       store(line.data(), 0, y, p.width);
     }
@@ -611,9 +636,9 @@ VolumeRead readTiffStack(const std::string& file, const VolumeReadOptions& optio
     if (!TIFFSetDirectory(t.get(), tdir_t(z))) throw InputError(file, 0, tiffWhere(z), "cannot read the page");
     const TiffPage p = tiffPage(t.get(), file, z);
     if (p.width != first.width || p.height != first.height) {
-      throw InputError(file, 0, tiffWhere(z), "is " + std::to_string(p.width) + " x " + std::to_string(p.height) +
-                                                 " pixels, page 1 is " + std::to_string(first.width) + " x " +
-                                                 std::to_string(first.height));
+      throw InputError(file, 0, tiffWhere(z),
+                       "is " + std::to_string(p.width) + " x " + std::to_string(p.height) + " pixels, page 1 is " +
+                           std::to_string(first.width) + " x " + std::to_string(first.height));
     }
     readTiffPage(t.get(), file, z, p, r.volume.dims, z, r.volume.labels);
   }
@@ -668,7 +693,9 @@ VolumeRead readTiffSlices(const std::string& path, const VolumeReadOptions& opti
     }
   }
   if (ec) throw InputError(path, 0, "", "cannot list the folder: " + ec.message());
-  if (names.empty()) throw InputError(path, 0, "", pattern.empty() ? "folder holds no .tif or .tiff slice" : "no file matches the pattern");
+  if (names.empty())
+    throw InputError(path, 0, "",
+                     pattern.empty() ? "folder holds no .tif or .tiff slice" : "no file matches the pattern");
   std::sort(names.begin(), names.end(), naturalLess);
 
   VolumeRead r;
@@ -684,13 +711,14 @@ VolumeRead readTiffSlices(const std::string& path, const VolumeReadOptions& opti
       r.volume.dims = Index<3>(p.width, p.height, int(names.size()));
       r.volume.labels.resize(checkedVoxelCount(path, r.volume.dims, 0, options));
     } else if (p.width != first.width || p.height != first.height) {
-      throw InputError(file, 0, "", "slice is " + std::to_string(p.width) + " x " + std::to_string(p.height) +
-                                        " pixels, the first (" + names[0] + ") is " + std::to_string(first.width) +
-                                        " x " + std::to_string(first.height));
+      throw InputError(file, 0, "",
+                       "slice is " + std::to_string(p.width) + " x " + std::to_string(p.height) +
+                           " pixels, the first (" + names[0] + ") is " + std::to_string(first.width) + " x " +
+                           std::to_string(first.height));
     }
     if (TIFFNumberOfDirectories(t.get()) != 1) {
-      throw InputError(file, 0, "", "a slice file holds one page, this one " +
-                                        std::to_string(TIFFNumberOfDirectories(t.get())));
+      throw InputError(file, 0, "",
+                       "a slice file holds one page, this one " + std::to_string(TIFFNumberOfDirectories(t.get())));
     }
     readTiffPage(t.get(), file, 0, p, r.volume.dims, int(z), r.volume.labels);
   }
@@ -701,12 +729,18 @@ VolumeRead readTiffSlices(const std::string& path, const VolumeReadOptions& opti
 
 std::uint32_t largestFor(VoxelType type) {
   switch (type) {
-    case VoxelType::UInt8: return 0xFFu;
-    case VoxelType::UInt16: return 0xFFFFu;
-    case VoxelType::UInt32: return 0xFFFFFFFFu;
-    case VoxelType::Int8: return 0x7Fu;
-    case VoxelType::Int16: return 0x7FFFu;
-    case VoxelType::Int32: return 0x7FFFFFFFu;
+    case VoxelType::UInt8:
+      return 0xFFu;
+    case VoxelType::UInt16:
+      return 0xFFFFu;
+    case VoxelType::UInt32:
+      return 0xFFFFFFFFu;
+    case VoxelType::Int8:
+      return 0x7Fu;
+    case VoxelType::Int16:
+      return 0x7FFFu;
+    case VoxelType::Int32:
+      return 0x7FFFFFFFu;
   }
   return 0;
 }
@@ -719,7 +753,8 @@ std::vector<unsigned char> encodeVoxels(const std::string& path, const std::vect
   for (std::size_t v = 0; v < count; ++v) {
     const std::uint32_t u = labels[first + v];
     if (u > largestFor(type)) {
-      throw std::runtime_error("cannot write '" + path + "': label " + std::to_string(u) + " does not fit the voxel type");
+      throw std::runtime_error("cannot write '" + path + "': label " + std::to_string(u) +
+                               " does not fit the voxel type");
     }
     for (std::size_t i = 0; i < b; ++i) out[v * b + (bigEndian ? b - 1 - i : i)] = (unsigned char)(u >> (8 * i));
   }
@@ -728,12 +763,18 @@ std::vector<unsigned char> encodeVoxels(const std::string& path, const std::vect
 
 const char* nrrdTypeName(VoxelType type) {
   switch (type) {
-    case VoxelType::UInt8: return "uint8";
-    case VoxelType::UInt16: return "uint16";
-    case VoxelType::UInt32: return "uint32";
-    case VoxelType::Int8: return "int8";
-    case VoxelType::Int16: return "int16";
-    case VoxelType::Int32: return "int32";
+    case VoxelType::UInt8:
+      return "uint8";
+    case VoxelType::UInt16:
+      return "uint16";
+    case VoxelType::UInt32:
+      return "uint32";
+    case VoxelType::Int8:
+      return "int8";
+    case VoxelType::Int16:
+      return "int16";
+    case VoxelType::Int32:
+      return "int32";
   }
   return "uint8";
 }
@@ -761,8 +802,9 @@ VolumeRead readLabelVolume(const std::string& path, const VolumeReadOptions& opt
                            std::memcmp(magic, "II+\0", 4) == 0 || std::memcmp(magic, "MM\0+", 4) == 0)) {
     return readTiffStack(path, options);
   }
-  throw InputError(path, 0, "", "unknown volume format (NRRD .nrrd/.nhdr, TIFF .tif/.tiff, a folder of TIFF slices, "
-                                "or raw with --raw-dims)");
+  throw InputError(path, 0, "",
+                   "unknown volume format (NRRD .nrrd/.nhdr, TIFF .tif/.tiff, a folder of TIFF slices, "
+                   "or raw with --raw-dims)");
 }
 
 void writeNrrd(const std::string& path, const LabelVolume& volume, VoxelType type, bool gzip) {
@@ -825,13 +867,15 @@ void writeTiff(const std::string& path, const LabelVolume& volume, VoxelType typ
     TIFFSetField(raw, TIFFTAG_PHOTOMETRIC, std::uint16_t(PHOTOMETRIC_MINISBLACK));
     TIFFSetField(raw, TIFFTAG_PLANARCONFIG, std::uint16_t(PLANARCONFIG_CONTIG));
     TIFFSetField(raw, TIFFTAG_COMPRESSION, std::uint16_t(compress ? COMPRESSION_ADOBE_DEFLATE : COMPRESSION_NONE));
-    TIFFSetField(raw, TIFFTAG_ROWSPERSTRIP, std::uint32_t(std::max<std::size_t>(1, 8192 / (nx * voxelBytes(type) + 1))));
+    TIFFSetField(raw, TIFFTAG_ROWSPERSTRIP,
+                 std::uint32_t(std::max<std::size_t>(1, 8192 / (nx * voxelBytes(type) + 1))));
     if (volume.dims[2] > 1) {
       TIFFSetField(raw, TIFFTAG_SUBFILETYPE, std::uint32_t(FILETYPE_PAGE));
       TIFFSetField(raw, TIFFTAG_PAGENUMBER, std::uint16_t(z), std::uint16_t(volume.dims[2]));
     }
     for (std::size_t y = 0; y < ny; ++y) {
-      std::vector<unsigned char> row = encodeVoxels(path, volume.labels, (std::size_t(z) * ny + y) * nx, nx, type, hostBig);
+      std::vector<unsigned char> row =
+          encodeVoxels(path, volume.labels, (std::size_t(z) * ny + y) * nx, nx, type, hostBig);
       if (TIFFWriteScanline(raw, row.data(), std::uint32_t(y), 0) < 0) {
         throw std::runtime_error("cannot write '" + path + "': " + tiffLastError);
       }

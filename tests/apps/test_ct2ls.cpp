@@ -103,8 +103,8 @@ TEST(Ct2ls, SphereBecomesAGrainWhereItWasScanned) {
   EXPECT_LT((turn - shape->bodyToGrid().rotation).norm(), 1e-7);
 
   // --keep-border keeps label 2 (a block: 6 x 8 x 8 voxels, its volume exact to 2 %).
-  const test::ProcessResult k = test::runCaptured({LSDEM_BINARY, "ct2ls", (dir / "scan.nrrd").string(), "-o",
-                                                   (dir / "all").string(), "--keep-border", "--binary"});
+  const test::ProcessResult k = test::runCaptured(
+      {LSDEM_BINARY, "ct2ls", (dir / "scan.nrrd").string(), "-o", (dir / "all").string(), "--keep-border", "--binary"});
   ASSERT_EQ(k.code, 0) << k.output;
   const auto block = io::readGrainFile<3>((dir / "all" / "grain_2.lsg").string());
   EXPECT_NEAR(block->volume() / (6 * 8 * 8 * 1e-12), 1.0, 0.02);
@@ -132,8 +132,7 @@ TEST(Ct2ls, BadInputEndsInOneLine) {
   fails({(dir / "cut.nrrd").string(), "-o", (dir / "o").string()},
         "lsdem: " + (dir / "cut.nrrd").string() + ": truncated: holds 48860 bytes of data");
   // A label over the memory cap, named.
-  fails({scan, "-o", (dir / "o").string(), "--max-memory", "1"},
-        "lsdem: " + scan + ": label 5: needs about");
+  fails({scan, "-o", (dir / "o").string(), "--max-memory", "1"}, "lsdem: " + scan + ": label 5: needs about");
   // TIFF carries no spacing: asked for.
   io::writeTiff((dir / "scan.tif").string(), v, io::VoxelType::UInt8, true);
   fails({(dir / "scan.tif").string(), "-o", (dir / "o").string()},
@@ -142,7 +141,8 @@ TEST(Ct2ls, BadInputEndsInOneLine) {
   LabelVolume empty = v;
   std::fill(empty.labels.begin(), empty.labels.end(), 0u);
   io::writeNrrd((dir / "empty.nrrd").string(), empty, io::VoxelType::UInt8, true);
-  fails({(dir / "empty.nrrd").string(), "-o", (dir / "o").string()}, "empty.nrrd: holds no label other than the background 0");
+  fails({(dir / "empty.nrrd").string(), "-o", (dir / "o").string()},
+        "empty.nrrd: holds no label other than the background 0");
   // Every label skipped.
   fails({scan, "-o", (dir / "o").string(), "--min-voxels", "100000"},
         "no grain written: all 3 labels skipped (1 on the border, 2 below --min-voxels)");
@@ -150,6 +150,8 @@ TEST(Ct2ls, BadInputEndsInOneLine) {
   fails({scan, "-o", (dir / "o").string(), "--cells-across", "-3"}, "lsdem: --cells-across: must be positive, got -3");
   fails({scan, "-o", (dir / "o").string(), "--raw-dims", "40,36", "--raw-type", "uint8"},
         "lsdem: --raw-dims: needs three sizes NX,NY,NZ");
+  fails({scan, "-o", (dir / "o").string(), "--raw-endian", "big"}, "lsdem: --raw-endian: needs --raw-dims");
+  fails({scan, "-o", (dir / "o").string(), "--raw-dims", "40,36,34"}, "lsdem: --raw-dims: needs --raw-type");
   fails({scan, "-o", (dir / "o").string(), "--raw-dims", "40,36,34", "--raw-type", "float"},
         "lsdem: --raw-type: must be uint8, uint16, uint32, int8, int16 or int32, got 'float'");
 }

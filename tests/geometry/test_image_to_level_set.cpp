@@ -80,8 +80,8 @@ TEST(ImageToLevelSet, EllipsoidKeepsItsVolume) {
   const Recovered got = recover(v);
   const double exact = 4.0 / 3.0 * M_PI * axes.prod();
   const double error = got.volume / exact - 1.0;
-  std::printf("ellipsoid 32 x 24 x 20 voxels: volume error %+.3f %%, against the voxel count %+.3f %%\n",
-              100.0 * error, 100.0 * (got.volume / got.voxelVolume - 1.0));
+  std::printf("ellipsoid 32 x 24 x 20 voxels: volume error %+.3f %%, against the voxel count %+.3f %%\n", 100.0 * error,
+              100.0 * (got.volume / got.voxelVolume - 1.0));
   EXPECT_LT(std::abs(error), 0.01);
   EXPECT_LT(std::abs(got.volume / got.voxelVolume - 1.0), 0.002);
   EXPECT_LT((got.centroid - centre).norm(), 0.02 * h);
@@ -97,8 +97,8 @@ TEST(ImageToLevelSet, AnisotropicVoxels) {
   const Recovered got = recover(v);
   const double exact = 4.0 / 3.0 * M_PI * r * r * r;
   const double error = got.volume / exact - 1.0;
-  std::printf("sphere in 1 x 1 x 2 voxels: volume error %+.3f %%, against the voxel count %+.3f %%\n",
-              100.0 * error, 100.0 * (got.volume / got.voxelVolume - 1.0));
+  std::printf("sphere in 1 x 1 x 2 voxels: volume error %+.3f %%, against the voxel count %+.3f %%\n", 100.0 * error,
+              100.0 * (got.volume / got.voxelVolume - 1.0));
   EXPECT_LT(std::abs(error), 0.01);
   EXPECT_LT(std::abs(got.volume / got.voxelVolume - 1.0), 0.005);
 }
@@ -112,7 +112,8 @@ TEST(ImageToLevelSet, VolumeFollowsTheVoxelCount) {
     const double h = 1.0 / across, r = 0.5;
     const int count = int(across) + 8;
     const Vec<3> centre = Vec<3>(0.3, -0.2, 0.1) + h * Vec<3>(0.5 * count + 0.3, 0.5 * count - 0.2, 0.5 * count + 0.05);
-    const LabelVolume v = ellipsoidVolume(Index<3>(count, count, count), Vec<3>::Constant(h), centre, Vec<3>::Constant(r));
+    const LabelVolume v =
+        ellipsoidVolume(Index<3>(count, count, count), Vec<3>::Constant(h), centre, Vec<3>::Constant(r));
     const Recovered got = recover(v);
     const double error = got.volume / (4.0 / 3.0 * M_PI * r * r * r) - 1.0;
     const double againstCount = got.volume / got.voxelVolume - 1.0;
@@ -152,7 +153,8 @@ TEST(LabelVolume, StatisticsCountBoxesAndBorder) {
 }
 
 TEST(ImageToLevelSet, RefusesBadOptions) {
-  const LabelVolume v = ellipsoidVolume(Index<3>(12, 12, 12), Vec<3>::Ones(), Vec<3>(6.3, 5.8, 6.1), Vec<3>::Constant(3.0));
+  const LabelVolume v =
+      ellipsoidVolume(Index<3>(12, 12, 12), Vec<3>::Ones(), Vec<3>(6.3, 5.8, 6.1), Vec<3>::Constant(3.0));
   const LabelStats s = labelStatistics(v).at(0);
   LabelGridOptions o;
   o.cellsAcross = 0.0;

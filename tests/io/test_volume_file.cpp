@@ -113,10 +113,12 @@ TEST(VolumeFile, NrrdDetachedHeaderBigEndian) {
   EXPECT_FALSE(r.hasOrigin);
   EXPECT_EQ(r.units, "");
   // "space units" are read (one unit for all axes).
-  writeText(dir / "mm.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1 1 1\nspace units: \"mm\" \"mm\" \"mm\"\n"
-                             "encoding: raw\n\n\1");
+  writeText(dir / "mm.nrrd",
+            "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1 1 1\nspace units: \"mm\" \"mm\" \"mm\"\n"
+            "encoding: raw\n\n\1");
   EXPECT_EQ(io::readLabelVolume((dir / "mm.nrrd").string()).units, "mm");
-  writeText(dir / "mixed.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1 1 1\nspace units: \"mm\" \"mm\" \"m\"\n");
+  writeText(dir / "mixed.nrrd",
+            "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1 1 1\nspace units: \"mm\" \"mm\" \"m\"\n");
   try {
     io::readLabelVolume((dir / "mixed.nrrd").string());
     ADD_FAILURE() << "mixed units read";
@@ -214,10 +216,10 @@ TEST(VolumeFile, BadFilesNameTheFileAndTheProblem) {
         ": endian: missing");
   check("notnrrd.nrrd", "P5 1 1 255\n", ":1: not a NRRD file");
   check("rotated.nrrd",
-        "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1 1 1\nspace directions: (1,1,0) (0,1,0) (0,0,1)\nencoding: raw\n\n\1",
+        "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1 1 1\nspace directions: (1,1,0) (0,1,0) (0,0,1)\nencoding: "
+        "raw\n\n\1",
         ":5: space directions: axes are not along x, y, z");
-  check("negative.nrrd",
-        "NRRD0004\ntype: int8\ndimension: 3\nsizes: 2 1 1\nencoding: raw\n\n\1\xfe",
+  check("negative.nrrd", "NRRD0004\ntype: int8\ndimension: 3\nsizes: 2 1 1\nencoding: raw\n\n\1\xfe",
         ": voxel (1, 0, 0) holds the negative label -2");
   check("unknown.vol", "hello", ": unknown volume format");
   // gzip: cut short, and corrupt.
@@ -232,10 +234,12 @@ TEST(VolumeFile, BadFilesNameTheFileAndTheProblem) {
   check("tcut.tif", tif.substr(0, 60), "");
   check("tjunk.tif", std::string("II*\0garbage", 11), ": cannot open as TIFF");
   // Over the memory cap: refused before allocating.
-  writeText(dir / "huge.nrrd", "NRRD0004\ntype: uint32\ndimension: 3\nsizes: 4000 4000 4000\nendian: little\nencoding: raw\n\n");
+  writeText(dir / "huge.nrrd",
+            "NRRD0004\ntype: uint32\ndimension: 3\nsizes: 4000 4000 4000\nendian: little\nencoding: raw\n\n");
   const std::string e = errorOf([&] { io::readLabelVolume((dir / "huge.nrrd").string()); });
   EXPECT_NE(e.find("huge.nrrd: volume of 4000 x 4000 x 4000 voxels needs 488281 MB to read, over the cap of 4096 MB"),
             std::string::npos)
       << e;
-  EXPECT_NE(errorOf([&] { io::readLabelVolume((dir / "missing.nrrd").string()); }).find("no such file"), std::string::npos);
+  EXPECT_NE(errorOf([&] { io::readLabelVolume((dir / "missing.nrrd").string()); }).find("no such file"),
+            std::string::npos);
 }

@@ -35,11 +35,11 @@ struct LabelVolume {
 /// What one label covers.
 struct LabelStats {
   std::uint32_t label = 0;
-  std::size_t voxels = 0;                    ///< voxels holding the label
-  Index<3> lower = Index<3>::Zero();         ///< first voxel of the bounding box, per axis
-  Index<3> upper = Index<3>::Zero();         ///< last voxel of the bounding box (inclusive)
-  Vec<3> voxelCentroid = Vec<3>::Zero();     ///< mean voxel centre, world units
-  bool touchesBorder = false;                ///< a voxel on a face of the image (the grain may be cut off)
+  std::size_t voxels = 0;                 ///< voxels holding the label
+  Index<3> lower = Index<3>::Zero();      ///< first voxel of the bounding box, per axis
+  Index<3> upper = Index<3>::Zero();      ///< last voxel of the bounding box (inclusive)
+  Vec<3> voxelCentroid = Vec<3>::Zero();  ///< mean voxel centre, world units
+  bool touchesBorder = false;             ///< a voxel on a face of the image (the grain may be cut off)
 };
 
 /// @brief The statistics of every label other than `background`, sorted by label.

@@ -55,7 +55,7 @@ struct VolumeRead {
   /// The length unit of spacing and origin the file names (NRRD "space
   /// units", one for all axes, e.g. "mm"); empty when it names none.
   std::string units;
-  int files = 1;                 ///< files read (slices of a folder)
+  int files = 1;  ///< files read (slices of a folder)
 };
 
 /// @brief Reads a labelled volume. The format comes from options.raw, else
