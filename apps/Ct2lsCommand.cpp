@@ -219,11 +219,12 @@ void run(const Ct2lsOptions& o) {
     // Memory: estimated before anything of the label is allocated.
     const std::size_t need = geometry::labelLevelSetBytes(volume, s, gridOptions);
     if (double(need) > o.maxMemoryMb * 1048576.0) {
-      char mb[64];
-      std::snprintf(mb, sizeof mb, "%.3g MB, over --max-memory %g MB", double(need) / 1048576.0, o.maxMemoryMb);
-      throw io::InputError(o.image, 0, key,
-                           std::string("needs about ") + mb +
-                               " for its distance transform and grid (raise it, or lower --cells-across)");
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "needs about %.3g MB for its distance transform and grid, over --max-memory %g MB (raise it, or "
+                    "lower --cells-across)",
+                    double(need) / 1048576.0, o.maxMemoryMb);
+      throw io::InputError(o.image, 0, key, text);
     }
     // Level set, shape and grain file.
     const auto start = std::chrono::steady_clock::now();
