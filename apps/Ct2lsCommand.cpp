@@ -10,6 +10,7 @@
 
 #include "Commands.h"
 
+#include "lsdem/geometry/Components.h"
 #include "lsdem/geometry/ImageToLevelSet.h"
 #include "lsdem/geometry/LabelVolume.h"
 #include "lsdem/geometry/Shape.h"
@@ -197,7 +198,7 @@ void run(const Ct2lsOptions& o) {
     std::string file;
   };
   std::vector<Written> written;
-  int skippedBorder = 0, skippedSmall = 0;
+  int skippedBorder = 0, skippedSmall = 0, skippedPieces = 0;
   const double voxelVolume = volume.spacing.prod();
   double labelSeconds = 0.0;
   for (const geometry::LabelStats& s : labels) {
@@ -226,11 +227,20 @@ void run(const Ct2lsOptions& o) {
                     double(need) / 1048576.0, o.maxMemoryMb);
       throw io::InputError(o.image, 0, key, text);
     }
-    // Level set, shape and grain file.
+    // Level set (one body: a label in pieces is skipped), shape and grain file.
     const auto start = std::chrono::steady_clock::now();
     std::shared_ptr<const geometry::Shape<3>> shape;
     try {
-      shape = geometry::Shape<3>::fromGrid(geometry::labelLevelSet(volume, s, gridOptions), shapeOptions);
+      geometry::Grid<3> grid = geometry::labelLevelSet(volume, s, gridOptions);
+      std::vector<int> components;
+      if (const int bodies = geometry::labelComponents<3>(grid, components); bodies > 1) {
+        std::printf("  label %u: skipped: %d separate bodies (a grain is one; split the label in the segmentation)\n",
+                    s.label, bodies);
+        ++skippedPieces;
+        std::fflush(stdout);
+        continue;
+      }
+      shape = geometry::Shape<3>::fromGrid(std::move(grid), shapeOptions);
     } catch (const std::invalid_argument& e) {
       throw io::InputError(o.image, 0, key, std::string("no grain: ") + e.what());
     }
@@ -261,7 +271,7 @@ void run(const Ct2lsOptions& o) {
     throw io::InputError(o.image, 0, "",
                          "no grain written: all " + std::to_string(labels.size()) + " labels skipped (" +
                              std::to_string(skippedBorder) + " on the border, " + std::to_string(skippedSmall) +
-                             " below --min-voxels)");
+                             " below --min-voxels, " + std::to_string(skippedPieces) + " in pieces)");
   }
 
   // Where each grain was scanned: a table and a scene fragment placing them there.
@@ -294,9 +304,9 @@ void run(const Ct2lsOptions& o) {
     if (!f) throw io::InputError((fs::path(o.outDir) / file).string(), 0, "", "cannot write");
   }
   std::printf(
-      "ct2ls: %zu grains written to %s (%.2f s), %d skipped on the border, %d below --min-voxels; "
+      "ct2ls: %zu grains written to %s (%.2f s), %d skipped on the border, %d below --min-voxels, %d in pieces; "
       "grains.csv and particles.toml list where they were scanned\n",
-      written.size(), o.outDir.c_str(), labelSeconds, skippedBorder, skippedSmall);
+      written.size(), o.outDir.c_str(), labelSeconds, skippedBorder, skippedSmall, skippedPieces);
 }
 
 }  // namespace

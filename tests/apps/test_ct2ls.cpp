@@ -1,7 +1,8 @@
 // End to end: `lsdem ct2ls` on labelled volumes written in the test. A sphere
 // comes back as a grain file with its volume and centroid, listed in
-// grains.csv and particles.toml; labels on the border or below the voxel
-// count are skipped with a line each; bad input ends in one line naming the
+// grains.csv and particles.toml (names zero-padded to the largest label);
+// labels on the border, below the voxel count or in pieces are skipped with
+// a line each; bad input ends in one line naming the
 // file (and the label) with exit code 2.
 
 #include "support/Files.h"
@@ -36,7 +37,8 @@ fs::path tempDir(const std::string& name) {
 }
 
 // 40 x 36 x 34 voxels of 0.1 mm: label 5 a sphere of radius 10 voxels inside,
-// label 2 a block on the x = 0 face, label 9 a speck of 8 voxels.
+// label 2 a block on the x = 0 face, label 9 a speck of 8 voxels, label 11
+// two blocks of 125 voxels far apart.
 LabelVolume threeLabels() {
   LabelVolume v;
   v.dims = Index<3>(40, 36, 34);
@@ -51,6 +53,9 @@ LabelVolume threeLabels() {
         if (d.norm() < 10.0) l = 5;
         if (i < 6 && j < 8 && k < 8) l = 2;
         if (i >= 2 && i < 4 && j >= 30 && j < 32 && k >= 28 && k < 30) l = 9;
+        if (i >= 34 && i < 39 && ((j >= 2 && j < 7 && k >= 2 && k < 7) || (j >= 28 && j < 33 && k >= 26 && k < 31))) {
+          l = 11;
+        }
       }
   return v;
 }
@@ -66,10 +71,13 @@ TEST(Ct2ls, SphereBecomesAGrainWhereItWasScanned) {
   EXPECT_NE(r.output.find("label 2: skipped: touches the image border"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("label 9: skipped: 8 voxels, below --min-voxels 100"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("1 grains written"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("1 skipped on the border, 1 below --min-voxels"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("label 11: skipped: 2 separate bodies (a grain is one; split the label in the segmentation)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("1 skipped on the border, 1 below --min-voxels, 1 in pieces"), std::string::npos) << r.output;
 
   // The grain: the sphere's volume within 1 % and its centre where it was scanned.
-  const auto shape = io::readGrainFile<3>((dir / "grains" / "grain_5.lsg").string());
+  const auto shape = io::readGrainFile<3>((dir / "grains" / "grain_05.lsg").string());
   const double r0 = 1e-3, exact = 4.0 / 3.0 * M_PI * r0 * r0 * r0;
   EXPECT_NEAR(shape->volume() / exact, 1.0, 0.01);
   const Vec<3> centre = Vec<3>(0.001, 0.002, 0.003) + 1e-4 * Vec<3>(22.3, 17.6, 16.2);
@@ -89,10 +97,10 @@ TEST(Ct2ls, SphereBecomesAGrainWhereItWasScanned) {
   EXPECT_EQ(cells[0], "5");
   EXPECT_NEAR(std::stod(cells[4]), centre[0], 1e-6);
   EXPECT_NEAR(std::stod(cells[6]), centre[2], 1e-6);
-  EXPECT_EQ(cells[11], "grain_5.lsg");
+  EXPECT_EQ(cells[11], "grain_05.lsg");
   EXPECT_FALSE(std::getline(rows, row));
   const std::string toml = test::readFile(dir / "grains" / "particles.toml");
-  EXPECT_NE(toml.find("[shapes.label_5]\nkind = \"grain_file\"\npath = \"grain_5.lsg\""), std::string::npos) << toml;
+  EXPECT_NE(toml.find("[shapes.label_5]\nkind = \"grain_file\"\npath = \"grain_05.lsg\""), std::string::npos) << toml;
   EXPECT_NE(toml.find("positions = [[" + cells[4] + ", "), std::string::npos) << toml;
   // rotations_deg [rx, ry, rz] turn the body frame as the grain lay: Rz Ry Rx = bodyToGrid.
   const double deg = M_PI / 180.0;
@@ -106,7 +114,7 @@ TEST(Ct2ls, SphereBecomesAGrainWhereItWasScanned) {
   const test::ProcessResult k = test::runCaptured(
       {LSDEM_BINARY, "ct2ls", (dir / "scan.nrrd").string(), "-o", (dir / "all").string(), "--keep-border", "--binary"});
   ASSERT_EQ(k.code, 0) << k.output;
-  const auto block = io::readGrainFile<3>((dir / "all" / "grain_2.lsg").string());
+  const auto block = io::readGrainFile<3>((dir / "all" / "grain_02.lsg").string());
   EXPECT_NEAR(block->volume() / (6 * 8 * 8 * 1e-12), 1.0, 0.02);
 }
 
@@ -145,7 +153,7 @@ TEST(Ct2ls, BadInputEndsInOneLine) {
         "empty.nrrd: holds no label other than the background 0");
   // Every label skipped.
   fails({scan, "-o", (dir / "o").string(), "--min-voxels", "100000"},
-        "no grain written: all 3 labels skipped (1 on the border, 2 below --min-voxels)");
+        "no grain written: all 4 labels skipped (1 on the border, 3 below --min-voxels, 0 in pieces)");
   // Bad options.
   fails({scan, "-o", (dir / "o").string(), "--cells-across", "-3"}, "lsdem: --cells-across: must be positive, got -3");
   fails({scan, "-o", (dir / "o").string(), "--raw-dims", "40,36", "--raw-type", "uint8"},
@@ -175,7 +183,7 @@ TEST(Ct2ls, RawAndTiffGiveTheSameGrain) {
     args.insert(args.begin(), {LSDEM_BINARY, "ct2ls"});
     const test::ProcessResult r = test::runCaptured(args);
     ASSERT_EQ(r.code, 0) << r.output;
-    const auto shape = io::readGrainFile<3>((fs::path(args[4]) / "grain_5.lsg").string());
+    const auto shape = io::readGrainFile<3>((fs::path(args[4]) / "grain_05.lsg").string());
     volumes.push_back(shape->volume());
   }
   EXPECT_NEAR(volumes[1] / volumes[0], 1.0, 1e-9);
