@@ -67,7 +67,9 @@ struct VolumeRead {
 /// @note Throws InputError naming the file (and the header line or page)
 /// for a truncated or inconsistent file, a size that does not match the
 /// header, an unsupported type or encoding, a negative label, or a volume
-/// over options.maxBytes.
+/// over options.maxBytes. Reading or writing TIFF installs libtiff's
+/// process-wide error handler (its messages become the InputError's) and a
+/// silent warning handler.
 VolumeRead readLabelVolume(const std::string& path, const VolumeReadOptions& options = {});
 
 /// @brief Writes a volume as NRRD with an attached header (type, sizes,
