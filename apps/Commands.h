@@ -23,6 +23,7 @@ void addStabilityBench(CLI::App& bench);
 void addAccuracyBench(CLI::App& bench);
 
 void addMesh2lsCommand(CLI::App& app);  ///< `lsdem mesh2ls MESH --spacing H -o OUT.lsg`: CAD mesh -> grain file (docs/grains.md).
+void addCt2lsCommand(CLI::App& app);  ///< `lsdem ct2ls IMAGE -o DIR`: labelled CT volume -> one grain file per label (docs/tomography.md).
 void addPlotCommand(CLI::App& app);  ///< `lsdem plot DIR [--out PLOTDIR]`: PNG plots of a run's CSV histories (docs/plots.md).
 void addRenderCommand(CLI::App& app);  ///< `lsdem render DIR [--frame N|last] -o IMAGE.png [--view AZ,EL]`: PNG of one frame of a run (docs/render.md).
 void addParaviewCommand(CLI::App& app);  ///< `lsdem paraview DIR [--screenshot FILE.png] [--time T]`: the run in ParaView, or a PNG of it (docs/paraview.md).

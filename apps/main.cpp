@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   lsdem::apps::addShapeCommand(app);
   lsdem::apps::addSplitCommand(app);
   lsdem::apps::addMesh2lsCommand(app);
+  lsdem::apps::addCt2lsCommand(app);
   lsdem::apps::addPlotCommand(app);
   lsdem::apps::addRenderCommand(app);
   lsdem::apps::addParaviewCommand(app);

@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build ccache pkg-config
   libeigen3-dev libcgal-dev libboost-dev libgmp-dev libmpfr-dev
-  libassimp-dev libtomlplusplus-dev libcli11-dev zlib1g-dev
+  libassimp-dev libtomlplusplus-dev libcli11-dev zlib1g-dev libtiff-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   gnuplot-nox
   python3-dev pybind11-dev python3-numpy python3-pytest
