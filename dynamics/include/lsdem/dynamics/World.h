@@ -193,9 +193,9 @@ struct Replacement {
   std::vector<std::pair<RemovedParticle, double>> fines;
 };
 
-/// Stages of the step whose wall-clock time is reported. Energy: the energy
-/// ledger's sums (work of the half kicks, dashpot and friction losses, kinetic
-/// and elastic energy), which every step books.
+/// Stages of the step whose wall-clock time is reported. Energy: what the
+/// energy ledger books every step (work of the half kicks, dashpot and
+/// friction losses); the kinetic and elastic energy are summed when read.
 enum class Stage { Integrate, Kinematics, BroadPhase, NarrowPhase, Accumulate, Effects, AfterStep, Energy, Count };
 const char* stageName(Stage s);
 
