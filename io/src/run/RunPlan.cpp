@@ -10,6 +10,7 @@
 #include "run/HistoryRecorder.h"
 #include "run/RemovedLog.h"
 #include "run/SummaryRecorder.h"
+#include "run/TrackRecorder.h"
 
 #include "lsdem/io/InputError.h"
 
@@ -126,6 +127,13 @@ std::vector<std::unique_ptr<Recorder<D>>> makeRecorders(const RunContext<D>& con
       o.distributionTimes.empty() ? Schedule::every(end.every(o.distributions > 1 ? o.distributions - 1 : 0))
                                   : Schedule::at(o.distributionTimes),
       context));
+  if (!o.track.empty()) {
+    // Every step, or every `track_every` s (whole steps for a scene of a number of steps).
+    const double dt = std::max(context.sw.world->dt(), 1e-300);
+    const double every = end.byTime ? o.trackEvery : std::max(1.0, std::floor(o.trackEvery / dt));
+    r.push_back(std::make_unique<TrackRecorder<D>>(
+        o.trackEvery > 0.0 ? Schedule::every(every) : Schedule::everyStep(), context));
+  }
   r.push_back(std::make_unique<SummaryRecorder<D>>(frames, context));
   return r;
 }
