@@ -146,15 +146,45 @@ void report(const char* what, int cells, const Errors& e) {
 
 }  // namespace
 
-// The reference itself: Chung & Ooi's test 2 speed gives delta_max = 1 % of
-// the diameter, and test 1's figures are those of the paper's Table.
-TEST(ChungOoi, HertzReferenceMatchesTheClosedForm) {
-  const Figures t2 = hertz(kTest2In3D);
-  EXPECT_NEAR(t2.overlap, 0.002, 1e-12);
-  const Figures t1 = hertz(kTest1In3D);
-  EXPECT_NEAR(t1.overlap, 2.7411e-4, 1e-8);
-  EXPECT_NEAR(t1.force, 10696.9, 0.1);
-  EXPECT_NEAR(t1.duration, 4.0339e-5, 1e-9);
+// The reference itself, against the equation of motion integrated step by
+// step (RK4, 20000 steps over the contact): the closed form's overlap, force
+// and duration, and Chung & Ooi's test 2 speed giving delta_max = 1 % of
+// the diameter.
+TEST(ChungOoi, HertzReferenceMatchesTheEquationOfMotion) {
+  EXPECT_NEAR(hertz(kTest2In3D).overlap, 0.002, 1e-12);
+  EXPECT_NEAR(hertz(kTest2In2D).overlap, 0.002, 1e-12);
+  for (const Impact& c : {kTest1In3D, kTest2In3D, kTest1In2D, kTest2In2D}) {
+    const Figures ref = hertz(c);
+    // m* and K = 4/3 E* sqrt(R*) from the closed form's own figures: F_max = K delta_max^(3/2)
+    // and the energy 1/2 m* v^2 = 2/5 K delta_max^(5/2).
+    const double k = ref.force / std::pow(ref.overlap, 1.5);
+    const double v0 = c.onPlane ? c.speed : 2.0 * c.speed;
+    const double m = 0.8 * k * std::pow(ref.overlap, 2.5) / (v0 * v0);
+    const double pi = std::numbers::pi;
+    const double mass = c.density * (c.dimension == 3 ? 4.0 / 3.0 * pi * std::pow(c.radius, 3) : pi * c.radius * c.radius);
+    EXPECT_NEAR(m, c.onPlane ? mass : mass / 2.0, 1e-12 * mass) << c.scene;
+    const auto accel = [&](double delta) { return delta > 0.0 ? -k * std::pow(delta, 1.5) / m : 0.0; };
+    const double h = ref.duration / 20000.0;
+    double delta = 0.0, v = v0, t = 0.0, deepest = 0.0;
+    while (true) {
+      const double k1x = v, k1v = accel(delta);
+      const double k2x = v + 0.5 * h * k1v, k2v = accel(delta + 0.5 * h * k1x);
+      const double k3x = v + 0.5 * h * k2v, k3v = accel(delta + 0.5 * h * k2x);
+      const double k4x = v + h * k3v, k4v = accel(delta + h * k3x);
+      const double next = delta + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+      v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+      if (next <= 0.0) {
+        t += h * delta / (delta - next);  // the crossing, linearly within the step
+        break;
+      }
+      delta = next;
+      t += h;
+      deepest = std::max(deepest, delta);
+    }
+    EXPECT_NEAR(deepest / ref.overlap, 1.0, 1e-6) << c.scene;
+    EXPECT_NEAR(k * std::pow(deepest, 1.5) / ref.force, 1.0, 2e-6) << c.scene;
+    EXPECT_NEAR(t / ref.duration, 1.0, 1e-4) << c.scene;
+  }
 }
 
 // Test 2: the sphere (disc) on a rigid plane. The plane is exact and the
