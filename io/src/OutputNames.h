@@ -18,11 +18,12 @@ inline constexpr const char* kShapeHistograms = "shape_histograms.csv";
 inline constexpr const char* kRemoved = "removed.csv";
 inline constexpr const char* kBreakageLog = "breakage_log.csv";
 inline constexpr const char* kProductPsd = "product_psd.csv";
+inline constexpr const char* kTracks = "tracks.csv";
 
 /// Every file of a run besides its series, `scene.toml` and `frames/`.
-inline constexpr std::array<const char*, 9> kFiles = {kSummary,         kHistory, kCheckpoint,  kPsd,
-                                                      kShapeStats,      kShapeHistograms, kRemoved, kBreakageLog,
-                                                      kProductPsd};
+inline constexpr std::array<const char*, 10> kFiles = {kSummary,     kHistory,         kCheckpoint, kPsd,
+                                                       kShapeStats, kShapeHistograms, kRemoved,    kBreakageLog,
+                                                       kProductPsd, kTracks};
 
 /// The ParaView series: SERIES.pvd, with its frames in frames/SERIES_NNNNNN.vtp.
 inline constexpr const char* kParticles = "particles";

@@ -3,6 +3,7 @@
 
 #include "lsdem/io/Scene.h"
 
+#include "NumberText.h"
 #include "ShapeTable.h"
 #include "TomlReader.h"
 
@@ -10,6 +11,7 @@
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/ShapeFile.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -831,6 +833,23 @@ class SceneReader {
     scene_.keyLines[r.pathOf("checkpoint_every")] = r.lineOf("checkpoint_every");
     if (o.checkpointEvery < 0.0) r.fail("checkpoint_every", "must be >= 0 s");
     o.progressSeconds = r.positive("progress_seconds", o.progressSeconds);
+    if (r.has("track")) {
+      // Global ids: whole numbers >= 0, each once (fragments and fed grains
+      // get theirs later, so an id need not exist at the start).
+      for (const double v : r.numbers("track", -1)) {
+        if (!(v >= 0.0 && v <= 9007199254740992.0 && v == std::floor(v))) {
+          r.fail("track", "particle ids are whole numbers >= 0, got " + numberText(v));
+        }
+        const std::uint64_t id = std::uint64_t(v);
+        if (std::find(o.track.begin(), o.track.end(), id) != o.track.end()) {
+          r.fail("track", "particle " + std::to_string(id) + " is listed twice");
+        }
+        o.track.push_back(id);
+      }
+    }
+    o.trackEvery = r.number("track_every", 0.0);
+    if (o.trackEvery < 0.0) r.fail("track_every", "must be >= 0 s, got " + numberText(o.trackEvery));
+    if (o.trackEvery > 0.0 && o.track.empty()) r.fail("track_every", "needs `track` (the particle ids to track)");
     if (const toml::table* s = r.optionalTable("specimen")) {
       TomlReader sr(*s, file_, "output.specimen");
       SpecimenDef spec;

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 
 using namespace lsdem;
@@ -204,7 +205,11 @@ TEST(Run, WritesEveryOutputWithExactMassBalance) {
 
 TEST(Run, ResumedRunEqualsUninterruptedRun) {
   TempDir dir("resume");
-  const std::string scene = writeScene(dir.path, kCrushScene).string();
+  // With tracks of two grains and of two fragments (ids 8 and 9, born in the
+  // crush), on an interval of the clock.
+  std::string text = kCrushScene;
+  text.insert(text.find("[output]\n") + 9, "track = [9, 0, 3, 8]\ntrack_every = 0.0005\n");
+  const std::string scene = writeScene(dir.path, text).string();
 
   io::RunOptions straight;
   straight.scene = scene;
@@ -230,9 +235,24 @@ TEST(Run, ResumedRunEqualsUninterruptedRun) {
   EXPECT_EQ(a.particles, b.particles);
   EXPECT_EQ(a.breakages, b.breakages);
   for (const char* file : {"history.csv", "psd.csv", "breakage_log.csv", "removed.csv", "shape_stats.csv",
-                           "particles.pvd", "frames/particles_000006.vtp", "frames/surfaces_000006.vtp"}) {
+                           "tracks.csv", "particles.pvd", "frames/particles_000006.vtp",
+                           "frames/surfaces_000006.vtp"}) {
     EXPECT_EQ(readFile(dir.path / "straight" / file), readFile(dir.path / "resumed" / file)) << file;
   }
+  // tracks.csv: the first instant, every 0.5 ms of the 12 ms, the last; the
+  // fragments from when they are born.
+  const std::vector<std::string> tracks = lines(readFile(dir.path / "straight" / "tracks.csv"));
+  ASSERT_GT(tracks.size(), 1u);
+  EXPECT_EQ(tracks[1].substr(0, 6), "0,0,0,");
+  EXPECT_EQ(tracks[2].substr(0, 6), "0,0,3,");
+  std::set<std::string> times, fragments;
+  for (std::size_t k = 1; k < tracks.size(); ++k) {
+    const std::vector<std::string> c = split(tracks[k]);
+    times.insert(c[1]);
+    if (c[2] == "8" || c[2] == "9") fragments.insert(c[2]);
+  }
+  EXPECT_EQ(times.size(), 25u);
+  EXPECT_EQ(fragments.size(), 2u) << "the crush must make fragments 8 and 9 for this test to mean anything";
 }
 
 // The shipped chipping scene stopped after its first chip and resumed ends

@@ -214,6 +214,15 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "simulation.density_scaling_max", "must be >= 1"},
       {"scaling_factor_alone", edit("steps = 10", "steps = 10\ndensity_scaling_max = 5.0"), 4,
        "simulation.density_scaling_max", "needs `density_scaling_below`"},
+      // Tracked particles.
+      {"track_fraction", std::string(kBase) + "[output]\ntrack = [0, 1.5]\n", 22, "output.track",
+       "whole numbers >= 0"},
+      {"track_negative", std::string(kBase) + "[output]\ntrack = [-1]\n", 22, "output.track", "whole numbers >= 0"},
+      {"track_twice", std::string(kBase) + "[output]\ntrack = [1, 0, 1]\n", 22, "output.track", "listed twice"},
+      {"track_every_alone", std::string(kBase) + "[output]\ntrack_every = 0.1\n", 22, "output.track_every",
+       "needs `track`"},
+      {"track_every_negative", std::string(kBase) + "[output]\ntrack = [0]\ntrack_every = -1.0\n", 23,
+       "output.track_every", "must be >= 0"},
   };
   for (const BadCase& c : cases) {
     const fs::path file = writeScene(c.name, c.scene);

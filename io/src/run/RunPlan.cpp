@@ -10,6 +10,7 @@
 #include "run/HistoryRecorder.h"
 #include "run/RemovedLog.h"
 #include "run/SummaryRecorder.h"
+#include "run/TrackRecorder.h"
 
 #include "lsdem/io/InputError.h"
 
@@ -26,6 +27,14 @@ constexpr double kMaxSteps = 1e9;
 // The largest energy scale (J) a scene may reach by its accelerations and
 // speeds: room for the sums and products of the energy ledger in doubles.
 constexpr double kMaxEnergyScale = 1e300;
+
+// Every `seconds` of simulated time from `first` intervals on: in a run to a
+// duration the clock is time; in a run of a number of steps, whole steps
+// (at least one) of the time step `dt`.
+Schedule everySeconds(double seconds, const RunEnd& end, double dt, double first) {
+  const double interval = end.byTime ? seconds : std::max(1.0, std::floor(seconds / std::max(dt, 1e-300)));
+  return Schedule::every(interval, first * interval);
+}
 
 }  // namespace
 
@@ -109,8 +118,7 @@ template <int D>
 Schedule checkpointSchedule(const SceneDef<D>& scene, const RunEnd& end, const dynamics::World<D>& world) {
   const double every = scene.output.checkpointEvery;
   if (!(every > 0.0)) return {};
-  const double interval = end.byTime ? every : std::max(1.0, std::floor(every / std::max(world.dt(), 1e-300)));
-  return Schedule::every(interval, interval);
+  return everySeconds(every, end, world.dt(), 1.0);
 }
 
 template <int D>
@@ -126,6 +134,11 @@ std::vector<std::unique_ptr<Recorder<D>>> makeRecorders(const RunContext<D>& con
       o.distributionTimes.empty() ? Schedule::every(end.every(o.distributions > 1 ? o.distributions - 1 : 0))
                                   : Schedule::at(o.distributionTimes),
       context));
+  if (!o.track.empty()) {
+    r.push_back(std::make_unique<TrackRecorder<D>>(
+        o.trackEvery > 0.0 ? everySeconds(o.trackEvery, end, context.sw.world->dt(), 0.0) : Schedule::everyStep(),
+        context));
+  }
   r.push_back(std::make_unique<SummaryRecorder<D>>(frames, context));
   return r;
 }

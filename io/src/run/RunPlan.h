@@ -53,8 +53,9 @@ Schedule checkpointSchedule(const SceneDef<D>& scene, const RunEnd& end, const d
 /// @brief The recorders the scene's `[output]` declares, in the order they
 /// record: removed.csv and breakage_log.csv (always), history.csv
 /// (`history_rows`), the ParaView series (`frames` > 0, `vtk`), the
-/// distributions (`distributions` or `distribution_times`), and summary.json
-/// (last: it follows the frames, and is written at the end).
+/// distributions (`distributions` or `distribution_times`), tracks.csv
+/// (`track`), and summary.json (last: it follows the frames, and is written
+/// at the end).
 template <int D>
 std::vector<std::unique_ptr<Recorder<D>>> makeRecorders(const RunContext<D>& context, const RunEnd& end);
 

@@ -70,6 +70,9 @@ struct OutputDef {
   /// sphericity from the grid's volume and the nodes' area can exceed 1).
   double shapeMinCells = 5.0;
   double checkpointEvery = 0.0;         ///< s of simulated time between checkpoints (0: only at the end)
+  /// Global ids of the particles whose trajectory tracks.csv records (`track`; empty: no tracks.csv).
+  std::vector<std::uint64_t> track;
+  double trackEvery = 0.0;              ///< s of simulated time between rows of tracks.csv (0: every step)
   double progressSeconds = 2.0;         ///< wall seconds between progress reports
 };
 
