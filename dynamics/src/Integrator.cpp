@@ -89,7 +89,8 @@ void kickDrift(Particles<D>& p, double dt) {
       p.orientation[i] += dt * p.angularVelocity[i];
     } else {
       Eigen::Quaterniond& q = p.orientation[i];
-      Vec<3> Lbody = p.inertia[i].cwiseProduct(q.conjugate() * p.angularVelocity[i]) + half * (q.conjugate() * p.torque[i]);
+      Vec<3> Lbody =
+          p.inertia[i].cwiseProduct(q.conjugate() * p.angularVelocity[i]) + half * (q.conjugate() * p.torque[i]);
       freeRotationBody(q, Lbody, p.invInertia[i], dt);
       p.angularVelocity[i] = q * Vec<3>(p.invInertia[i].cwiseProduct(Lbody));
     }

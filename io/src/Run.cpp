@@ -236,8 +236,8 @@ RunResult runOf(SceneDef<D> scene, std::string sceneText, const RunOptions& opti
     checkOutputFolder(out, options.overwrite);
   }
 #ifdef LSDEM_HAVE_OPENMP
-  const int threads = options.threads >= 0 ? options.threads : scene.threads;
-  if (threads > 0) omp_set_num_threads(threads);
+  // The command line's threads are set already (runScene); else the scene's.
+  if (options.threads < 0 && scene.threads > 0) omp_set_num_threads(scene.threads);
 #endif
   Runner<D> runner(std::move(scene), std::move(sceneText), options, out, std::move(lock));
   return runner.run(!options.resumeDir.empty());
