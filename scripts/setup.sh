@@ -14,6 +14,8 @@ packages=(
 # LSDEM_PARAVIEW=1: also ParaView with its Python and a virtual display
 # (`lsdem paraview`, scripts/check_paraview.sh; about 800 MB).
 if [[ ${LSDEM_PARAVIEW:-0} == 1 ]]; then packages+=(paraview python3-paraview xvfb xauth); fi
+# LSDEM_MPI=1: also OpenMPI, for the distributed runs (docs/parallel.md).
+if [[ ${LSDEM_MPI:-0} == 1 ]]; then packages+=(libopenmpi-dev openmpi-bin); fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -1419,9 +1419,66 @@ std::size_t ContactSolver<D>::recordBytes() const {
 }
 
 template <int D>
+typename ContactSolver<D>::ParticleHistory ContactSolver<D>::particleHistory(std::uint64_t id) const {
+  ParticleHistory out;
+  for (const HistoryPair& h : history_) {
+    if (h.idA != id && h.other != id) continue;
+    HistoryPair copy = h;
+    copy.first = std::uint32_t(out.nodes.size());
+    out.pairs.push_back(copy);
+    out.nodes.insert(out.nodes.end(), nodes_.begin() + h.first, nodes_.begin() + h.first + h.count);
+    if (!shear_.empty()) out.shear.insert(out.shear.end(), shear_.begin() + h.first, shear_.begin() + h.first + h.count);
+    if (!preload_.empty()) {
+      out.preload.insert(out.preload.end(), preload_.begin() + h.first, preload_.begin() + h.first + h.count);
+    }
+  }
+  return out;
+}
+
+template <int D>
+void ContactSolver<D>::adoptHistory(std::uint64_t id, const ParticleHistory& history) {
+  std::erase_if(history_, [&](const HistoryPair& h) { return h.idA == id || h.other == id; });
+  if (history.pairs.empty()) return;
+  // The arrays the history points into, aligned with nodes_ before appending.
+  const std::size_t base = nodes_.size();
+  if (!history.shear.empty() && shear_.size() != base) shear_.resize(base, Vec<D>::Zero());
+  if (!history.preload.empty() && preload_.size() != base) {
+    preload_.resize(base, 0.0);
+  }
+  if (historyKeys_.size() != base) buildHistoryKeysFor(base);
+  nodes_.insert(nodes_.end(), history.nodes.begin(), history.nodes.end());
+  for (const NodeContact<D>& c : history.nodes) historyKeys_.push_back(nodeKey(c));
+  if (!shear_.empty()) {
+    if (history.shear.empty()) {
+      shear_.resize(nodes_.size(), Vec<D>::Zero());
+    } else {
+      shear_.insert(shear_.end(), history.shear.begin(), history.shear.end());
+    }
+  }
+  if (!preload_.empty()) {
+    if (history.preload.empty()) {
+      preload_.resize(nodes_.size(), 0.0);
+    } else {
+      preload_.insert(preload_.end(), history.preload.begin(), history.preload.end());
+    }
+  }
+  for (HistoryPair h : history.pairs) {
+    h.first += std::uint32_t(base);
+    history_.push_back(h);
+  }
+  std::sort(history_.begin(), history_.end(),
+            [](const HistoryPair& x, const HistoryPair& y) { return keyLess(x, y.idA, y.other); });
+}
+
+template <int D>
+void ContactSolver<D>::buildHistoryKeysFor(std::size_t count) {
+  historyKeys_.resize(count);
+  for (std::size_t q = 0; q < count; ++q) historyKeys_[q] = nodeKey(nodes_[q]);
+}
+
+template <int D>
 void ContactSolver<D>::buildHistoryKeys() {
-  historyKeys_.resize(history_.empty() ? 0 : nodes_.size());
-  for (std::size_t q = 0; q < historyKeys_.size(); ++q) historyKeys_[q] = nodeKey(nodes_[q]);
+  buildHistoryKeysFor(history_.empty() ? 0 : nodes_.size());
 }
 
 template <int D>

@@ -1,5 +1,7 @@
 #include "lsdem/dynamics/Particles.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -16,12 +18,26 @@ std::size_t Particles<D>::add(const ParticleDef<D>& def) {
   }
   const auto& mp = def.shape->mass();
   const double rho = def.density * def.massScale;
-  const double m = rho * mp.volume;
+  double m = rho * mp.volume;
   Spin<D> I;
   if constexpr (D == 2) {
     I = rho * mp.polarMoment();
   } else {
     I = rho * mp.principalInertia();
+  }
+  if (def.mass != 0.0) {
+    bool positive;
+    if constexpr (D == 2) {
+      positive = def.inertia > 0.0 && std::isfinite(def.inertia);
+    } else {
+      positive = (def.inertia.array() > 0.0).all() && def.inertia.allFinite();
+    }
+    if (!(def.mass > 0.0) || !std::isfinite(def.mass) || !positive) {
+      throw std::invalid_argument("a particle's given mass and inertia must be positive, got mass " +
+                                  std::to_string(def.mass));
+    }
+    m = def.mass;
+    I = def.inertia;
   }
 
   position.push_back(def.position);
@@ -43,7 +59,12 @@ std::size_t Particles<D>::add(const ParticleDef<D>& def) {
   material.push_back(def.material);
   strength.push_back(def.strength);
 
-  id.push_back(nextId_++);
+  if (def.id == kNoParent) {
+    id.push_back(nextId_++);
+  } else {
+    id.push_back(def.id);
+    nextId_ = std::max(nextId_, def.id + 1);
+  }
   parentId.push_back(def.parent);
   generation.push_back(def.generation);
   birthTime.push_back(def.birthTime);

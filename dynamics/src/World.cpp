@@ -367,6 +367,21 @@ void World<D>::removeParticle(std::size_t index, const std::string& reason) {
   r.reason = reason;
   removed_.push_back(r);
   energy_.removedEnergy += particles_.kineticEnergy(index);
+  dropParticle(index);
+}
+
+template <int D>
+void World<D>::detachParticle(std::size_t index) {
+  if (index >= particles_.size()) {
+    throw std::out_of_range("World::detachParticle: index " + std::to_string(index) + " of " +
+                            std::to_string(particles_.size()) + " particles");
+  }
+  if (!densityScales_.empty()) densityScales_.erase(particles_.id[index]);
+  dropParticle(index);
+}
+
+template <int D>
+void World<D>::dropParticle(std::size_t index) {
   particles_.remove(index);
   if (index < stiffness_.size()) {
     stiffness_[index] = stiffness_.back();
@@ -376,6 +391,17 @@ void World<D>::removeParticle(std::size_t index, const std::string& reason) {
   // the removed one's place): the next step re-evaluates them, and the
   // springs the particle held leave the ledger as splitRelease.
   broad_.invalidate();
+  forcesValid_ = false;
+  energyCurrent_ = false;
+}
+
+template <int D>
+void World<D>::setMotion(std::size_t index, const Vec<D>& position, const Orientation<D>& orientation,
+                         const Vec<D>& velocity, const Spin<D>& angularVelocity) {
+  particles_.position.at(index) = position;
+  particles_.orientation[index] = orientation;
+  particles_.velocity[index] = velocity;
+  particles_.angularVelocity[index] = angularVelocity;
   forcesValid_ = false;
   energyCurrent_ = false;
 }
@@ -622,6 +648,12 @@ void World<D>::refreshContacts() {
 
 template <int D>
 void World<D>::step() {
+  beginStep();
+  finishStep();
+}
+
+template <int D>
+void World<D>::beginStep() {
   if (!(dt_ > 0.0)) {
     throw std::logic_error("no time step: give dt, or add particles so the automatic step can be estimated");
   }
@@ -642,10 +674,13 @@ void World<D>::step() {
   t0 = Clock::now();
   moveKinematicBodies(time_ + dt_);
   stageSeconds_[std::size_t(Stage::Kinematics)] += secondsSince(t0);
+}
 
+template <int D>
+void World<D>::finishStep() {
   // Forces at the new positions, then the closing half kick.
   computeForces(dt_);
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   kick(particles_, dt_);
   time_ += dt_;
   ++steps_;

@@ -414,6 +414,25 @@ class ContactSolver {
   /// @brief Forgets every shear history (e.g. after a restart without it).
   void clearHistory() { history_.clear(); }
 
+  /// One particle's contact history: the node contacts of its pairs (with
+  /// particles, planes and tools) that the next compute() carries on, with
+  /// their shear and rest overlaps. What moves with a particle to another
+  /// solver (a distributed run: the particle moves to another rank).
+  struct ParticleHistory {
+    std::vector<detail::HistoryPair> pairs;  ///< first: offset into nodes
+    std::vector<NodeContact<D>> nodes;
+    std::vector<Vec<D>> shear;    ///< aligned with nodes; empty without friction
+    std::vector<double> preload;  ///< aligned with nodes; empty without rest overlaps
+  };
+  /// @brief The history of particle `id`'s pairs as of the last compute()
+  /// (empty without friction and rest overlaps).
+  ParticleHistory particleHistory(std::uint64_t id) const;
+  /// @brief Replaces the history of particle `id`'s pairs by `history`
+  /// (from particleHistory() of a solver of the same law), for the next
+  /// compute(). The records of the last compute() are stale afterwards
+  /// (compute() again before reading them).
+  void adoptHistory(std::uint64_t id, const ParticleHistory& history);
+
   /// @brief Writes the output of the last compute() (records, shear history,
   /// totals, loads): what the next compute() and the readers of this step need.
   void saveState(StateWriter& out) const;
@@ -447,6 +466,7 @@ class ContactSolver {
   // (filled as gather() copies the records; rebuilt from them on loadState()).
   detail::Records<std::uint32_t> historyKeys_;
   void buildHistoryKeys();
+  void buildHistoryKeysFor(std::size_t count);  // historyKeys_ of the first `count` records of nodes_
   // Separation certificates: a cache, not saved with the state (a restored
   // run makes them afresh, with the same contacts). Two slots per candidate
   // pair, in the pairs' order (2k: a's nodes in b, 2k + 1: b's in a), then

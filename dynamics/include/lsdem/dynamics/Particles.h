@@ -50,6 +50,16 @@ struct ParticleDef {
   ParticleId parent = kNoParent;
   int generation = 0;
   double birthTime = 0.0;                           ///< s
+  /// Its global id; kNoParent (the default): the next free id. A given id
+  /// (a particle mirrored from another rank of a distributed run) must not
+  /// be in use; ids above it are then the next free ones.
+  ParticleId id = kNoParent;
+  /// Mass (kg) and principal moments of inertia (kg m^2, body frame) as
+  /// given, in place of density x massScale x the shape's: a particle
+  /// mirrored from another rank keeps its owner's numbers bit for bit.
+  /// 0 (the default): from the density.
+  double mass = 0.0;
+  Spin<D> inertia = Rotation<D>::zeroSpin();
 };
 
 template <int D>

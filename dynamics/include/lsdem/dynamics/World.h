@@ -217,6 +217,24 @@ class World {
   /// @brief Removes particle `index`, recording it (for mass balance and size
   /// distributions) with `reason`.
   void removeParticle(std::size_t index, const std::string& reason);
+  /// @brief Takes particle `index` out without a removal record or any
+  /// booking: it goes on elsewhere (a distributed run: a mirrored particle
+  /// out of reach, or one that moved to another rank). Its contact history
+  /// stays until the next force evaluation.
+  void detachParticle(std::size_t index);
+  /// @brief Replaces the contact history of particle `id`'s pairs
+  /// (ContactSolver::adoptHistory): a distributed run hands it over with a
+  /// particle that moves to another rank. The contacts are then stale until
+  /// the next force evaluation.
+  void adoptHistory(std::uint64_t id, const typename ContactSolver<D>::ParticleHistory& history) {
+    contacts_.adoptHistory(id, history);
+    forcesValid_ = false;
+  }
+  /// @brief Sets the pose and velocities of particle `index` (a distributed
+  /// run: a mirror of a particle another rank moves). The contacts are then
+  /// stale until the next force evaluation.
+  void setMotion(std::size_t index, const Vec<D>& position, const Orientation<D>& orientation, const Vec<D>& velocity,
+                 const Spin<D>& angularVelocity);
   /// @brief Records a removal of matter that never became a particle (breakage
   /// fines): appends `r` to removed() and adds `kineticEnergy` (J) to the
   /// ledger's removedEnergy.
@@ -249,8 +267,16 @@ class World {
   }
 
   // ---- running ----
-  /// @brief Advances one step of dt().
+  /// @brief Advances one step of dt(): beginStep() then finishStep().
   void step();
+  /// @brief The first part of a step: the forces of the current state if
+  /// they are stale, the opening half kick and the drift, tools and planes to
+  /// the end of the step. Positions are then x(n+1), velocities v(n+1/2).
+  /// A distributed run mirrors its particles between the two parts.
+  void beginStep();
+  /// @brief The rest of a step: forces at the new positions, the closing
+  /// half kick, the clock, and the effects between steps.
+  void finishStep();
   /// @brief Evaluates the contacts and forces of the particles as they are
   /// now, if they changed since the last evaluation (contactsCurrent() false);
   /// step() does it first anyway, so calling it between steps changes no
@@ -377,6 +403,8 @@ class World {
   Particles<D> particles_;
   BroadPhase<D> broad_;
   ContactSolver<D> contacts_;
+  // removeParticle without the record: the particle set and its derived state.
+  void dropParticle(std::size_t index);
   std::vector<ToolDef<D>> tools_;
   std::vector<ToolPose<D>> toolPoses_;
   std::vector<Plane<D>> planes_;

@@ -1,0 +1,505 @@
+#include "lsdem/parallel/DistributedWorld.h"
+
+#include "lsdem/io/GrainFile.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <variant>
+
+namespace lsdem::parallel {
+namespace {
+
+using dynamics::ParticleId;
+using dynamics::StateReader;
+using dynamics::StateWriter;
+
+void check(int code, const char* what) {
+  if (code != MPI_SUCCESS) throw std::runtime_error(std::string("MPI: ") + what + " failed with code " + std::to_string(code));
+}
+
+std::uint64_t fnv1a(const std::string& bytes) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (const char c : bytes) {
+    h ^= std::uint8_t(c);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+template <int D>
+std::string grainBytes(const geometry::Shape<D>& shape) {
+  std::ostringstream out(std::ios::binary);
+  io::writeGrain(out, shape, io::GrainFormat::Binary);
+  return std::move(out).str();
+}
+
+// Sends each rank its bytes and returns what each rank sent here (one
+// all-to-all of the sizes, one of the bytes).
+std::vector<std::vector<char>> allToAll(MPI_Comm comm, const std::vector<StateWriter>& out) {
+  const std::size_t ranks = out.size();
+  std::vector<long long> sendCount(ranks), recvCount(ranks);
+  for (std::size_t r = 0; r < ranks; ++r) sendCount[r] = (long long)out[r].bytes().size();
+  check(MPI_Alltoall(sendCount.data(), 1, MPI_LONG_LONG, recvCount.data(), 1, MPI_LONG_LONG, comm), "Alltoall");
+  std::vector<int> sc(ranks), sd(ranks), rc(ranks), rd(ranks);
+  long long sendTotal = 0, recvTotal = 0;
+  for (std::size_t r = 0; r < ranks; ++r) {
+    sd[r] = int(sendTotal);
+    rd[r] = int(recvTotal);
+    sc[r] = int(sendCount[r]);
+    rc[r] = int(recvCount[r]);
+    sendTotal += sendCount[r];
+    recvTotal += recvCount[r];
+  }
+  if (sendTotal > (1ll << 31) - 1 || recvTotal > (1ll << 31) - 1) {
+    throw std::runtime_error("MPI exchange of more than 2 GiB in one step");
+  }
+  std::vector<char> send(static_cast<std::size_t>(sendTotal)), recv(static_cast<std::size_t>(recvTotal));
+  for (std::size_t r = 0; r < ranks; ++r) std::copy(out[r].bytes().begin(), out[r].bytes().end(), send.begin() + sd[r]);
+  check(MPI_Alltoallv(send.data(), sc.data(), sd.data(), MPI_CHAR, recv.data(), rc.data(), rd.data(), MPI_CHAR, comm),
+        "Alltoallv");
+  std::vector<std::vector<char>> in(ranks);
+  for (std::size_t r = 0; r < ranks; ++r) in[r].assign(recv.begin() + rd[r], recv.begin() + rd[r] + rc[r]);
+  return in;
+}
+
+template <class T>
+void putRaw(StateWriter& out, const std::vector<T>& v) {
+  out.put(std::uint64_t(v.size()));
+  for (const T& x : v) out.put(x);
+}
+template <class T>
+void getRaw(StateReader& in, std::vector<T>& v) {
+  v.resize(std::size_t(in.get<std::uint64_t>()));
+  for (T& x : v) x = in.get<T>();
+}
+
+}  // namespace
+
+template <int D>
+DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, const DistributedDef& def)
+    : comm_(comm), world_(world), def_(def) {
+  check(MPI_Comm_rank(comm_, &rank_), "Comm_rank");
+  check(MPI_Comm_size(comm_, &ranks_), "Comm_size");
+  const dynamics::WorldDef<D>& wd = world_.def();
+  for (const std::string& name : world_.effectNames()) {
+    if (name != "gravity" && name != "global_damping" && name != "local_damping") {
+      throw std::invalid_argument("a distributed run does not support the effect '" + name +
+                                  "' yet (docs/parallel.md); run it on one rank");
+    }
+  }
+  if (wd.densityScaling) {
+    throw std::invalid_argument("a distributed run does not support density scaling yet (docs/parallel.md)");
+  }
+  for (const auto& tool : world_.tools()) {
+    if (std::holds_alternative<dynamics::ServoPlaten<D>>(tool.motion)) {
+      throw std::invalid_argument("a distributed run does not support the servo platen '" + tool.name +
+                                  "' yet (docs/parallel.md)");
+    }
+  }
+  if (world_.steps() != 0) throw std::invalid_argument("a distributed run starts from a world that has not stepped");
+
+  const dynamics::Particles<D>& p = world_.particles();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    largestRadius_ = std::max({largestRadius_, p.shape[i]->boundingRadius(), p.shape[i]->cubicBoundingRadius()});
+    const std::uint64_t h = shapeHash(p.shape[i]);
+    (void)h;
+  }
+  skin_ = wd.broadPhase.skin > 0.0 ? wd.broadPhase.skin : 0.1 * largestRadius_;
+  checkSameWorldEverywhere();
+  shapesAt_.assign(std::size_t(ranks_), {});
+  for (auto& held : shapesAt_) {
+    for (const auto& entry : shapes_) held.insert(entry.first);
+  }
+
+  // The decomposition of the whole set (the same on every rank), then each
+  // rank keeps its own particles and their ghosts.
+  std::vector<Vec<D>> points(p.position.begin(), p.position.end());
+  std::vector<double> weights(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) weights[i] = double(std::max<std::size_t>(1, p.shape[i]->nodes().size()));
+  decomposition_ = Decomposition<D>::build(points, weights, ranks_);
+  owned_.assign(p.size(), 0);
+  for (std::size_t i = p.size(); i-- > 0;) {
+    const int owner = decomposition_.owner(p.position[i]);
+    if (owner == rank_) {
+      owned_[i] = 1;
+    } else if (!(decomposition_.distance(p.position[i], rank_) < reach(i))) {
+      dropLocal(i);
+    }
+  }
+}
+
+template <int D>
+void DistributedWorld<D>::checkSameWorldEverywhere() const {
+  // Particle count, ids and shape hashes summed in a fixed order: equal on every rank.
+  const dynamics::Particles<D>& p = world_.particles();
+  std::uint64_t digest = p.size();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    digest = digest * 1099511628211ull ^ p.id[i];
+    digest = digest * 1099511628211ull ^ hashOf_.at(p.shape[i].get());
+  }
+  std::uint64_t lo = digest, hi = digest;
+  check(MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_UINT64_T, MPI_MIN, comm_), "Allreduce");
+  check(MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_UINT64_T, MPI_MAX, comm_), "Allreduce");
+  if (lo != hi) {
+    throw std::invalid_argument("a distributed run needs the same world on every rank: rank " + std::to_string(rank_) +
+                                " has other particles or shapes (build every rank's world from the same scene)");
+  }
+}
+
+template <int D>
+std::uint64_t DistributedWorld<D>::shapeHash(const std::shared_ptr<const geometry::Shape<D>>& shape) {
+  const auto it = hashOf_.find(shape.get());
+  if (it != hashOf_.end()) return it->second;
+  const std::uint64_t h = fnv1a(grainBytes(*shape));
+  hashOf_.emplace(shape.get(), h);
+  shapes_.emplace(h, shape);
+  return h;
+}
+
+template <int D>
+double DistributedWorld<D>::reach(std::size_t index) const {
+  const geometry::Shape<D>& s = *world_.particles().shape[index];
+  return std::max(s.boundingRadius(), s.cubicBoundingRadius()) + largestRadius_ + skin_;
+}
+
+template <int D>
+void DistributedWorld<D>::dropLocal(std::size_t index) {
+  world_.detachParticle(index);
+  owned_[index] = owned_.back();
+  owned_.pop_back();
+}
+
+template <int D>
+std::size_t DistributedWorld<D>::ownedCount() const {
+  return std::size_t(std::count(owned_.begin(), owned_.end(), std::uint8_t(1)));
+}
+
+template <int D>
+std::uint64_t DistributedWorld<D>::globalCount() const {
+  std::uint64_t n = ownedCount();
+  check(MPI_Allreduce(MPI_IN_PLACE, &n, 1, MPI_UINT64_T, MPI_SUM, comm_), "Allreduce");
+  return n;
+}
+
+template <int D>
+void DistributedWorld<D>::step() {
+  world_.beginStep();
+  exchange();
+  world_.finishStep();
+  ++stats_.steps;
+  if (def_.rebalanceImbalance > 0.0 && def_.rebalanceEvery > 0 && stats_.steps % def_.rebalanceEvery == 0) rebalance();
+}
+
+template <int D>
+void DistributedWorld<D>::run(std::uint64_t n) {
+  for (std::uint64_t s = 0; s < n; ++s) step();
+}
+
+template <int D>
+void DistributedWorld<D>::exchange() {
+  const auto t0 = std::chrono::steady_clock::now();
+  const dynamics::Particles<D>& p = world_.particles();
+  const std::size_t n = p.size();
+
+  // What each rank gets: the shapes it lacks, then one record per particle
+  // (owner, id, shape, mass and motion), then the contact history of the
+  // particles it takes over.
+  std::vector<StateWriter> out(static_cast<std::size_t>(ranks_));
+  std::vector<std::vector<std::size_t>> sent(static_cast<std::size_t>(ranks_));
+  std::vector<int> newOwner(n, rank_);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!owned_[i]) continue;
+    newOwner[i] = decomposition_.owner(p.position[i]);
+    const double r = reach(i);
+    for (int q = 0; q < ranks_; ++q) {
+      if (q == rank_) continue;
+      if (q == newOwner[i] || decomposition_.distance(p.position[i], q) < r) sent[std::size_t(q)].push_back(i);
+    }
+  }
+  for (int q = 0; q < ranks_; ++q) {
+    StateWriter& w = out[std::size_t(q)];
+    const std::vector<std::size_t>& list = sent[std::size_t(q)];
+    if (list.empty()) continue;
+    // Shapes first, each once per rank.
+    std::vector<std::uint64_t> newShapes;
+    for (std::size_t i : list) {
+      const std::uint64_t h = shapeHash(p.shape[i]);
+      if (shapesAt_[std::size_t(q)].insert(h).second) newShapes.push_back(h);
+    }
+    w.put(std::uint64_t(newShapes.size()));
+    for (std::uint64_t h : newShapes) {
+      w.put(h);
+      w.putString(grainBytes(*shapes_.at(h)));
+    }
+    stats_.shapesSent += newShapes.size();
+    w.put(std::uint64_t(list.size()));
+    for (std::size_t i : list) {
+      w.put(std::int32_t(newOwner[i]));
+      w.put(p.id[i]);
+      w.put(shapeHash(p.shape[i]));
+      w.put(p.mass[i]);
+      w.put(p.inertia[i]);
+      w.put(p.material[i]);
+      w.put(p.strength[i]);
+      w.put(p.parentId[i]);
+      w.put(p.generation[i]);
+      w.put(p.birthTime[i]);
+      w.put(p.position[i]);
+      w.put(p.orientation[i]);
+      w.put(p.velocity[i]);
+      w.put(p.angularVelocity[i]);
+      if (newOwner[i] == q) {
+        const auto history = world_.contacts().particleHistory(p.id[i]);
+        putRaw(w, history.pairs);
+        putRaw(w, history.nodes);
+        putRaw(w, history.shear);
+        putRaw(w, history.preload);
+        ++stats_.migrations;
+      }
+    }
+    stats_.ghostsSent += list.size();
+    stats_.bytesSent += w.bytes().size();
+    ++stats_.messagesSent;
+  }
+  const std::vector<std::vector<char>> in = allToAll(comm_, out);
+
+  // Particles this rank gave away stay as ghosts when in reach.
+  for (std::size_t i = 0; i < n; ++i) {
+    if (owned_[i] && newOwner[i] != rank_) owned_[i] = 0;
+  }
+  // Local index by id; what was refreshed this exchange.
+  std::unordered_map<ParticleId, std::size_t> local;
+  local.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) local.emplace(p.id[i], i);
+  std::vector<std::uint8_t> keep(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    // Still ours, or just given away but in reach of our subdomain.
+    keep[i] = owned_[i] || (newOwner[i] != rank_ && decomposition_.distance(p.position[i], rank_) < reach(i));
+  }
+  struct Adopted {
+    ParticleId id;
+    typename dynamics::ContactSolver<D>::ParticleHistory history;
+  };
+  std::vector<Adopted> adopted;
+  for (int q = 0; q < ranks_; ++q) {
+    const std::vector<char>& bytes = in[std::size_t(q)];
+    if (bytes.empty()) continue;
+    StateReader r(bytes.data(), bytes.size());
+    for (std::uint64_t k = 0, count = r.get<std::uint64_t>(); k < count; ++k) {
+      const std::uint64_t h = r.get<std::uint64_t>();
+      const std::string grain = r.getString();
+      std::istringstream s(grain, std::ios::binary);
+      auto shape = io::readGrain<D>(s, "rank " + std::to_string(q));
+      shapes_.emplace(h, shape);
+      hashOf_.emplace(shape.get(), h);
+      shapesAt_[std::size_t(q)].insert(h);  // the sender holds it
+    }
+    for (std::uint64_t k = 0, count = r.get<std::uint64_t>(); k < count; ++k) {
+      const int owner = r.get<std::int32_t>();
+      dynamics::ParticleDef<D> def;
+      def.id = r.get<ParticleId>();
+      const std::uint64_t h = r.get<std::uint64_t>();
+      def.mass = r.get<double>();
+      def.inertia = r.get<dynamics::Spin<D>>();
+      def.material = r.get<int>();
+      def.strength = r.get<double>();
+      def.parent = r.get<ParticleId>();
+      def.generation = r.get<int>();
+      def.birthTime = r.get<double>();
+      def.position = r.get<Vec<D>>();
+      def.orientation = r.get<dynamics::Orientation<D>>();
+      def.velocity = r.get<Vec<D>>();
+      def.angularVelocity = r.get<dynamics::Spin<D>>();
+      if (owner == rank_) {
+        Adopted a{def.id, {}};
+        getRaw(r, a.history.pairs);
+        getRaw(r, a.history.nodes);
+        getRaw(r, a.history.shear);
+        getRaw(r, a.history.preload);
+        adopted.push_back(std::move(a));
+      }
+      const auto it = local.find(def.id);
+      if (it != local.end()) {
+        world_.setMotion(it->second, def.position, def.orientation, def.velocity, def.angularVelocity);
+        keep[it->second] = 1;
+        owned_[it->second] = owner == rank_;
+      } else {
+        const auto shape = shapes_.find(h);
+        if (shape == shapes_.end()) {
+          throw std::runtime_error("rank " + std::to_string(rank_) + ": particle " + std::to_string(def.id) +
+                                   " from rank " + std::to_string(q) + " has a shape this rank never received");
+        }
+        def.shape = shape->second;
+        world_.addParticle(def);
+        owned_.push_back(owner == rank_);
+        keep.push_back(1);
+      }
+    }
+    if (!r.atEnd()) throw std::runtime_error("MPI exchange: message from rank " + std::to_string(q) + " is malformed");
+  }
+  // Ghosts out of reach leave, highest index first.
+  for (std::size_t i = keep.size(); i-- > 0;) {
+    if (!keep[i]) {
+      world_.detachParticle(i);
+      owned_[i] = owned_.back();
+      owned_.pop_back();
+      keep[i] = keep.back();
+      keep.pop_back();
+    }
+  }
+  for (const Adopted& a : adopted) world_.adoptHistory(a.id, a.history);
+  stats_.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+template <int D>
+void DistributedWorld<D>::rebalance() {
+  const dynamics::Particles<D>& p = world_.particles();
+  double weight = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (owned_[i]) weight += double(std::max<std::size_t>(1, p.shape[i]->nodes().size()));
+  }
+  double largest = weight, total = weight;
+  check(MPI_Allreduce(MPI_IN_PLACE, &largest, 1, MPI_DOUBLE, MPI_MAX, comm_), "Allreduce");
+  check(MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
+  if (!(total > 0.0) || !(largest > def_.rebalanceImbalance * total / ranks_)) return;
+  // Every rank gets every owned centroid and weight, in rank order, and builds the same tree.
+  std::vector<double> mine;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!owned_[i]) continue;
+    for (int a = 0; a < D; ++a) mine.push_back(p.position[i][a]);
+    mine.push_back(double(std::max<std::size_t>(1, p.shape[i]->nodes().size())));
+  }
+  int count = int(mine.size());
+  std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
+  check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_), "Allgather");
+  int total_values = 0;
+  for (int q = 0; q < ranks_; ++q) {
+    offsets[std::size_t(q)] = total_values;
+    total_values += counts[std::size_t(q)];
+  }
+  std::vector<double> all(static_cast<std::size_t>(total_values));
+  check(MPI_Allgatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(), MPI_DOUBLE, comm_),
+        "Allgatherv");
+  std::vector<Vec<D>> points;
+  std::vector<double> weights;
+  for (std::size_t k = 0; k + D < all.size() + 1; k += D + 1) {
+    Vec<D> x;
+    for (int a = 0; a < D; ++a) x[a] = all[k + std::size_t(a)];
+    points.push_back(x);
+    weights.push_back(all[k + D]);
+  }
+  decomposition_ = Decomposition<D>::build(points, weights, ranks_);
+  ++stats_.rebalances;
+  // The particles move to their new owners at the next exchange.
+}
+
+template <int D>
+dynamics::BoundaryLoads<D> DistributedWorld<D>::boundaryLoads() const {
+  dynamics::BoundaryLoads<D> loads = world_.boundaryLoads();
+  // Each rank's part (its own particles' contacts only), summed in rank order on every rank.
+  // The world's loads count ghosts too: recount from the records of owned particles.
+  dynamics::BoundaryLoads<D> own;
+  own.planeForce.assign(loads.planeForce.size(), Vec<D>::Zero());
+  own.planeTorque.assign(loads.planeTorque.size(), dynamics::Rotation<D>::zeroSpin());
+  own.toolForce.assign(loads.toolForce.size(), Vec<D>::Zero());
+  own.toolTorque.assign(loads.toolTorque.size(), dynamics::Rotation<D>::zeroSpin());
+  const auto records = world_.contacts().pairContacts();
+  const std::size_t particlePairs = world_.contacts().particleContacts().size();
+  std::size_t k = particlePairs;
+  for (; k < records.size(); ++k) {
+    const auto& rec = records[k];
+    if (!owned_[rec.a]) continue;
+    if (k < particlePairs + world_.contacts().planeContacts().size()) {
+      own.planeForce[rec.b] -= rec.force;
+      own.planeTorque[rec.b] += rec.torqueB;
+    } else {
+      own.toolForce[rec.b] -= rec.force;
+      own.toolTorque[rec.b] += rec.torqueB;
+    }
+  }
+  std::vector<double> flat;
+  const auto put = [&](const auto& v) {
+    for (const auto& x : v) {
+      if constexpr (std::is_arithmetic_v<std::decay_t<decltype(x)>>) {
+        flat.push_back(x);
+      } else {
+        for (int a = 0; a < int(x.size()); ++a) flat.push_back(x[a]);
+      }
+    }
+  };
+  put(own.planeForce);
+  put(own.planeTorque);
+  put(own.toolForce);
+  put(own.toolTorque);
+  std::vector<double> all(flat.size() * std::size_t(ranks_));
+  check(MPI_Allgather(flat.data(), int(flat.size()), MPI_DOUBLE, all.data(), int(flat.size()), MPI_DOUBLE, comm_),
+        "Allgather");
+  std::vector<double> sum(flat.size(), 0.0);
+  for (int q = 0; q < ranks_; ++q) {
+    for (std::size_t k2 = 0; k2 < flat.size(); ++k2) sum[k2] += all[std::size_t(q) * flat.size() + k2];
+  }
+  std::size_t at = 0;
+  const auto get = [&](auto& v) {
+    for (auto& x : v) {
+      if constexpr (std::is_arithmetic_v<std::decay_t<decltype(x)>>) {
+        x = sum[at++];
+      } else {
+        for (int a = 0; a < int(x.size()); ++a) x[a] = sum[at++];
+      }
+    }
+  };
+  get(own.planeForce);
+  get(own.planeTorque);
+  get(own.toolForce);
+  get(own.toolTorque);
+  return own;
+}
+
+template <int D>
+std::vector<typename DistributedWorld<D>::ParticleState> DistributedWorld<D>::gather(int root) const {
+  const dynamics::Particles<D>& p = world_.particles();
+  StateWriter w;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!owned_[i]) continue;
+    w.put(p.id[i]);
+    w.put(p.position[i]);
+    w.put(p.orientation[i]);
+    w.put(p.velocity[i]);
+    w.put(p.angularVelocity[i]);
+  }
+  int count = int(w.bytes().size());
+  std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
+  check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, comm_), "Gather");
+  int total = 0;
+  for (int q = 0; q < ranks_; ++q) {
+    offsets[std::size_t(q)] = total;
+    total += counts[std::size_t(q)];
+  }
+  std::vector<char> all(rank_ == root ? std::size_t(total) : 0);
+  check(MPI_Gatherv(w.bytes().data(), count, MPI_CHAR, all.data(), counts.data(), offsets.data(), MPI_CHAR, root, comm_),
+        "Gatherv");
+  std::vector<ParticleState> states;
+  if (rank_ != root) return states;
+  StateReader r(all.data(), all.size());
+  while (!r.atEnd()) {
+    ParticleState s;
+    s.id = r.get<ParticleId>();
+    s.position = r.get<Vec<D>>();
+    s.orientation = r.get<dynamics::Orientation<D>>();
+    s.velocity = r.get<Vec<D>>();
+    s.angularVelocity = r.get<dynamics::Spin<D>>();
+    states.push_back(s);
+  }
+  std::sort(states.begin(), states.end(), [](const ParticleState& a, const ParticleState& b) { return a.id < b.id; });
+  return states;
+}
+
+template class DistributedWorld<2>;
+template class DistributedWorld<3>;
+
+}  // namespace lsdem::parallel

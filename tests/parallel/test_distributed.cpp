@@ -1,0 +1,252 @@
+// A world spread over 1, 2 or 4 ranks equals the same world on one process,
+// bit for bit: grains with friction (shear history that must move with a
+// particle to its new rank) fall under gravity through the cuts between the
+// subdomains into a box of planes, collide and pile up.
+#include "lsdem/parallel/DistributedWorld.h"
+
+#include "lsdem/geometry/ShapeDef.h"
+
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace lsdem {
+namespace {
+
+using dynamics::ParticleDef;
+using dynamics::PlaneDef;
+using dynamics::World;
+using dynamics::WorldDef;
+using parallel::DistributedWorld;
+using geometry::Vec;
+
+int rankOf(MPI_Comm comm) {
+  int r = 0;
+  MPI_Comm_rank(comm, &r);
+  return r;
+}
+
+// Three grain shapes: a sphere, an ellipsoid and a random grain, 10 cells across.
+template <int D>
+std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes(double d) {
+  std::vector<std::shared_ptr<const geometry::Shape<D>>> out;
+  geometry::ShapeDef<D> sphere;
+  sphere.kind = geometry::ShapeKind::Sphere;
+  sphere.radius = 0.5 * d;
+  sphere.cellsAcross = 10;
+  out.push_back(geometry::buildShape(sphere));
+  geometry::ShapeDef<D> ellipsoid;
+  ellipsoid.kind = geometry::ShapeKind::Ellipsoid;
+  ellipsoid.semiAxes = Vec<D>::Constant(0.4 * d);
+  ellipsoid.semiAxes[0] = 0.6 * d;
+  ellipsoid.cellsAcross = 10;
+  out.push_back(geometry::buildShape(ellipsoid));
+  geometry::ShapeDef<D> grain;
+  grain.kind = geometry::ShapeKind::RandomGrain;
+  grain.grain.equivalentDiameter = d;
+  grain.grain.elongation = 1.3;
+  grain.grain.roughness = 0.1;
+  grain.grain.seed = 7;
+  grain.cellsAcross = 10;
+  out.push_back(geometry::buildShape(grain));
+  return out;
+}
+
+// A box of planes (floor at height 0, walls at 0 and `width` across every
+// other axis) and a lattice of grains above the floor with random offsets,
+// orientations and velocities (the same on every rank: a fixed seed).
+template <int D>
+void build(World<D>& w, int perSide, int layers) {
+  const double d = 0.01;
+  const double pitch = 1.1 * d;
+  const double width = perSide * pitch;
+  const int up = 1;  // the vertical axis
+  PlaneDef<D> floor;
+  floor.name = "floor";
+  floor.plane.normal = Vec<D>::Unit(up);
+  w.addPlane(floor);
+  for (int a = 0; a < D; ++a) {
+    if (a == up) continue;
+    PlaneDef<D> lo, hi;
+    lo.plane.normal = Vec<D>::Unit(a);
+    hi.plane.point = Vec<D>::Unit(a) * width;
+    hi.plane.normal = -Vec<D>::Unit(a);
+    w.addPlane(lo);
+    w.addPlane(hi);
+  }
+  const auto pool = shapes<D>(d);
+  std::mt19937_64 rng(12345);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const int across = D == 3 ? perSide * perSide : perSide;
+  for (int layer = 0; layer < layers; ++layer) {
+    for (int k = 0; k < across; ++k) {
+      ParticleDef<D> p;
+      p.shape = pool[std::size_t(layer + k) % pool.size()];
+      p.density = 2650.0;
+      Vec<D> x;
+      x[0] = (k % perSide + 0.5) * pitch + 0.1 * d * u(rng);
+      x[up] = (layer + 0.7) * pitch + 0.1 * d * u(rng);
+      if constexpr (D == 3) x[2] = (k / perSide + 0.5) * pitch + 0.1 * d * u(rng);
+      p.position = x;
+      for (int a = 0; a < D; ++a) p.velocity[a] = 0.3 * u(rng);
+      p.velocity[0] -= 1.5;  // the whole bed moves across the cuts into the wall at x = 0
+      if constexpr (D == 2) {
+        p.orientation = 3.0 * u(rng);
+        p.angularVelocity = 20.0 * u(rng);
+      } else {
+        p.orientation = Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized();
+        p.angularVelocity = 20.0 * Vec<3>(u(rng), u(rng), u(rng));
+      }
+      w.addParticle(p);
+    }
+  }
+}
+
+template <int D>
+WorldDef<D> worldDef() {
+  WorldDef<D> def;
+  Vec<D> g = Vec<D>::Zero();
+  g[1] = -9.81;
+  def.gravity = g;
+  def.contact.kn = 2e5;
+  def.contact.ks = 1.6e5;
+  def.contact.friction = 0.5;
+  def.contact.dampingRatio = 0.3;
+  return def;
+}
+
+// Runs `steps` steps serially and distributed; every rank checks that the
+// gathered state equals the serial one bit for bit.
+template <int D>
+void expectEqualToSerial(int perSide, int layers, std::uint64_t steps) {
+  MPI_Comm comm = MPI_COMM_WORLD;
+  World<D> serial(worldDef<D>());
+  build(serial, perSide, layers);
+  World<D> local(worldDef<D>());
+  build(local, perSide, layers);
+  parallel::DistributedDef def;
+  def.rebalanceEvery = 100;
+  def.rebalanceImbalance = 1.05;
+  DistributedWorld<D> dist(comm, local, def);
+  ASSERT_EQ(dist.globalCount(), serial.particles().size());
+
+  serial.run(steps);
+  dist.run(steps);
+  EXPECT_EQ(local.dt(), serial.dt());
+  EXPECT_EQ(local.time(), serial.time());
+
+  const auto states = dist.gather(0);
+  const dynamics::Particles<D>& p = serial.particles();
+  if (rankOf(comm) == 0) {
+    ASSERT_EQ(states.size(), p.size());
+    std::size_t moved = 0, spun = 0;
+    for (std::size_t k = 0; k < states.size(); ++k) {
+      // Serial ids are 0..N-1 in order (no particle was removed).
+      const std::size_t i = std::size_t(states[k].id);
+      ASSERT_EQ(p.id[i], states[k].id);
+      for (int a = 0; a < D; ++a) {
+        EXPECT_EQ(states[k].position[a], p.position[i][a]) << "particle " << i << " axis " << a;
+        EXPECT_EQ(states[k].velocity[a], p.velocity[i][a]) << "particle " << i << " axis " << a;
+      }
+      if constexpr (D == 2) {
+        EXPECT_EQ(states[k].orientation, p.orientation[i]);
+        EXPECT_EQ(states[k].angularVelocity, p.angularVelocity[i]);
+        spun += std::abs(p.angularVelocity[i]) > 0.0;
+      } else {
+        EXPECT_EQ(states[k].orientation.coeffs(), p.orientation[i].coeffs());
+        EXPECT_EQ(states[k].angularVelocity, p.angularVelocity[i]);
+        spun += p.angularVelocity[i].norm() > 0.0;
+      }
+      moved += p.velocity[i].norm() > 0.0;
+    }
+    EXPECT_GT(moved, 0u);
+    EXPECT_GT(spun, 0u);
+  }
+  // The run was busy: contacts with shear history, and (on several ranks)
+  // particles that changed rank.
+  EXPECT_GT(serial.contacts().historySize(), 0u);
+  std::uint64_t migrations = dist.stats().migrations;
+  MPI_Allreduce(MPI_IN_PLACE, &migrations, 1, MPI_UINT64_T, MPI_SUM, comm);
+  // The bed piles up against the wall, so the load goes out of balance and
+  // the cuts move (rebalance) while particles are in contact across them.
+  std::uint64_t rebalances = dist.stats().rebalances;
+  MPI_Allreduce(MPI_IN_PLACE, &rebalances, 1, MPI_UINT64_T, MPI_MAX, comm);
+  if (dist.ranks() > 1) {
+    EXPECT_GT(migrations, 0u);
+    EXPECT_GT(rebalances, 0u);
+  }
+
+  // The boundary loads, summed over the ranks, are the serial ones (to round-off: another order of the sum).
+  const auto loads = dist.boundaryLoads();
+  const auto& ref = serial.boundaryLoads();
+  ASSERT_EQ(loads.planeForce.size(), ref.planeForce.size());
+  for (std::size_t j = 0; j < ref.planeForce.size(); ++j) {
+    EXPECT_LE((loads.planeForce[j] - ref.planeForce[j]).norm(), 1e-9 * (1.0 + ref.planeForce[j].norm())) << "plane " << j;
+  }
+}
+
+TEST(DistributedWorld, TwoDimensionalPileEqualsSerialBitForBit) { expectEqualToSerial<2>(12, 8, 2000); }
+
+TEST(DistributedWorld, ThreeDimensionalPileEqualsSerialBitForBit) { expectEqualToSerial<3>(5, 4, 2000); }
+
+// The RCB cuts give every part its share of the weight and the owner of a
+// point is the part whose box holds it.
+TEST(Decomposition, BalancesWeightAndOwnsByBox) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec<3>> points(3000);
+  std::vector<double> weights(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    points[k] = Vec<3>(2.0 * u(rng), u(rng), 0.5 * u(rng));
+    weights[k] = 1.0 + double(k % 3);
+  }
+  for (int parts : {1, 2, 3, 4, 7}) {
+    const auto d = parallel::Decomposition<3>::build(points, weights, parts);
+    std::vector<double> load(std::size_t(parts), 0.0);
+    double total = 0.0;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const int o = d.owner(points[k]);
+      ASSERT_GE(o, 0);
+      ASSERT_LT(o, parts);
+      EXPECT_TRUE(d.box(o).contains(points[k]));
+      EXPECT_EQ(d.distance(points[k], o), 0.0);
+      load[std::size_t(o)] += weights[k];
+      total += weights[k];
+    }
+    for (double l : load) EXPECT_NEAR(l, total / parts, 3.0 + 0.002 * total) << parts << " parts";
+  }
+}
+
+// A world that is not the same on every rank is refused with the reason.
+TEST(DistributedWorld, RefusesWorldsThatDifferBetweenRanks) {
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  if (ranks < 2) GTEST_SKIP() << "needs 2 ranks";
+  World<2> w(worldDef<2>());
+  build(w, 4, 1 + rankOf(MPI_COMM_WORLD));
+  EXPECT_THROW(DistributedWorld<2>(MPI_COMM_WORLD, w), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace lsdem
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  // Only rank 0 prints; every rank runs every test (they are collective).
+  if (lsdem::rankOf(MPI_COMM_WORLD) != 0) {
+    delete ::testing::UnitTest::GetInstance()->listeners().Release(
+        ::testing::UnitTest::GetInstance()->listeners().default_result_printer());
+  }
+  const int failed = RUN_ALL_TESTS();
+  // A failure on any rank fails the run on all.
+  int any = failed;
+  MPI_Allreduce(MPI_IN_PLACE, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return any;
+}
