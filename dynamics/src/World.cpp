@@ -345,6 +345,7 @@ void World<D>::stepFromCritical() {
 template <int D>
 std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
   const std::size_t i = particles_.add(def);
+  if (!ghost_.empty()) ghost_.push_back(0);
   stiffness_.push_back(shapeStiffness(def.shape));
   if (def_.densityScaling) scaleDensity(i);
   updateTimeStep(true);
@@ -383,6 +384,10 @@ void World<D>::detachParticle(std::size_t index) {
 template <int D>
 void World<D>::dropParticle(std::size_t index) {
   particles_.remove(index);
+  if (!ghost_.empty()) {
+    ghost_[index] = ghost_.back();
+    ghost_.pop_back();
+  }
   if (index < stiffness_.size()) {
     stiffness_[index] = stiffness_.back();
     stiffness_.pop_back();
@@ -393,6 +398,20 @@ void World<D>::dropParticle(std::size_t index) {
   broad_.invalidate();
   forcesValid_ = false;
   energyCurrent_ = false;
+}
+
+template <int D>
+void World<D>::setGhost(std::size_t index, bool ghost) {
+  if (index >= particles_.size()) {
+    throw std::out_of_range("World::setGhost: index " + std::to_string(index) + " of " +
+                            std::to_string(particles_.size()) + " particles");
+  }
+  if (ghost_.empty()) {
+    if (!ghost) return;
+    ghost_.assign(particles_.size(), 0);
+  }
+  if (ghost_[index] != std::uint8_t(ghost)) forcesValid_ = false;
+  ghost_[index] = std::uint8_t(ghost);
 }
 
 template <int D>
@@ -477,11 +496,18 @@ std::vector<std::size_t> World<D>::replace(std::vector<Replacement<D>>& splits) 
   }
   // Parents leave, highest index first (swap-removal keeps the others valid);
   // the children enter in order and bring their kinetic energy.
-  for (std::size_t i : parents) particles_.remove(i);
+  for (std::size_t i : parents) {
+    particles_.remove(i);
+    if (!ghost_.empty()) {
+      ghost_[i] = ghost_.back();
+      ghost_.pop_back();
+    }
+  }
   std::vector<std::size_t> added;
   for (const Replacement<D>& s : splits) {
     for (const ParticleDef<D>& def : s.children) {
       const std::size_t i = particles_.add(def);
+      if (!ghost_.empty()) ghost_.push_back(0);
       energy_.addedEnergy += particles_.kineticEnergy(i);
       added.push_back(i);
     }
@@ -565,7 +591,16 @@ void World<D>::computeForces(double dtClosing) {
   t0 = Clock::now();
   const double forceTime = dtClosing > 0.0 ? time_ + dtClosing : time_;
   contacts_.setFrictionActive(forceTime >= def_.contact.frictionFrom);
-  contacts_.compute(particles_, broad_.pairs(), planes_, toolPoses_, dtClosing > 0.0 ? dtClosing : dt_,
+  // With ghosts (a distributed run), the pairs of two ghosts are left out.
+  const std::vector<std::array<std::uint32_t, 2>>* pairs = &broad_.pairs();
+  if (!ghost_.empty()) {
+    pairsWithoutGhostPairs_.clear();
+    for (const auto& pair : broad_.pairs()) {
+      if (!(ghost_[pair[0]] && ghost_[pair[1]])) pairsWithoutGhostPairs_.push_back(pair);
+    }
+    pairs = &pairsWithoutGhostPairs_;
+  }
+  contacts_.compute(particles_, *pairs, planes_, toolPoses_, dtClosing > 0.0 ? dtClosing : dt_,
                     dtClosing > 0.0 || steps_ == 0);
   stageSeconds_[std::size_t(Stage::NarrowPhase)] += secondsSince(t0);
 
@@ -810,6 +845,7 @@ void World<D>::loadState(StateReader& in,
     r.reason = in.getString();
   }
   particles_.loadState(in, shapeAt);
+  ghost_.clear();  // a checkpoint holds one world's own particles
   contacts_.loadState(in);
   in.getVector(loads_.planeForce);
   in.getVector(loads_.planeTorque);

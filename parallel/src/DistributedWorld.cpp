@@ -122,13 +122,12 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   std::vector<double> weights(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) weights[i] = double(std::max<std::size_t>(1, p.shape[i]->nodes().size()));
   decomposition_ = Decomposition<D>::build(points, weights, ranks_);
-  owned_.assign(p.size(), 0);
   for (std::size_t i = p.size(); i-- > 0;) {
-    const int owner = decomposition_.owner(p.position[i]);
-    if (owner == rank_) {
-      owned_[i] = 1;
-    } else if (!(decomposition_.distance(p.position[i], rank_) < reach(i))) {
-      dropLocal(i);
+    if (decomposition_.owner(p.position[i]) == rank_) continue;
+    if (decomposition_.distance(p.position[i], rank_) < reach(i)) {
+      world_.setGhost(i, true);
+    } else {
+      world_.detachParticle(i);
     }
   }
 }
@@ -168,15 +167,10 @@ double DistributedWorld<D>::reach(std::size_t index) const {
 }
 
 template <int D>
-void DistributedWorld<D>::dropLocal(std::size_t index) {
-  world_.detachParticle(index);
-  owned_[index] = owned_.back();
-  owned_.pop_back();
-}
-
-template <int D>
 std::size_t DistributedWorld<D>::ownedCount() const {
-  return std::size_t(std::count(owned_.begin(), owned_.end(), std::uint8_t(1)));
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < world_.particles().size(); ++i) n += !world_.isGhost(i);
+  return n;
 }
 
 template <int D>
@@ -213,7 +207,7 @@ void DistributedWorld<D>::exchange() {
   std::vector<std::vector<std::size_t>> sent(static_cast<std::size_t>(ranks_));
   std::vector<int> newOwner(n, rank_);
   for (std::size_t i = 0; i < n; ++i) {
-    if (!owned_[i]) continue;
+    if (world_.isGhost(i)) continue;
     newOwner[i] = decomposition_.owner(p.position[i]);
     const double r = reach(i);
     for (int q = 0; q < ranks_; ++q) {
@@ -268,19 +262,22 @@ void DistributedWorld<D>::exchange() {
   }
   const std::vector<std::vector<char>> in = allToAll(comm_, out);
 
-  // Particles this rank gave away stay as ghosts when in reach.
+  // What stays: our own particles, and those just given away while in reach
+  // of our subdomain (as ghosts); the other ghosts stay if refreshed below.
+  std::vector<std::uint8_t> keep(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
-    if (owned_[i] && newOwner[i] != rank_) owned_[i] = 0;
+    if (world_.isGhost(i)) continue;
+    if (newOwner[i] == rank_) {
+      keep[i] = 1;
+    } else {
+      world_.setGhost(i, true);
+      keep[i] = decomposition_.distance(p.position[i], rank_) < reach(i);
+    }
   }
-  // Local index by id; what was refreshed this exchange.
+  // Local index by id.
   std::unordered_map<ParticleId, std::size_t> local;
   local.reserve(n);
   for (std::size_t i = 0; i < n; ++i) local.emplace(p.id[i], i);
-  std::vector<std::uint8_t> keep(n, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    // Still ours, or just given away but in reach of our subdomain.
-    keep[i] = owned_[i] || (newOwner[i] != rank_ && decomposition_.distance(p.position[i], rank_) < reach(i));
-  }
   struct Adopted {
     ParticleId id;
     typename dynamics::ContactSolver<D>::ParticleHistory history;
@@ -327,7 +324,7 @@ void DistributedWorld<D>::exchange() {
       if (it != local.end()) {
         world_.setMotion(it->second, def.position, def.orientation, def.velocity, def.angularVelocity);
         keep[it->second] = 1;
-        owned_[it->second] = owner == rank_;
+        world_.setGhost(it->second, owner != rank_);
       } else {
         const auto shape = shapes_.find(h);
         if (shape == shapes_.end()) {
@@ -335,8 +332,7 @@ void DistributedWorld<D>::exchange() {
                                    " from rank " + std::to_string(q) + " has a shape this rank never received");
         }
         def.shape = shape->second;
-        world_.addParticle(def);
-        owned_.push_back(owner == rank_);
+        world_.setGhost(world_.addParticle(def), owner != rank_);
         keep.push_back(1);
       }
     }
@@ -346,8 +342,6 @@ void DistributedWorld<D>::exchange() {
   for (std::size_t i = keep.size(); i-- > 0;) {
     if (!keep[i]) {
       world_.detachParticle(i);
-      owned_[i] = owned_.back();
-      owned_.pop_back();
       keep[i] = keep.back();
       keep.pop_back();
     }
@@ -361,7 +355,7 @@ void DistributedWorld<D>::rebalance() {
   const dynamics::Particles<D>& p = world_.particles();
   double weight = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (owned_[i]) weight += double(std::max<std::size_t>(1, p.shape[i]->nodes().size()));
+    if (!world_.isGhost(i)) weight += double(std::max<std::size_t>(1, p.shape[i]->nodes().size()));
   }
   double largest = weight, total = weight;
   check(MPI_Allreduce(MPI_IN_PLACE, &largest, 1, MPI_DOUBLE, MPI_MAX, comm_), "Allreduce");
@@ -370,7 +364,7 @@ void DistributedWorld<D>::rebalance() {
   // Every rank gets every owned centroid and weight, in rank order, and builds the same tree.
   std::vector<double> mine;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (!owned_[i]) continue;
+    if (world_.isGhost(i)) continue;
     for (int a = 0; a < D; ++a) mine.push_back(p.position[i][a]);
     mine.push_back(double(std::max<std::size_t>(1, p.shape[i]->nodes().size())));
   }
@@ -413,7 +407,7 @@ dynamics::BoundaryLoads<D> DistributedWorld<D>::boundaryLoads() const {
   std::size_t k = particlePairs;
   for (; k < records.size(); ++k) {
     const auto& rec = records[k];
-    if (!owned_[rec.a]) continue;
+    if (world_.isGhost(rec.a)) continue;
     if (k < particlePairs + world_.contacts().planeContacts().size()) {
       own.planeForce[rec.b] -= rec.force;
       own.planeTorque[rec.b] += rec.torqueB;
@@ -465,7 +459,7 @@ std::vector<typename DistributedWorld<D>::ParticleState> DistributedWorld<D>::ga
   const dynamics::Particles<D>& p = world_.particles();
   StateWriter w;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (!owned_[i]) continue;
+    if (world_.isGhost(i)) continue;
     w.put(p.id[i]);
     w.put(p.position[i]);
     w.put(p.orientation[i]);

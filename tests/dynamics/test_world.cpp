@@ -494,3 +494,55 @@ TEST(World, TimeStepCountsWallMaterialsAndNamesItsLimit) {
   EXPECT_NEAR(hardLimit.stiffness / softLimit.stiffness, 2.0, 1e-12);
   EXPECT_NEAR(hard, soft / std::sqrt(2.0), 1e-12 * soft);
 }
+
+// Ghosts (a distributed run's mirrors): a pair of two ghosts is not
+// computed, a pair with one ghost is, and the flags follow the particles
+// through removals; a world without ghosts keeps none.
+TEST(World, PairsOfTwoGhostsAreNotComputed) {
+  WorldDef<2> def;
+  def.contact.kn = 1e5;
+  def.contact.hasFriction = false;
+  World<2> w(def);
+  const auto s = test::sphereShape<2>(0.05);
+  for (int k = 0; k < 3; ++k) {
+    ParticleDef<2> p;
+    p.shape = s;
+    p.position = Vec<2>(0.098 * k, 0.0);  // each touches the next
+    w.addParticle(p);
+  }
+  EXPECT_FALSE(w.isGhost(0));
+  w.refreshContacts();
+  ASSERT_EQ(w.contacts().particleContacts().size(), 2u);
+  const auto touching = [&] {
+    int n = 0;
+    for (const auto& c : w.contacts().particleContacts()) n += c.nodeCount > 0;
+    return n;
+  };
+  EXPECT_EQ(touching(), 2);
+  w.setGhost(0, true);
+  w.setGhost(1, true);
+  EXPECT_FALSE(w.contactsCurrent());
+  w.refreshContacts();
+  // (0, 1) is left out; (1, 2) has one ghost and stays.
+  ASSERT_EQ(w.contacts().particleContacts().size(), 1u);
+  EXPECT_EQ(touching(), 1);
+  EXPECT_EQ(w.particles().id[w.contacts().particleContacts()[0].b], 2u);
+  // Detaching particle 0 moves particle 2 into its place, with its flag.
+  w.detachParticle(0);
+  ASSERT_EQ(w.particles().size(), 2u);
+  EXPECT_FALSE(w.isGhost(0));  // particle 2, not a ghost
+  EXPECT_TRUE(w.isGhost(1));
+  EXPECT_TRUE(w.removed().empty());  // detached, not removed
+  // A given id and mass are kept as given.
+  ParticleDef<2> p;
+  p.shape = s;
+  p.id = 17;
+  p.mass = 1.25;
+  p.inertia = 0.5;
+  p.position = Vec<2>(1.0, 0.0);
+  const std::size_t i = w.addParticle(p);
+  EXPECT_EQ(w.particles().id[i], 17u);
+  EXPECT_EQ(w.particles().mass[i], 1.25);
+  EXPECT_EQ(w.particles().inertia[i], 0.5);
+  EXPECT_FALSE(w.isGhost(i));
+}

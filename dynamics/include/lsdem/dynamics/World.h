@@ -230,6 +230,14 @@ class World {
     contacts_.adoptHistory(id, history);
     forcesValid_ = false;
   }
+  /// @brief Marks particle `index` as a ghost (or not): a mirror of a
+  /// particle another rank of a distributed run owns and moves. Pairs of two
+  /// ghosts are not computed (no force they give acts on a particle this
+  /// world owns); everything else treats ghosts like the other particles.
+  /// A world without ghosts keeps no flags and pays nothing.
+  void setGhost(std::size_t index, bool ghost);
+  /// @brief Whether particle `index` is a ghost (setGhost).
+  bool isGhost(std::size_t index) const { return !ghost_.empty() && ghost_[index] != 0; }
   /// @brief Sets the pose and velocities of particle `index` (a distributed
   /// run: a mirror of a particle another rank moves). The contacts are then
   /// stale until the next force evaluation.
@@ -435,6 +443,10 @@ class World {
 
   // Scratch for the broad phase.
   std::vector<double> radii_;
+  // Ghost flags (setGhost), aligned with particles_; empty: no ghosts.
+  std::vector<std::uint8_t> ghost_;
+  // The candidate pairs without those of two ghosts (only with ghosts).
+  std::vector<std::array<std::uint32_t, 2>> pairsWithoutGhostPairs_;
 
   double time_ = 0.0;
   std::uint64_t steps_ = 0;

@@ -18,7 +18,7 @@
 ///
 /// A pair with a ghost is computed on both ranks; each keeps the force on
 /// its own particle (the pair law is symmetric in its inputs, so both get
-/// the same numbers). The force on an owned particle is then the sum of the
+/// the same numbers). Pairs of two ghosts are not computed (World::setGhost). The force on an owned particle is then the sum of the
 /// same pair forces in the same order as in one world (the broad phase sorts
 /// pairs by global id), so a distributed run equals the serial one bit for
 /// bit. Ghosts are moved by their owners: what the local integrator does to
@@ -98,7 +98,7 @@ class DistributedWorld {
   /// @brief This rank's world: its own particles and its ghosts.
   const dynamics::World<D>& world() const { return world_; }
   /// @brief Whether local particle `index` is this rank's own (else a ghost).
-  bool owned(std::size_t index) const { return owned_.at(index) != 0; }
+  bool owned(std::size_t index) const { return !world_.isGhost(index); }
   /// @brief Particles this rank owns.
   std::size_t ownedCount() const;
   /// @brief Particles of the whole run (collective).
@@ -118,14 +118,12 @@ class DistributedWorld {
   void checkSameWorldEverywhere() const;
   std::uint64_t shapeHash(const std::shared_ptr<const geometry::Shape<D>>& shape);
   double reach(std::size_t index) const;
-  void dropLocal(std::size_t index);
 
   MPI_Comm comm_;
   dynamics::World<D>& world_;
   DistributedDef def_;
   int rank_ = 0, ranks_ = 1;
   Decomposition<D> decomposition_;
-  std::vector<std::uint8_t> owned_;  // aligned with world_.particles()
   double largestRadius_ = 0.0;       // r_max
   double skin_ = 0.0;
   // Shapes by content hash, and the hash of each shape this rank holds.
