@@ -629,7 +629,10 @@ void pullInsideParent(NodeSet<D>& nodes, const Grid<D>& fineGrid, const Grid<D>&
 /// `pieceGrid` onto the level it had in the parent. A cut's node goes to
 /// level 0. A parent's node goes to the value `levelInterpolant` of
 /// `parentGrid` had at it, less the piece's surface shift there
-/// (matchEnclosedVolume lowers the piece's grid by `shift`): the offset of a
+/// (matchEnclosedVolume lowers the piece's grid by `shift`), both times the
+/// shift's weight, which is 0 within a cell diagonal of the cut (there a
+/// node keeping its offset would come round the rim, past the cut, into its
+/// sibling) and near other bodies: the offset of a
 /// node on the parent's true surface from its interpolated zero set
 /// (~h^2 / (8 R) with the multilinear one, ~0 for the grid's own nodes) is
 /// kept, so that away from the cut, where the piece's surface is the
@@ -656,9 +659,14 @@ NodeSet<D> nodesOnPiece(NodeSet<D> nodes, const std::vector<char>& fromParent, c
   starts.clear();
   std::size_t keptCount = 0;
   for (std::size_t n = 0; n < nodes.size(); ++n) {
+    // The offset and the shift both fade to 0 by the cut (SurfaceShift::
+    // weight): there a node with its offset would come round the rim onto
+    // the sibling's side, inside it.
     const Vec<D>& start = nodes.positions[n];
     const double level =
-        fromParent[n] ? geometry::interpolantValue(parentGrid, start, levelInterpolant) - shift.at(start) : 0.0;
+        fromParent[n]
+            ? (geometry::interpolantValue(parentGrid, start, levelInterpolant) - shift.delta) * shift.weight(start)
+            : 0.0;
     const Vec<D> x = geometry::projectOntoLevel(pieceGrid, nodes.positions[n], level, interpolant, 1e-4, 10);
     if (!(std::abs(geometry::interpolantValue(pieceGrid, x, interpolant) - level) <= 1e-3 * h)) continue;
     starts.push_back(nodes.positions[n]);

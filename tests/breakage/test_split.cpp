@@ -786,8 +786,8 @@ namespace {
 
 // How far a split's fragment nodes lie from the fragment's true surface
 // (the sphere their parent's nodes were on, cut by the plane: the distance
-// max(|x| - R, -+psi)), mean over the nodes more than two cells from the
-// cut and over those within two cells (the rim and the cut face); and how
+// max(|x| - R, -+psi)), mean over the nodes more than three cells from the
+// cut and over those within three cells (the rim and the cut face); and how
 // deep a node of one fragment sits in the other's level set as each
 // interpolant reads it (the siblings' contact at birth), world units.
 struct ExactSplit {
@@ -825,7 +825,7 @@ ExactSplit splitExactSphere(lsdem::geometry::GridInterpolant interpolant, double
       const Vec<D> xBody = parent->bodyToGrid().applyInverse(xGrid);
       const double psi = cut.plane->normal.dot(xBody) - cut.plane->offset;
       const double gap = std::abs(std::max(xGrid.norm() - def.radius, fragment.side < 0 ? psi : -psi));
-      if (std::abs(psi) > 2.0 * h) {
+      if (std::abs(psi) > 3.0 * h) {
         out.far += gap;
         ++out.farCount;
       } else {
@@ -847,22 +847,22 @@ ExactSplit splitExactSphere(lsdem::geometry::GridInterpolant interpolant, double
 // Fragments of a grain with its nodes on the exact sphere (10 cells across)
 // keep them there: a parent's node goes to the level it had in the parent's
 // interpolant, less the piece's surface shift (matchEnclosedVolume moves the
-// grid's zero set, not the parent's nodes), so away from the cut it does not
-// move, and at the rim it keeps its offset. A re-gridded piece's nodes are
-// projected with the contact's interpolant (SplitOptions::nodeInterpolant);
-// a piece on its parent's grid uses the multilinear one whatever the
-// contact's (the Catmull-Rom interpolant of the cut's kink bulges out at the
-// rim: nodes put on it sat twice as deep in their sibling, 1.5e-2 against
-// 7.6e-3 m in 3D as the tricubic contact reads it). Measured, mean distance
-// to the fragment's true surface (m), before (every node projected onto the
-// piece's multilinear zero set) -> after:
-//   parent's grid, surface as cut: 3D away 3.3e-3 -> 3e-13, rim 5.5e-3 -> 3.4e-3;
-//     2D 1.6e-3 -> 1e-13, 1.9e-3 -> 1.2e-3;
-//   parent's grid, volume matched (the default): 3D 8.8e-3 -> 5.2e-4,
-//     5.2e-3 -> 3.7e-3; 2D 5.7e-3 -> 1.5e-4, 1.7e-3 -> 1.3e-3;
-//   re-gridded, volume matched: 3D 1.3e-3 -> 1.4e-4 (multilinear) / 1.2e-4
-//     (Catmull-Rom), rim 1.1e-3 -> 1.4e-4 / 8.0e-5; 2D 7.5e-4 -> 3.0e-4 /
-//     3.2e-4, 4.1e-4 -> 3.0e-4 / 2.8e-4.
+// grid's zero set, not the parent's nodes), both faded to 0 within a cell
+// diagonal of the cut (a node keeping its offset there would come round the
+// rim into its sibling), so more than three cells from the cut it does not
+// move. A re-gridded piece's nodes are projected with the contact's
+// interpolant (SplitOptions::nodeInterpolant); a piece on its parent's grid
+// uses the multilinear one whatever the contact's (the Catmull-Rom
+// interpolant of the cut's kink bulges out at the rim: nodes put on it sat
+// twice as deep in their sibling, 1.5e-2 against 7.6e-3 m in 3D as the
+// tricubic contact reads it). Measured, mean distance to the fragment's true
+// surface (m) more than / within three cells of the cut, before (every node
+// projected onto the piece's multilinear zero set) -> after:
+//   parent's grid, surface as cut: 3D 3.3e-3 -> 4e-13, 5.0e-3 -> 4.5e-3;
+//   parent's grid, volume matched (the default): 3D 9.7e-3 -> 1.5e-4,
+//     5.6e-3 -> 4.5e-3; 2D 5.8e-3 -> 1e-13, 2.1e-3 -> 1.6e-3;
+//   re-gridded, volume matched: 3D 1.4e-3 -> 1.2e-4 (multilinear) / 1.1e-4
+//     (Catmull-Rom), 1.1e-3 -> 5.0e-4 / 3.8e-4.
 // No node starts inside its sibling as the multilinear contact reads it.
 template <int D>
 void checkFragmentsKeepExactNodes() {
@@ -872,14 +872,14 @@ void checkFragmentsKeepExactNodes() {
     // On the parent's grid.
     const ExactSplit onParent = splitExactSphere<D>(GridInterpolant::Multilinear, 0.0, matchVolume);
     std::printf("%dD exact sphere split on the parent's grid%s: mean distance to the true surface %.3e (%zu nodes "
-                "more than 2 cells from the cut), %.3e (%zu within 2 cells); deepest node in its sibling %.3e "
+                "more than 3 cells from the cut), %.3e (%zu within 3 cells); deepest node in its sibling %.3e "
                 "(multilinear), %.3e (Catmull-Rom)\n",
                 D, matchVolume ? ", volume matched" : "", onParent.far, onParent.farCount, onParent.near,
                 onParent.nearCount, onParent.depthMultilinear, onParent.depthCubic);
     EXPECT_GT(onParent.farCount, 10u);
     EXPECT_GT(onParent.nearCount, 10u);
     EXPECT_LT(onParent.far, matchVolume ? 1e-2 * h : 1e-9 * h);
-    EXPECT_LT(onParent.near, 0.05 * h);
+    EXPECT_LT(onParent.near, 0.06 * h);
     EXPECT_LT(onParent.depthMultilinear, 1e-6 * h);
     // The contact's interpolant does not change a piece on its parent's grid.
     const ExactSplit cubicOnParent = splitExactSphere<D>(GridInterpolant::CatmullRom, 0.0, matchVolume);
@@ -890,7 +890,7 @@ void checkFragmentsKeepExactNodes() {
     const ExactSplit linear = splitExactSphere<D>(GridInterpolant::Multilinear, 40.0, matchVolume);
     const ExactSplit cubic = splitExactSphere<D>(GridInterpolant::CatmullRom, 40.0, matchVolume);
     std::printf("%dD exact sphere split re-gridded%s: mean distance to the true surface %.3e / %.3e (multilinear / "
-                "Catmull-Rom nodes, more than 2 cells from the cut), %.3e / %.3e (within 2 cells); deepest node in its "
+                "Catmull-Rom nodes, more than 3 cells from the cut), %.3e / %.3e (within 3 cells); deepest node in its "
                 "sibling %.3e / %.3e\n",
                 D, matchVolume ? ", volume matched" : "", linear.far, cubic.far, linear.near, cubic.near,
                 linear.depthMultilinear, cubic.depthCubic);
