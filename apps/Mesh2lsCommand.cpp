@@ -1,8 +1,9 @@
 /// @file Mesh2lsCommand.cpp
 /// @brief `lsdem mesh2ls MESH --spacing H [--scale S] [--nodes-per-cell N]
-/// [--binary] -o OUT.lsg [--json]`: turns a closed CAD mesh (STL/OBJ/PLY) into a
-/// level-set grain file (docs/grains.md) and prints the grain's volume,
-/// centroid and node count.
+/// [--nodes-on exact_surface|grid] [--binary] -o OUT.lsg [--json]`: turns a
+/// closed CAD mesh (STL/OBJ/PLY) into a level-set grain file (docs/grains.md),
+/// its surface nodes on the mesh's triangles (or on the grid's zero set), and
+/// prints the grain's volume, centroid and node count.
 
 #include "Commands.h"
 
@@ -10,6 +11,7 @@
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/MeshToLevelSet.h"
 #include "lsdem/geometry/Shape.h"
+#include "lsdem/geometry/SurfaceNodes.h"
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/JsonWriter.h"
@@ -31,6 +33,7 @@ struct Mesh2lsOptions {
   double spacing = 0.0;
   double scale = 1.0;
   double nodesPerCell = 2.0;
+  std::string nodesOn = "exact_surface";
   bool binary = false;
   bool json = false;
 };
@@ -49,6 +52,9 @@ void run(const Mesh2lsOptions& o) {
   requirePositive("--spacing", o.spacing);
   requirePositive("--scale", o.scale);
   requirePositive("--nodes-per-cell", o.nodesPerCell);
+  if (o.nodesOn != "exact_surface" && o.nodesOn != "grid") {
+    throw io::InputError("--nodes-on", 0, "", "must be exact_surface or grid, got '" + o.nodesOn + "'");
+  }
   std::error_code ec;
   if (!std::filesystem::is_regular_file(o.mesh, ec)) throw io::InputError(o.mesh, 0, "", "no such mesh file");
 
@@ -81,7 +87,15 @@ void run(const Mesh2lsOptions& o) {
   options.nodesPerCell = o.nodesPerCell;
   std::shared_ptr<const geometry::Shape<3>> shape;
   try {
-    shape = geometry::Shape<3>::fromGrid(std::move(grid), options);
+    // Nodes made on the grid's zero set, then moved on to the triangles.
+    if (o.nodesOn == "grid") {
+      shape = geometry::Shape<3>::fromGrid(std::move(grid), options);
+    } else {
+      geometry::NodeSet<3> nodes = geometry::surfaceNodes(grid, o.nodesPerCell, nullptr,
+                                                          geometry::meshSurfaceProjector(mesh, o.spacing));
+      if (nodes.empty()) throw std::invalid_argument("the level set has no surface to place nodes on");
+      shape = geometry::Shape<3>::fromGridAndNodes(std::move(grid), std::move(nodes), options);
+    }
   } catch (const std::invalid_argument& e) {
     throw io::InputError(o.mesh, 0, "", std::string("no grain at this --spacing: ") + e.what());
   }
@@ -125,6 +139,8 @@ void addMesh2lsCommand(CLI::App& app) {
   cmd->add_option("--spacing", opts->spacing, "grid spacing, metres (after --scale)")->required();
   cmd->add_option("--scale", opts->scale, "factor from mesh units to metres (default 1; 0.001 for millimetres)");
   cmd->add_option("--nodes-per-cell", opts->nodesPerCell, "surface nodes per grid-cell length (default 2)");
+  cmd->add_option("--nodes-on", opts->nodesOn,
+                  "exact_surface (default: nodes on the mesh's triangles) or grid (on the level set's zero set)");
   cmd->add_flag("--binary", opts->binary, "write the binary grain form instead of text");
   cmd->add_option("-o,--output", opts->output, "grain file to write (.lsg)")->required();
   cmd->add_flag("--json", opts->json, "Print JSON instead of text");

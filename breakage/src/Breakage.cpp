@@ -299,6 +299,12 @@ void Breakage<D>::applyQueue(World<D>& world) {
   springs_.clear();
   if (world.contactsCurrent()) springsPerParticle(world);
 
+  // Fragments' nodes go on their surfaces as the scene's contact reads them.
+  SplitOptions splitOptions = def_.split;
+  splitOptions.nodeInterpolant = world.def().contact.interpolation == dynamics::LevelSetInterpolation::Tricubic
+                                     ? geometry::GridInterpolant::CatmullRom
+                                     : geometry::GridInterpolant::Multilinear;
+
   // Split every queued parent while the store's indices are unchanged.
   for (const Pending& q : queue_) {
     const std::size_t i = q.index;
@@ -319,7 +325,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
         def_.split.matchEnclosedVolume ? clearanceAround(world, i) : geometry::SignedDistance<D>{};
     SplitResult<D> split;
     try {
-      split = splitShape(shape, surface, def_.split, clearance);
+      split = splitShape(shape, surface, splitOptions, clearance);
     } catch (const std::exception& e) {
       // A manual break is logged and skipped; a failure the criterion found is a bug worth stopping for.
       if (!q.manual) throw;
@@ -341,7 +347,7 @@ void Breakage<D>::applyQueue(World<D>& world) {
       // The plane through the contacts grazes the grain (one side holds no
       // interior grid node): the same orientation through the centroid.
       surface.plane->offset = 0.0;
-      split = splitShape(shape, surface, def_.split, clearance);
+      split = splitShape(shape, surface, splitOptions, clearance);
       if (!split.isSplit) {
         // No cut resolves at this grid: the grain stays whole from now on
         // rather than being retried every step.

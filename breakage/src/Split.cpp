@@ -36,6 +36,9 @@ struct Side {
   int sign = 0;                    ///< -1: phi_f < 0 (eq. 15), +1: phi_f > 0 (eq. 14)
   std::vector<Grid<D>> pieces;     ///< cropped grids, parent grid frame
   std::vector<NodeSet<D>> nodes;   ///< per piece, parent grid frame
+  /// Per piece, per node: 1 for a node of the parent's surface, 0 for one of
+  /// the cut (nodesOnPiece keeps a parent node's offset from the interpolant).
+  std::vector<std::vector<char>> fromParent;
 };
 
 /// Distance from x to a grid's node box (0 inside). A padded piece's grid is
@@ -597,14 +600,19 @@ SurfaceShift<D> matchEnclosedVolume(Grid<D>& grid, const SurfaceShift<D>& unshif
 /// whatever the parent touched (or its sibling). Each such node is moved in
 /// along the new grid's normal until it is within 1e-4 parent cells of the
 /// parent's surface moved by `shift` (at most a few hundredths of a cell).
+/// `starts` (nodesOnPiece; null for nodes made afresh): a parent's node on
+/// its true surface lies outside the parent's multilinear zero set by up to
+/// ~h^2 / (8 R) where the parent was there too: that much is allowed.
 template <int D>
 void pullInsideParent(NodeSet<D>& nodes, const Grid<D>& fineGrid, const Grid<D>& parentGrid,
                       const geometry::SignedDistance<D>& psi, const Side<D>& side, std::size_t piece,
-                      const SurfaceShift<D>& shift) {
+                      const SurfaceShift<D>& shift, const std::vector<Vec<D>>* starts) {
   const double tolerance = 1e-4 * parentGrid.spacing();
-  for (Vec<D>& x : nodes.positions) {
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    Vec<D>& x = nodes.positions[n];
+    const double allowed = starts ? std::max(0.0, parentGrid.value((*starts)[n])) : 0.0;
     for (int iteration = 0; iteration < 8; ++iteration) {
-      const double outside = pieceLevelSet(parentGrid, psi, side, piece, x) - shift.at(x);
+      const double outside = pieceLevelSet(parentGrid, psi, side, piece, x) - shift.at(x) - allowed;
       if (!(outside > tolerance)) break;
       Vec<D> grad;
       fineGrid.valueAndGradient(x, grad);
@@ -616,10 +624,24 @@ void pullInsideParent(NodeSet<D>& nodes, const Grid<D>& fineGrid, const Grid<D>&
 }
 
 /// The parent's nodes (and a flat cut's) given to a piece, on the piece's
-/// own surface: each projected onto the zero set of `pieceGrid` (the
-/// multilinear interpolant rounds the max() kink of eq. 14-15 at the new rim
-/// by up to ~h/4, a re-gridded piece's finer grid less, and the surface may
-/// have been moved out, matchEnclosedVolume). A node the projection could not
+/// own surface as the contact sees it: each projected with `interpolant`
+/// (the scene's contact look-up, SplitOptions::nodeInterpolant) of
+/// `pieceGrid` onto the level it had in the parent. A cut's node goes to
+/// level 0. A parent's node goes to the value `levelInterpolant` of
+/// `parentGrid` had at it, less the piece's surface shift there
+/// (matchEnclosedVolume lowers the piece's grid by `shift`), both times the
+/// shift's weight, which is 0 within a cell diagonal of the cut (there a
+/// node keeping its offset would come round the rim, past the cut, into its
+/// sibling) and near other bodies: the offset of a
+/// node on the parent's true surface from its interpolated zero set
+/// (~h^2 / (8 R) with the multilinear one, ~0 for the grid's own nodes) is
+/// kept, so that away from the cut, where the piece's surface is the
+/// parent's, the node stays where it was, and near it (the multilinear
+/// interpolant rounds the max() kink of eq. 14-15 at the new rim by up to
+/// ~h/4, a re-gridded piece's finer grid less) it moves onto the piece's
+/// surface with its offset. The shift moves the grid's zero set, whose
+/// enclosed volume it matches to the piece's mass, not the parent's nodes:
+/// they were on the parent's surface. A node the projection could not
 /// bring to the surface (a parent node several cells from the piece it was
 /// given to, left up to a cell outside it and outside the parent; or one
 /// beside a sliver whose grid values stay just above zero, left 0.008 cells
@@ -630,13 +652,23 @@ void pullInsideParent(NodeSet<D>& nodes, const Grid<D>& fineGrid, const Grid<D>&
 /// `starts` gets, per node kept, the point it was projected from (the
 /// parent's node, or the cut's), for movedNodes().
 template <int D>
-NodeSet<D> nodesOnPiece(NodeSet<D> nodes, const Grid<D>& pieceGrid, double h, double nodesPerCell,
+NodeSet<D> nodesOnPiece(NodeSet<D> nodes, const std::vector<char>& fromParent, const Grid<D>& pieceGrid,
+                        geometry::GridInterpolant interpolant, const SurfaceShift<D>& shift, const Grid<D>& parentGrid,
+                        geometry::GridInterpolant levelInterpolant, double h, double nodesPerCell,
                         std::vector<Vec<D>>& starts) {
   starts.clear();
   std::size_t keptCount = 0;
   for (std::size_t n = 0; n < nodes.size(); ++n) {
-    const Vec<D> x = geometry::projectOntoZero(pieceGrid, nodes.positions[n], 1e-4, 10);
-    if (!(std::abs(pieceGrid.value(x)) <= 1e-3 * h)) continue;
+    // The offset and the shift both fade to 0 by the cut (SurfaceShift::
+    // weight): there a node with its offset would come round the rim onto
+    // the sibling's side, inside it.
+    const Vec<D>& start = nodes.positions[n];
+    const double level =
+        fromParent[n]
+            ? (geometry::interpolantValue(parentGrid, start, levelInterpolant) - shift.delta) * shift.weight(start)
+            : 0.0;
+    const Vec<D> x = geometry::projectOntoLevel(pieceGrid, nodes.positions[n], level, interpolant, 1e-4, 10);
+    if (!(std::abs(geometry::interpolantValue(pieceGrid, x, interpolant) - level) <= 1e-3 * h)) continue;
     starts.push_back(nodes.positions[n]);
     nodes.positions[keptCount] = x;
     nodes.weights[keptCount] = nodes.weights[n];
@@ -672,15 +704,23 @@ std::vector<Vec<D>> movedNodes(const NodeSet<D>& nodes, const std::vector<Vec<D>
 }
 
 /// Surface nodes of a grid at `nodesPerCell`, raised until there are at least
-/// `minNodes` (a fragment is never a handful of nodes); empty when the grid has no surface.
+/// `minNodes` (a fragment is never a handful of nodes); empty when the grid
+/// has no surface. With the Catmull-Rom `interpolant` (the contact's) they
+/// are moved on from the multilinear zero set to its.
 template <int D>
-NodeSet<D> nodesWithFloor(const Grid<D>& grid, double nodesPerCell, int minNodes) {
+NodeSet<D> nodesWithFloor(const Grid<D>& grid, double nodesPerCell, int minNodes, geometry::GridInterpolant interpolant) {
+  geometry::SurfaceProjector<D> onSurface;
+  if (interpolant == geometry::GridInterpolant::CatmullRom) {
+    onSurface = [&grid](const Vec<D>& x) {
+      return geometry::projectOntoLevel(grid, x, 0.0, geometry::GridInterpolant::CatmullRom);
+    };
+  }
   NodeSet<D> nodes;
   for (int attempt = 0; attempt < 4; ++attempt) {
     if constexpr (D == 2) {
-      nodes = geometry::surfaceNodes(grid, nodesPerCell);
+      nodes = geometry::surfaceNodes(grid, nodesPerCell, onSurface);
     } else {
-      nodes = geometry::surfaceNodes(grid, nodesPerCell, nullptr);
+      nodes = geometry::surfaceNodes(grid, nodesPerCell, nullptr, onSurface);
     }
     if (nodes.empty() || nodes.size() >= std::size_t(minNodes)) break;
     // Node counts grow like density^(D-1): raise it by the shortfall.
@@ -776,7 +816,10 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
 
   // A surface that leaves one side without interior does not split the grain.
   if (sides[0].pieces.empty() || sides[1].pieces.empty()) return result;
-  for (Side<D>& side : sides) side.nodes.resize(side.pieces.size());
+  for (Side<D>& side : sides) {
+    side.nodes.resize(side.pieces.size());
+    side.fromParent.resize(side.pieces.size());
+  }
 
   // Nodes of a flat cut: the parent's by the sign of phi_f, then the new plane
   // nodes on both sides, each to the piece whose grid is smallest at it.
@@ -785,17 +828,19 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
     for (std::size_t i = 0; i < parentNodes.size(); ++i) {
       const Vec<D> x = bodyToGrid.apply(parentNodes.positions[i]);
       Side<D>& side = sides[planeGrid->distance(x) < 0.0 ? 0 : 1];
-      NodeSet<D>& target = side.nodes[owningPiece(side.pieces, x)];
-      target.positions.push_back(x);
-      target.weights.push_back(parentNodes.weights[i]);
+      const std::size_t piece = owningPiece(side.pieces, x);
+      side.nodes[piece].positions.push_back(x);
+      side.nodes[piece].weights.push_back(parentNodes.weights[i]);
+      side.fromParent[piece].push_back(1);
     }
     const NodeSet<D> onPlane =
         planeNodes(grid, *planeGrid, bodyToGrid.translation, parent.boundingRadius(), h / nodesPerCell);
     for (Side<D>& side : sides) {
       for (std::size_t i = 0; i < onPlane.size(); ++i) {
-        NodeSet<D>& target = side.nodes[owningPiece(side.pieces, onPlane.positions[i])];
-        target.positions.push_back(onPlane.positions[i]);
-        target.weights.push_back(onPlane.weights[i]);
+        const std::size_t piece = owningPiece(side.pieces, onPlane.positions[i]);
+        side.nodes[piece].positions.push_back(onPlane.positions[i]);
+        side.nodes[piece].weights.push_back(onPlane.weights[i]);
+        side.fromParent[piece].push_back(0);
       }
     }
   }
@@ -875,11 +920,14 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
           NodeSet<D> nodes;
           bool ownNodes = false;
           if (options.regridKeepsNodeSpacing && planeGrid) {
-            nodes = nodesOnPiece(std::move(side.nodes[k]), refined, h, nodesPerCell, piece.starts);
+            // The refined grid samples the parent's multilinear field: a
+            // node keeps its offset from that.
+            nodes = nodesOnPiece(std::move(side.nodes[k]), side.fromParent[k], refined, options.nodeInterpolant, shift,
+                                 grid, geometry::GridInterpolant::Multilinear, h, nodesPerCell, piece.starts);
             ownNodes = nodes.size() >= std::size_t(options.minFragmentNodes);
           }
-          if (!ownNodes) nodes = nodesWithFloor(refined, density, options.minFragmentNodes);
-          pullInsideParent(nodes, refined, grid, psi, side, k, shift);
+          if (!ownNodes) nodes = nodesWithFloor(refined, density, options.minFragmentNodes, options.nodeInterpolant);
+          pullInsideParent(nodes, refined, grid, psi, side, k, shift, ownNodes ? &piece.starts : nullptr);
           if (!nodes.empty()) {
             piece.grid = std::move(refined);
             piece.nodes = std::move(nodes);
@@ -898,10 +946,12 @@ SplitResult<D> splitShape(const Shape<D>& parent, const FractureSurface<D>& surf
       if (!piece.regridded) {
         // A copy: a later piece of this side may be re-gridded beside it.
         piece.grid = side.pieces[k];
-        matchSurface(piece.grid);
-        NodeSet<D> nodes = nodesOnPiece(std::move(side.nodes[k]), piece.grid, h, nodesPerCell, piece.starts);
+        const SurfaceShift<D> shift = matchSurface(piece.grid);
+        NodeSet<D> nodes = nodesOnPiece(std::move(side.nodes[k]), side.fromParent[k], piece.grid,
+                                        geometry::GridInterpolant::Multilinear, shift, grid,
+                                        geometry::GridInterpolant::Multilinear, h, nodesPerCell, piece.starts);
         if (nodes.empty()) {
-          nodes = nodesWithFloor(piece.grid, nodesPerCell, 1);
+          nodes = nodesWithFloor(piece.grid, nodesPerCell, 1, geometry::GridInterpolant::Multilinear);
           piece.freshNodes = true;
         }
         piece.nodes = std::move(nodes);

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -257,6 +258,35 @@ Grid<3> meshToLevelSet(const TriangleMesh& mesh, double spacing, int paddingCell
     }
   }
   return grid;
+}
+
+namespace {
+
+// A mesh and its distance tree, built once and only read by the queries
+// (the tree keeps pointers into the mesh: the two never move apart).
+struct MeshDistanceTree {
+  explicit MeshDistanceTree(const TriangleMesh& mesh)
+      : surface(cgal::toSurfaceMesh(mesh)), tree(faces(surface).first, faces(surface).second, surface) {
+    tree.build();
+    tree.accelerate_distance_queries();
+  }
+  cgal::SurfaceMesh surface;
+  Tree tree;
+};
+
+}  // namespace
+
+SurfaceProjector<3> meshSurfaceProjector(const TriangleMesh& mesh, double spacing) {
+  if (!std::isfinite(spacing) || !(spacing > 0.0)) {
+    throw std::invalid_argument("mesh surface projector: spacing must be positive and finite, got " +
+                                std::to_string(spacing));
+  }
+  const auto index = std::make_shared<const MeshDistanceTree>(mesh);
+  // The closest point of the triangles, where it is within a cell.
+  return [index, spacing](const Vec<3>& x) {
+    const Vec<3> y = cgal::toVec(index->tree.closest_point(cgal::toPoint(x)));
+    return (y - x).norm() <= spacing ? y : x;
+  };
 }
 
 }  // namespace lsdem::geometry

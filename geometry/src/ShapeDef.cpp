@@ -82,23 +82,29 @@ double resolvedSpacing(const ShapeDef<D>& def) {
   return spacingFor(def, def.cellsAcross > 0.0 ? smallestDimension(def) : 0.0);
 }
 
+namespace {
+
+// The level set of a mesh definition's mesh (read by the caller, scaled).
+Grid<3> meshGrid(const ShapeDef<3>& def, const TriangleMesh& mesh) {
+  const double smallest = mesh.bounds().size().minCoeff();
+  const double h = spacingFor(def, smallest);
+  // 2 to 1e4 cells across the smallest extent, as cells_across allows.
+  if (!(smallest / h >= 2.0 && smallest / h <= 1e4)) {
+    throw std::invalid_argument("spacing " + std::to_string(h) + " gives " + std::to_string(smallest / h) +
+                                " cells across the mesh's smallest extent " + std::to_string(smallest) +
+                                "; it must give 2 to 1e4");
+  }
+  return meshToLevelSet(mesh, h, kDefaultPaddingCells, def.meshFile);
+}
+
+}  // namespace
+
 template <int D>
 Grid<D> buildGrid(const ShapeDef<D>& def, MeshImportReport* meshReport) {
   const int pad = kDefaultPaddingCells;
   // A mesh is read once, and its extent gives the spacing.
   if constexpr (D == 3) {
-    if (def.kind == ShapeKind::Mesh) {
-      const TriangleMesh mesh = readMesh(def.meshFile, def.meshScale, meshReport);
-      const double smallest = mesh.bounds().size().minCoeff();
-      const double h = spacingFor(def, smallest);
-      // 2 to 1e4 cells across the smallest extent, as cells_across allows.
-      if (!(smallest / h >= 2.0 && smallest / h <= 1e4)) {
-        throw std::invalid_argument("spacing " + std::to_string(h) + " gives " + std::to_string(smallest / h) +
-                                    " cells across the mesh's smallest extent " + std::to_string(smallest) +
-                                    "; it must give 2 to 1e4");
-      }
-      return meshToLevelSet(mesh, h, pad, def.meshFile);
-    }
+    if (def.kind == ShapeKind::Mesh) return meshGrid(def, readMesh(def.meshFile, def.meshScale, meshReport));
   }
   const double h = resolvedSpacing(def);
   switch (def.kind) {
@@ -160,15 +166,28 @@ SurfaceFunction<D> exactSurface(const ShapeDef<D>& def) {
 
 template <int D>
 std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def, MeshImportReport* meshReport) {
-  Grid<D> grid = buildGrid(def, meshReport);
-  const SurfaceFunction<D> surface = def.exactNodes ? exactSurface(def) : SurfaceFunction<D>{};
-  if (!surface) return Shape<D>::fromGrid(std::move(grid), def.options);
-  // Nodes made on the grid's surface, then moved on to the exact one.
+  // The grid, and the true surface the nodes go on: the exact function of a
+  // primitive or random grain, the triangles of a mesh (read once for both).
+  Grid<D> grid;
+  SurfaceProjector<D> onSurface;
+  if constexpr (D == 3) {
+    if (def.kind == ShapeKind::Mesh) {
+      const TriangleMesh mesh = readMesh(def.meshFile, def.meshScale, meshReport);
+      grid = meshGrid(def, mesh);
+      if (def.exactNodes) onSurface = meshSurfaceProjector(mesh, grid.spacing());
+    }
+  }
+  if (def.kind != ShapeKind::Mesh) {
+    grid = buildGrid(def, meshReport);
+    if (def.exactNodes) onSurface = projectorOnto(exactSurface(def), grid.spacing());
+  }
+  if (!onSurface) return Shape<D>::fromGrid(std::move(grid), def.options);
+  // Nodes made on the grid's surface, then moved on to the true one.
   NodeSet<D> nodes;
   if constexpr (D == 2) {
-    nodes = surfaceNodes(grid, def.options.nodesPerCell, surface);
+    nodes = surfaceNodes(grid, def.options.nodesPerCell, onSurface);
   } else {
-    nodes = surfaceNodes(grid, def.options.nodesPerCell, nullptr, surface);
+    nodes = surfaceNodes(grid, def.options.nodesPerCell, nullptr, onSurface);
   }
   if (nodes.empty()) throw std::invalid_argument("the level set has no surface to place nodes on");
   return Shape<D>::fromGridAndNodes(std::move(grid), std::move(nodes), def.options);

@@ -30,7 +30,7 @@ void checkDensity(double nodesPerCell) {
 
 }  // namespace
 
-NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell, const SurfaceFunction<2>& exactSurface) {
+NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell, const SurfaceProjector<2>& onSurface) {
   checkDensity(nodesPerCell);
   const double target = grid.spacing() / nodesPerCell;
   NodeSet<2> nodes;
@@ -62,10 +62,8 @@ NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell, const SurfaceF
       nodes.positions.push_back(projectOntoZero(grid, x));
     }
     // Onto the true surface, where the shape has one.
-    if (exactSurface) {
-      for (std::size_t k = first; k < nodes.positions.size(); ++k) {
-        nodes.positions[k] = projectOntoSurface(exactSurface, nodes.positions[k], grid.spacing());
-      }
+    if (onSurface) {
+      for (std::size_t k = first; k < nodes.positions.size(); ++k) nodes.positions[k] = onSurface(nodes.positions[k]);
     }
 
     // Weights: half the distance to each neighbour along the contour.
@@ -80,7 +78,7 @@ NodeSet<2> surfaceNodes(const Grid<2>& grid, double nodesPerCell, const SurfaceF
 }
 
 NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* meshOut,
-                        const SurfaceFunction<3>& exactSurface) {
+                        const SurfaceProjector<3>& onSurface) {
   checkDensity(nodesPerCell);
   const double target = grid.spacing() / nodesPerCell;
   NodeSet<3> nodes;
@@ -109,7 +107,7 @@ NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* 
   for (int v = 0; v < vertexCount; ++v) {
     Vec<3>& x = mesh.vertices[std::size_t(v)];
     x = projectOntoZero(grid, x);
-    if (exactSurface) x = projectOntoSurface(exactSurface, x, grid.spacing());
+    if (onSurface) x = onSurface(x);
   }
 
   // Nodes are the vertices; each face gives a third of its area to each corner
@@ -128,10 +126,35 @@ NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* 
 }
 
 template <int D>
-Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int maxIterations) {
+double interpolantValue(const Grid<D>& grid, const Vec<D>& x, GridInterpolant interpolant, Vec<D>* grad) {
+  if (interpolant == GridInterpolant::Multilinear) {
+    if (grad) return grid.valueAndGradient(x, *grad);
+    return grid.value(x);
+  }
+  // Catmull-Rom in the node box; outside, the value at the box's closest
+  // point plus the distance to it (as Grid::value extends the multilinear one).
+  const Vec<D> g = grid.toGrid(x);
+  const Vec<D> gc = g.cwiseMax(Vec<D>::Zero()).cwiseMin((grid.dims() - 1).template cast<double>().matrix());
+  Vec<D> gradCells;
+  const double inside = grid.cubicValueAndGradientAtCells(gc, gradCells);
+  const Vec<D> offset = grid.spacing() * (g - gc);
+  const double distance = offset.norm();
+  if (grad) {
+    for (int a = 0; a < D; ++a) (*grad)[a] = g[a] != gc[a] ? offset[a] / distance : gradCells[a] / grid.spacing();
+  }
+  return inside + distance;
+}
+
+template <int D>
+Vec<D> projectOntoLevel(const Grid<D>& grid, Vec<D> x, double level, GridInterpolant interpolant,
+                        double toleranceCells, int maxIterations) {
   const double h = grid.spacing();
+  // phi here is the interpolant minus the level.
+  const auto valueAndGradient = [&](const Vec<D>& y, Vec<D>& gradient) {
+    return interpolantValue(grid, y, interpolant, &gradient) - level;
+  };
   Vec<D> grad;
-  double phi = grid.valueAndGradient(x, grad);
+  double phi = valueAndGradient(x, grad);
   for (int iteration = 0; iteration < maxIterations && std::abs(phi) > toleranceCells * h; ++iteration) {
     // Full Newton step, capped.
     const double gradSquared = grad.squaredNorm();
@@ -144,7 +167,7 @@ Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int
     for (double t = 1.0; t > 1.0 / 64.0 && !accepted; t *= 0.5) {
       Vec<D> trialGrad;
       const Vec<D> trial = x - t * step;
-      const double trialPhi = grid.valueAndGradient(trial, trialGrad);
+      const double trialPhi = valueAndGradient(trial, trialGrad);
       if (std::abs(trialPhi) < std::abs(phi)) {
         x = trial;
         phi = trialPhi;
@@ -156,7 +179,7 @@ Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int
   }
   if (std::abs(phi) <= toleranceCells * h || !std::isfinite(phi)) return x;
 
-  // Newton stalled short of the zero: at a kink of the interpolant (the max()
+  // Newton stalled short of the level: at a kink of the interpolant (the max()
   // of a level-set cut, eq. 14-15) the gradient jumps and the damped steps
   // zig-zag or stop with |phi| up to ~h/4 left. A node left there is outside
   // its own body and can be inside a neighbour (a fragment's sibling), so
@@ -182,7 +205,7 @@ Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int
       rest /= width;
     }
     if (!grid.inBounds(i)) continue;
-    const double v = grid.at(i);
+    const double v = grid.at(i) - level;  // either interpolant's value at a node
     if (!(phi > 0.0 ? v <= 0.0 : v >= 0.0)) continue;
     const Vec<D> y = grid.nodePosition(i);
     const double d = (y - x).squaredNorm();
@@ -197,7 +220,7 @@ Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int
   double closestPhi = phi;
   for (int iteration = 0; iteration < 60; ++iteration) {
     const Vec<D> m = 0.5 * (a + b);
-    const double vm = grid.value(m);
+    const double vm = interpolantValue(grid, m, interpolant) - level;
     if (std::abs(vm) < std::abs(closestPhi)) {
       closest = m;
       closestPhi = vm;
@@ -210,6 +233,11 @@ Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int
     }
   }
   return closest;
+}
+
+template <int D>
+Vec<D> projectOntoZero(const Grid<D>& grid, Vec<D> x, double toleranceCells, int maxIterations) {
+  return projectOntoLevel(grid, x, 0.0, GridInterpolant::Multilinear, toleranceCells, maxIterations);
 }
 
 template <int D>
@@ -247,8 +275,20 @@ Vec<D> projectOntoSurface(const SurfaceFunction<D>& surface, const Vec<D>& start
   return x;
 }
 
+template <int D>
+SurfaceProjector<D> projectorOnto(SurfaceFunction<D> surface, double spacing) {
+  if (!surface) return {};
+  return [surface = std::move(surface), spacing](const Vec<D>& x) { return projectOntoSurface(surface, x, spacing); };
+}
+
+template SurfaceProjector<2> projectorOnto<2>(SurfaceFunction<2>, double);
+template SurfaceProjector<3> projectorOnto<3>(SurfaceFunction<3>, double);
 template Vec<2> projectOntoSurface<2>(const SurfaceFunction<2>&, const Vec<2>&, double);
 template Vec<3> projectOntoSurface<3>(const SurfaceFunction<3>&, const Vec<3>&, double);
+template double interpolantValue<2>(const Grid<2>&, const Vec<2>&, GridInterpolant, Vec<2>*);
+template double interpolantValue<3>(const Grid<3>&, const Vec<3>&, GridInterpolant, Vec<3>*);
+template Vec<2> projectOntoLevel<2>(const Grid<2>&, Vec<2>, double, GridInterpolant, double, int);
+template Vec<3> projectOntoLevel<3>(const Grid<3>&, Vec<3>, double, GridInterpolant, double, int);
 template Vec<2> projectOntoZero<2>(const Grid<2>&, Vec<2>, double, int);
 template Vec<3> projectOntoZero<3>(const Grid<3>&, Vec<3>, double, int);
 

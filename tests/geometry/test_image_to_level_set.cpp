@@ -6,12 +6,15 @@
 #include "lsdem/geometry/ImageToLevelSet.h"
 #include "lsdem/geometry/LabelVolume.h"
 #include "lsdem/geometry/Shape.h"
+#include "lsdem/geometry/SurfaceNodes.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 using namespace lsdem::geometry;
 
@@ -166,4 +169,56 @@ TEST(ImageToLevelSet, RefusesBadOptions) {
   LabelGridOptions coarse, fine;
   fine.cellsAcross = 40.0;
   EXPECT_GT(labelLevelSetBytes(v, s, fine), labelLevelSetBytes(v, s, coarse));
+}
+
+// Nodes of a scanned sphere on the sub-voxel surface: the grid's nodes lie
+// on the multilinear zero set of the resampled distance, ~h^2 / (8 R) per
+// curved direction inside the surface the grid samples; moved on to the
+// zero set of its Catmull-Rom interpolant the mean offset goes, but the
+// voxels' roughness stays and is larger: the nodes scatter about the sphere
+// of the voxel count's volume by more than the offset, and no nearer to it.
+// Measured (grid 10 cells across, h = 0.1 m, R = 0.5 m), mean r - r_count
+// and mean |r - r_count|: 10 voxels -3.2e-3, 1.09e-2 -> +1.1e-4, 1.21e-2;
+// 16 voxels -2.6e-3, 8.2e-3 -> +7.4e-4, 9.3e-3; 20 voxels -3.0e-3, 5.0e-3
+// -> +3.2e-4, 5.1e-3. So lsdem ct2ls keeps the grid's nodes (the contact
+// at small overlaps gets no better either: test_convergence.cpp).
+TEST(ImageToLevelSet, NodesOnTheTricubicSurfaceOfAScannedSphere) {
+  for (const double across : {10.0, 16.0, 20.0}) {
+    const double h = 1.0 / across, r = 0.5;
+    const int count = int(across) + 8;
+    const Vec<3> centre = Vec<3>(0.3, -0.2, 0.1) + h * Vec<3>(0.5 * count + 0.3, 0.5 * count - 0.2, 0.5 * count + 0.05);
+    const LabelVolume v =
+        ellipsoidVolume(Index<3>(count, count, count), Vec<3>::Constant(h), centre, Vec<3>::Constant(r));
+    const std::vector<LabelStats> stats = labelStatistics(v);
+    LabelGridOptions o;
+    o.cellsAcross = 10.0;
+    const Grid<3> grid = labelLevelSet(v, stats.at(0), o);
+    const double rCount = std::cbrt(3.0 * double(stats[0].voxels) * h * h * h / (4.0 * M_PI));
+    const NodeSet<3> onGrid = surfaceNodes(grid, 1.0);
+    const NodeSet<3> onCubic = surfaceNodes(grid, 1.0, nullptr, [&grid](const Vec<3>& x) {
+      return projectOntoLevel(grid, x, 0.0, GridInterpolant::CatmullRom);
+    });
+    const auto gap = [&](const NodeSet<3>& nodes, double radius) {
+      double mean = 0.0, meanAbs = 0.0;
+      for (const Vec<3>& x : nodes.positions) {
+        const double d = (x - centre).norm() - radius;
+        mean += d / double(nodes.size());
+        meanAbs += std::abs(d) / double(nodes.size());
+      }
+      return std::pair{mean, meanAbs};
+    };
+    const auto [gridMean, gridAbs] = gap(onGrid, rCount);
+    const auto [cubicMean, cubicAbs] = gap(onCubic, rCount);
+    const auto [gridTrue, gridTrueAbs] = gap(onGrid, r);
+    const auto [cubicTrue, cubicTrueAbs] = gap(onCubic, r);
+    std::printf("scanned sphere %2.0f voxels across, grid 10 cells (h = %.3f): node r - r_count mean %+.3e |.| %.3e "
+                "(grid) -> %+.3e |.| %.3e (tricubic); against r: %+.3e |.| %.3e -> %+.3e |.| %.3e\n",
+                across, grid.spacing(), gridMean, gridAbs, cubicMean, cubicAbs, gridTrue, gridTrueAbs, cubicTrue,
+                cubicTrueAbs);
+    const double inset = grid.spacing() * grid.spacing() / (8.0 * r);
+    EXPECT_LT(gridMean, -0.5 * inset) << across;            // the interpolant's inset
+    EXPECT_LT(std::abs(cubicMean), 0.5 * inset) << across;  // gone on the tricubic surface
+    EXPECT_GT(gridAbs, 1.5 * inset) << across;              // the voxels' roughness, larger
+    EXPECT_GT(cubicAbs, gridAbs) << across;                 // and no smaller there
+  }
 }

@@ -157,15 +157,18 @@ SplitResult<D> checkedSplit(const Shape<D>& parent, const HalfSpace<D>& plane, c
     }
   }
   // No node of a fragment lies outside the parent beyond a small fraction of
-  // a cell and the surface shift the split reports (SplitOptions::
+  // a cell, the surface shift the split reports (SplitOptions::
   // matchEnclosedVolume, which moves only free surface; here nothing is
-  // around): a fragment's surface where the parent had none would start
-  // inside whatever the parent touched.
-  double outside = 0.0;
+  // around) and the parent's own nodes' offset outside its interpolated
+  // surface (nodes on the true surface, which its fragments keep): a
+  // fragment's surface where the parent had none would start inside
+  // whatever the parent touched.
+  double outside = 0.0, parentOffset = 0.0;
   for (const auto& f : split.fragments) {
     for (const Vec<D>& x : f.shape->nodes().positions) outside = std::max(outside, parent.value(f.childToParent.apply(x)));
   }
-  if (!(outside <= (1e-3 + split.largestSurfaceShift) * h)) {
+  for (const Vec<D>& x : parent.nodes().positions) parentOffset = std::max(parentOffset, parent.value(x));
+  if (!(outside <= (1e-3 + split.largestSurfaceShift) * h + parentOffset)) {
     char buffer[160];
     std::snprintf(buffer, sizeof buffer, "%s: a fragment's node %.3g cells outside the parent", what, outside / h);
     out.violations.push_back(buffer);

@@ -4,6 +4,7 @@
 /// triangle mesh, after checking that the mesh can be trusted to have an inside.
 
 #include "lsdem/geometry/Grid.h"
+#include "lsdem/geometry/SurfaceNodes.h"
 #include "lsdem/geometry/TriangleMesh.h"
 
 #include <string>
@@ -83,5 +84,23 @@ MeshReport inspectMesh(const TriangleMesh& mesh);
 /// in parallel (z-slices); the result does not depend on the thread count.
 Grid<3> meshToLevelSet(const TriangleMesh& mesh, double spacing, int paddingCells = kDefaultPaddingCells,
                        const std::string& name = "mesh");
+
+/// @brief Surface nodes on a CAD part's true surface: moves a point (world
+/// units, the mesh's frame) to the closest point of the mesh's triangles
+/// (CGAL AABB tree, exact distance), the surface its level set samples.
+/// The grid's zero set lies ~h^2 / (8 R) inside a convex curved part and
+/// cuts its edges and corners; the closest point is the move along the
+/// surface's normal that undoes it (on a face, along the face's normal; off
+/// an edge or a corner, onto it). A point farther than `spacing` from the
+/// mesh is returned unmoved (it stays on the grid's surface), as
+/// projectOntoSurface does for primitives.
+/// @param mesh a mesh meshToLevelSet accepts (closed, manifold,
+/// outward-oriented), world units.
+/// @param spacing the grid spacing, world units (> 0): the largest move.
+/// @return A projector that holds its own copy of the mesh and its tree
+/// (built here; queries from several threads at once only read them).
+/// @note Throws std::invalid_argument for a bad spacing and MeshError when
+/// the faces do not form a manifold surface (cgal::toSurfaceMesh).
+SurfaceProjector<3> meshSurfaceProjector(const TriangleMesh& mesh, double spacing);
 
 }  // namespace lsdem::geometry

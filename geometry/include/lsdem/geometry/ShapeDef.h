@@ -46,11 +46,12 @@ struct ShapeDef {
   double cellsAcross = 0.0;   ///< grid cells across the smallest dimension of the shape
 
   ShapeOptions options;       ///< node density and mass estimator
-  /// Surface nodes on the shape's exact surface (exactSurface) where it has
-  /// one, rather than on the zero set of the grid's multilinear interpolant,
-  /// which lies ~h^2 / (8 R) inside a convex surface (R the radius of
-  /// curvature): the contact then loses none of a small overlap on its own
-  /// side. Meshes have no exact surface here and keep the grid's.
+  /// Surface nodes on the shape's true surface where it has one (the
+  /// exactSurface function of a primitive or random grain, the triangles of
+  /// a mesh: meshSurfaceProjector), rather than on the zero set of the
+  /// grid's multilinear interpolant, which lies ~h^2 / (8 R) inside a convex
+  /// surface (R the radius of curvature) and cuts a mesh's edges and
+  /// corners: the contact then loses none of a small overlap on its own side.
   bool exactNodes = true;
 };
 
@@ -58,7 +59,8 @@ struct ShapeDef {
 /// (grid frame = the definition's frame, world units): the exact signed
 /// distance of spheres, boxes, ellipsoids and polygons, the distance along
 /// the ray from the centre of superellipsoids and random grains; empty for
-/// meshes. @note Throws std::invalid_argument for invalid dimensions.
+/// meshes (their nodes go on the triangles: meshSurfaceProjector).
+/// @note Throws std::invalid_argument for invalid dimensions.
 template <int D>
 SurfaceFunction<D> exactSurface(const ShapeDef<D>& def);
 
@@ -84,7 +86,8 @@ template <int D>
 Grid<D> buildGrid(const ShapeDef<D>& def, MeshImportReport* meshReport = nullptr);
 
 /// @brief The shape of the definition: grid, mass properties, nodes (on the
-/// exact surface when `def.exactNodes` and the kind has one), descriptors.
+/// true surface when `def.exactNodes`: projectorOnto(exactSurface(def)), or
+/// a mesh's meshSurfaceProjector), descriptors.
 /// @param meshReport as for buildGrid.
 template <int D>
 std::shared_ptr<const Shape<D>> buildShape(const ShapeDef<D>& def, MeshImportReport* meshReport = nullptr);
