@@ -29,9 +29,10 @@ struct AccuracyOptionsCli {
   std::string out;  // empty: bench-accuracy, or bench-accuracy-breakage with --breakage
   bool breakage = false;
   bool dimensionGiven = false;
-  bool breakageOptionGiven = false;  // --seeds or --jobs
+  bool breakageOptionGiven = false;  // --seeds, --jobs or --resume
   int seeds = 0;
   int jobs = 2;
+  bool resume = false;
 };
 
 void runBreakage(const AccuracyOptionsCli& o) {
@@ -46,6 +47,7 @@ void runBreakage(const AccuracyOptionsCli& o) {
   options.quick = o.quick;
   options.seeds = o.seeds;
   options.jobs = o.jobs;
+  options.resume = o.resume;
   options.executable = exe.string();
   options.outDir = o.out.empty() ? "bench-accuracy-breakage" : o.out;
   options.progress = [](const std::string& line) { std::cout << "  " << line << '\n' << std::flush; };
@@ -84,7 +86,7 @@ void runAccuracy(const AccuracyOptionsCli& o) {
     runBreakage(o);
     return;
   }
-  if (o.breakageOptionGiven) throw io::InputError("", 0, "--seeds/--jobs", "only with --breakage");
+  if (o.breakageOptionGiven) throw io::InputError("", 0, "--seeds/--jobs/--resume", "only with --breakage");
   // The sweep, reporting each setting as it ends.
   study::AccuracyOptions options;
   options.dimension = o.dimension;
@@ -124,9 +126,12 @@ void addAccuracyBench(CLI::App& bench) {
   CLI::Option* jobs =
       cmd->add_option("--jobs", opts->jobs, "--breakage: runs at once, each a child process on one thread (default 2)")
           ->check(CLI::Range(1, 64));
-  cmd->callback([opts, dim, seeds, jobs] {
+  CLI::Option* resume = cmd->add_flag(
+      "--resume", opts->resume,
+      "--breakage: reuse the finished runs an earlier study left in DIR/runs (same scene text, cost kept)");
+  cmd->callback([opts, dim, seeds, jobs, resume] {
     opts->dimensionGiven = dim->count() > 0;
-    opts->breakageOptionGiven = seeds->count() + jobs->count() > 0;
+    opts->breakageOptionGiven = seeds->count() + jobs->count() + resume->count() > 0;
     runAccuracy(*opts);
   });
 }

@@ -123,11 +123,29 @@ TEST(BenchBreakage, QuickStudyWritesItsTableReportAndPlots) {
     EXPECT_TRUE(fs::is_regular_file(out / "psd_error_vs_time.png"));
     EXPECT_TRUE(fs::is_regular_file(out / "psd_error_vs_cells.png"));
   }
+
+  // --resume reads the finished runs again instead of running them: the
+  // same table, costs included; a run whose cost file is gone runs again.
+  const std::string table = lsdem::test::readFile(out / "breakage_accuracy.csv");
+  fs::remove(out / "runs" / "single_grain_c10_n1_pn_r0_s101.cost");
+  const Result again = run("bench accuracy --breakage --quick --resume --out " + out.string());
+  ASSERT_EQ(again.code, 0) << again.out;
+  EXPECT_TRUE(fs::is_regular_file(out / "runs" / "single_grain_c10_n1_pn_r0_s101.cost"));
+  const auto rerun = readCsv(out / "breakage_runs.csv");
+  ASSERT_EQ(rerun.size(), runs.size());
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (runs[i].at("case") == "single_grain" && runs[i].at("cells_across") == "10" && runs[i].at("seed") == "101" &&
+        runs[i].at("knob") == "cells") {
+      continue;  // run again: its CPU time is a new measurement
+    }
+    EXPECT_EQ(rerun[i].at("cpu_seconds"), runs[i].at("cpu_seconds")) << i;
+    EXPECT_EQ(rerun[i].at("psd_error_paired"), runs[i].at("psd_error_paired")) << i;
+  }
 }
 
 TEST(BenchBreakage, OptionErrorsAreOneLine) {
   for (const char* args : {"bench accuracy --breakage --dim 3", "bench accuracy --seeds 3 --quick",
-                           "bench accuracy --breakage --jobs 0"}) {
+                           "bench accuracy --resume --quick", "bench accuracy --breakage --jobs 0"}) {
     const Result r = run(args);
     EXPECT_NE(r.code, 0) << args;
     EXPECT_FALSE(r.out.empty()) << args;

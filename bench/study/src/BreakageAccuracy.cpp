@@ -212,6 +212,17 @@ int runChild(const std::string& exe, const fs::path& scene, const fs::path& out,
   return status;
 }
 
+// A finished run of an earlier study to reuse: the same scene text, its
+// summary written, its measured cost kept (CPU s, wall s, peak MiB).
+bool reusableRun(const fs::path& scene, const std::string& text, const fs::path& out, const fs::path& cost,
+                 BreakageRun& run) {
+  std::error_code ec;
+  if (!fs::is_regular_file(cost, ec) || !fs::is_regular_file(out / "summary.json", ec)) return false;
+  if (!fs::is_regular_file(scene, ec) || readText(scene) != text) return false;
+  std::istringstream in(readText(cost));
+  return static_cast<bool>(in >> run.cpuSeconds >> run.wallSeconds >> run.maxRssMiB);
+}
+
 // The last non-empty line of a log (the run's one-line error).
 std::string lastLine(const fs::path& log) {
   std::ifstream in(log);
@@ -396,15 +407,26 @@ BreakageReport runBreakageStudy(const BreakageOptions& options) {
         if (bc.name == r.caseName) c = &bc;
       }
       const std::string name = runName(r);
-      const fs::path scene = root / (name + ".toml"), out = root / name, log = root / (name + ".log");
+      const fs::path scene = root / (name + ".toml"), out = root / name, log = root / (name + ".log"),
+                     cost = root / (name + ".cost");
       try {
-        std::ofstream(scene, std::ios::binary | std::ios::trunc) << breakageSceneText(*c, r.setting, r.seed);
-        const int status = runChild(options.executable, scene, out, log, r);
-        if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-          r.error = "lsdem run failed: " + lastLine(log);
-        } else {
+        const std::string text = breakageSceneText(*c, r.setting, r.seed);
+        if (options.resume && reusableRun(scene, text, out, cost, r)) {
           readOutputs(out, r);
           r.ok = true;
+        } else {
+          fs::remove(cost);
+          std::ofstream(scene, std::ios::binary | std::ios::trunc) << text;
+          const int status = runChild(options.executable, scene, out, log, r);
+          if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+            r.error = "lsdem run failed: " + lastLine(log);
+          } else {
+            readOutputs(out, r);
+            r.ok = true;
+            // The measured cost, for a later --resume.
+            std::ofstream(cost) << number(r.cpuSeconds) << ' ' << number(r.wallSeconds) << ' ' << number(r.maxRssMiB)
+                                << '\n';
+          }
         }
       } catch (const std::exception& e) {
         r.error = e.what();

@@ -220,6 +220,20 @@ BreakageFiles writeBreakageFiles(const BreakageReport& report, const std::string
   writeAtomically(files.runsCsv, runsCsv(report));
   writeAtomically(front, frontCsv(frontPoints(report)));
   writeAtomically(files.markdown, breakageMarkdown(report));
+  // The mean noise floor as a line across the costs of the settings.
+  const std::string floorCsv = (dir / "breakage_noise_floor.csv").string();
+  {
+    const std::vector<FrontPoint> points = frontPoints(report);
+    double floor = 0.0;
+    for (const auto& [name, f] : report.noiseFloor) floor += f / double(report.noiseFloor.size());
+    std::ostringstream csv;
+    csv << "cpu_seconds,psd_error\n";
+    if (!points.empty()) {
+      csv << num(0.7 * points.front().cpu) << ',' << num(floor) << '\n'
+          << num(1.4 * points.back().cpu) << ',' << num(floor) << '\n';
+    }
+    writeAtomically(floorCsv, csv.str());
+  }
   if (!io::gnuplotAvailable()) return files;
 
   std::vector<std::string> cases;
@@ -246,6 +260,8 @@ BreakageFiles writeBreakageFiles(const BreakageReport& report, const std::string
       {front, "cpu_seconds", "psd_error", "every setting, mean of the scenes", "", "", Style::Points});
   pareto.series.push_back(
       {front, "cpu_seconds", "psd_error", "Pareto front, mean of the scenes", "on_front", "1", Style::LinesPoints});
+  pareto.series.push_back({floorCsv, "cpu_seconds", "psd_error", "noise floor of the seed means (mean of the scenes)",
+                           "", "", Style::Spec});
   for (const std::string& c : cases) {
     pareto.series.push_back(
         {files.csv, "cpu_seconds", "psd_error", c + ", grid ladder", "curve", c + "/cells", Style::LinesPoints});

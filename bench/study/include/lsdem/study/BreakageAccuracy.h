@@ -189,9 +189,13 @@ struct BreakageBudget {
 
 /// What to run.
 struct BreakageOptions {
-  bool quick = false;                              ///< the short ladder (CI) instead of the full one
-  int seeds = 0;                                   ///< Weibull seeds per setting (0: 2 quick, 6 full)
-  int jobs = 2;                                    ///< runs at once (child processes)
+  bool quick = false;  ///< the short ladder (CI) instead of the full one
+  int seeds = 0;       ///< Weibull seeds per setting (0: 2 quick, 6 full)
+  int jobs = 2;        ///< runs at once (child processes)
+  /// Reuse the finished runs an earlier study left in outDir/runs: a run
+  /// whose scene file is this setting's text, whose summary.json exists and
+  /// whose measured cost was kept (NAME.cost) is read instead of run again.
+  bool resume = false;
   std::string executable;                          ///< the lsdem program that runs the scenes (`lsdem run`)
   std::string outDir = "bench-accuracy-breakage";  ///< runs/ (scenes and their outputs) and the report go here
   /// Called with one line per finished run (progress); may be empty.
