@@ -414,6 +414,7 @@ BreakageReport runBreakageStudy(const BreakageOptions& options) {
         if (options.resume && reusableRun(scene, text, out, cost, r)) {
           readOutputs(out, r);
           r.ok = true;
+          r.reused = true;
         } else {
           fs::remove(cost);
           std::ofstream(scene, std::ios::binary | std::ios::trunc) << text;

@@ -201,7 +201,11 @@ std::string breakageMarkdown(const BreakageReport& report) {
   md << "\n";
   for (const std::string& note : report.notes) md << "- " << note << '\n';
   md << "\nThe study took " << fmt("%.0f", report.wallSeconds) << " s wall, " << fmt("%.0f", report.cpuSeconds)
-     << " s CPU in its runs.\n";
+     << " s CPU in its runs";
+  std::size_t reused = 0;
+  for (const BreakageRun& r : report.runs) reused += r.reused ? 1 : 0;
+  if (reused > 0) md << " (" << reused << " of them read from an earlier study, their CPU as measured then)";
+  md << ".\n";
   return md.str();
 }
 
@@ -252,19 +256,17 @@ BreakageFiles writeBreakageFiles(const BreakageReport& report, const std::string
   io::PlotSpec pareto;
   pareto.output = (dir / "psd_error_vs_time.png").string();
   pareto.title = "PSD error against cost (2D, mean over seeds)";
-  pareto.xLabel = "CPU seconds on 1 thread (the three scenes: sum; one scene: its run)";
-  pareto.yLabel = "L1 distance of the PSD to the finest grid, decades";
+  pareto.xLabel = "CPU s on one thread (3 scenes: sum)";
+  pareto.yLabel = "PSD L1 error vs finest grid, decades";
   pareto.logX = pareto.logY = true;
   using Style = io::PlotSeries::Style;
+  pareto.series.push_back({front, "cpu_seconds", "psd_error", "every setting (3 scenes)", "", "", Style::Points});
   pareto.series.push_back(
-      {front, "cpu_seconds", "psd_error", "every setting, mean of the scenes", "", "", Style::Points});
-  pareto.series.push_back(
-      {front, "cpu_seconds", "psd_error", "Pareto front, mean of the scenes", "on_front", "1", Style::LinesPoints});
-  pareto.series.push_back({floorCsv, "cpu_seconds", "psd_error", "noise floor of the seed means (mean of the scenes)",
-                           "", "", Style::Spec});
+      {front, "cpu_seconds", "psd_error", "Pareto front (3 scenes)", "on_front", "1", Style::LinesPoints});
+  pareto.series.push_back({floorCsv, "cpu_seconds", "psd_error", "noise floor", "", "", Style::Spec});
   for (const std::string& c : cases) {
     pareto.series.push_back(
-        {files.csv, "cpu_seconds", "psd_error", c + ", grid ladder", "curve", c + "/cells", Style::LinesPoints});
+        {files.csv, "cpu_seconds", "psd_error", c + " grid", "curve", c + "/cells", Style::LinesPoints});
   }
   draw(pareto);
 
@@ -273,7 +275,7 @@ BreakageFiles writeBreakageFiles(const BreakageReport& report, const std::string
   cells.output = (dir / "psd_error_vs_cells.png").string();
   cells.title = "PSD error against grid resolution (2D)";
   cells.xLabel = "grid cells across a grain";
-  cells.yLabel = "L1 distance of the PSD to the finest grid, decades";
+  cells.yLabel = "PSD L1 error vs finest grid, decades";
   cells.logX = cells.logY = true;
   for (const std::string& c : cases) {
     cells.series.push_back({files.csv, "cells_across", "psd_error", c, "curve", c + "/cells", Style::LinesPoints});

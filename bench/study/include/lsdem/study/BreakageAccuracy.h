@@ -113,7 +113,8 @@ struct BreakageRun {
   double knobValue = 0.0;  ///< the knob's value (law: 0 per_node, 1 area_weighted)
   BreakageSetting setting;
   std::uint64_t seed = 0;
-  bool ok = false;  ///< false: the run failed (error says why)
+  bool ok = false;      ///< false: the run failed (error says why)
+  bool reused = false;  ///< read from an earlier study (--resume): its cost is as measured then
   std::string error;
   SizeDistribution psd;                    ///< at the end of the run, fines included
   double d10 = 0.0, d50 = 0.0, d90 = 0.0;  ///< m
