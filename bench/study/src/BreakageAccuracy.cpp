@@ -425,8 +425,10 @@ BreakageReport runBreakageStudy(const BreakageOptions& options) {
             readOutputs(out, r);
             r.ok = true;
             // The measured cost, for a later --resume.
-            std::ofstream(cost) << number(r.cpuSeconds) << ' ' << number(r.wallSeconds) << ' ' << number(r.maxRssMiB)
-                                << '\n';
+            // Written to round-trip exactly, so a resumed study's tables equal this one's.
+            char line[96];
+            std::snprintf(line, sizeof line, "%.17g %.17g %.17g\n", r.cpuSeconds, r.wallSeconds, r.maxRssMiB);
+            std::ofstream(cost) << line;
           }
         }
       } catch (const std::exception& e) {
