@@ -201,7 +201,10 @@ void renderPlot(const PlotSpec& spec) {
     const PlotSeries& s = spec.series[i];
     const std::string dat = stem + "." + std::to_string(i) + ".dat";
     if (writeSeriesData(s, spec.logX, spec.logY, folder / dat) == 0) continue;
-    const std::string style = spec.lines ? "lines lw 2" : "points pt 7 ps 0.6";
+    const std::string style = s.style == PlotSeries::Style::LinesPoints ? "linespoints lw 2 pt 7 ps 1"
+                              : s.style == PlotSeries::Style::Points    ? "points pt 6 ps 1"
+                              : spec.lines                              ? "lines lw 2"
+                                                                        : "points pt 7 ps 0.6";
     curves.push_back(quoted(dat) + " using 1:2 with " + style + " title " + quoted(s.title.empty() ? s.y : s.title));
   }
   if (curves.empty()) throw NoRowsError("plot '" + spec.output + "': no series has a row to draw");

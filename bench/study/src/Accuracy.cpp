@@ -378,7 +378,8 @@ std::string accuracyMarkdown(const AccuracyReport& report) {
   const std::vector<std::vector<std::string>> groups{
       {"volume_sphere", "inertia_sphere", "volume_ellipsoid", "inertia_ellipsoid", "volume_grain", "centroid_grain",
        "inertia_grain"},
-      {"force_plane", "ripple_plane", "stiffness_plane", "force_pair", "ripple_pair", "stiffness_pair", "restitution"},
+      {"force_plane", "ripple_plane", "stiffness_plane", "force_pair", "ripple_pair", "stiffness_pair", "force_face",
+       "ripple_face", "restitution"},
       {"cap_volume", "cap_centroid", "split_mass", "packing_floor_stress", "packing_coordination",
        "packing_load_balance"}};
   const char* titles[] = {"Mass properties: error in %", "Contact: error in %", "Splits and packing: error in %"};

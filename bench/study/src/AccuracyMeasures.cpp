@@ -74,6 +74,26 @@ std::shared_ptr<const geometry::Shape<D>> sphereShape(double radius, double cell
   return slot;
 }
 
+// A square (2D) or cube (3D) of side `side`, `cells` cells across a side,
+// cached like the spheres.
+template <int D>
+std::shared_ptr<const geometry::Shape<D>> cubeShape(double side, double cells, double nodesPerCell, bool exactNodes) {
+  static std::mutex cacheMutex;
+  static std::map<std::array<double, 4>, std::shared_ptr<const geometry::Shape<D>>> cache;
+  std::lock_guard<std::mutex> lock(cacheMutex);
+  auto& slot = cache[{side, cells, nodesPerCell, exactNodes ? 1.0 : 0.0}];
+  if (!slot) {
+    geometry::ShapeDef<D> def;
+    def.kind = geometry::ShapeKind::Box;
+    def.halfExtents = Vec<D>::Constant(0.5 * side);
+    def.cellsAcross = cells;
+    def.options.nodesPerCell = nodesPerCell;
+    def.exactNodes = exactNodes;
+    slot = geometry::buildShape(def);
+  }
+  return slot;
+}
+
 // Orientation number k of a fixed low-discrepancy sequence: 2D angles by the
 // golden ratio; 3D uniform rotations (Shoemake) from the R3 additive sequence.
 template <int D>
@@ -349,6 +369,52 @@ std::vector<MetricValue> contactMetrics(const AccuracySetting& setting) {
   };
   summarise("plane", planeForce, planeOverlapIntegral<D>(R, delta));
   summarise("pair", pairForce, pairOverlapIntegral<D>(R, delta));
+
+  // A flat face on the plane: a cube (square) of side 1 m, a face parallel to
+  // the plane y = 0 and pressed into it by 1% of the side, turned about the
+  // plane's normal (3D: 8 angles). The independent reference is the exact
+  // overlap volume (area in 2D) delta L^(D-1): the law's continuum force on a
+  // plane is its stiffness per area times int delta dA, which is the overlap
+  // volume on the face plus the strips of the side faces in the plane, a
+  // further 2 (D - 1) delta / L (2% in 3D, 1% in 2D): part of the error.
+  const double side = 1.0, faceDelta = 0.01 * side;
+  const auto cube = cubeShape<D>(side, setting.cellsAcross, setting.nodesPerCell, setting.exactNodes);
+  const double cubeWMean = cube->nodes().totalWeight() / double(cube->nodes().size());
+  const double cubeLawPerArea = setting.formulation == dynamics::ForceFormulation::PerNode
+                                    ? law.kn / cubeWMean
+                                    : law.kn / dynamics::referenceNodeWeight<D>(cube->grid().spacing());
+  // The body frame is the principal frame; the box's own axes are its grid's.
+  const geometry::Rigid<D>& bodyToGrid = cube->bodyToGrid();
+  const int faceSamples = D == 3 ? 8 : 1;
+  std::vector<double> faceForce;
+  for (int k = 0; k < faceSamples; ++k) {
+    dynamics::Particles<D> single;
+    dynamics::ParticleDef<D> def;
+    def.shape = cube;
+    // World = turn about y of the grid frame; the lowest face (grid y = -L/2) at y = -delta.
+    def.position = (0.5 * side + bodyToGrid.translation(1) - faceDelta) * Vec<D>::Unit(1);
+    if constexpr (D == 2) {
+      def.orientation = std::atan2(bodyToGrid.rotation(1, 0), bodyToGrid.rotation(0, 0));
+    } else {
+      const double angle = 2.0 * kPi * 0.6180339887498949 * k;
+      const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
+      def.orientation = Eigen::Quaterniond(turn * bodyToGrid.rotation).normalized();
+      def.position -= turn * bodyToGrid.translation - bodyToGrid.translation(1) * Vec<D>::Unit(1);
+    }
+    single.add(def);
+    solver.compute(single, noPairs, planes, {}, 1e-6);
+    double f = 0.0;
+    for (const auto& c : solver.planeContacts()) f += c.force.dot(floor.normal);
+    faceForce.push_back(f);
+  }
+  {
+    double mean = 0.0;
+    for (double v : faceForce) mean += v / double(faceForce.size());
+    const auto [lo, hi] = std::minmax_element(faceForce.begin(), faceForce.end());
+    out.push_back(metricOf("force_face", mean, cubeLawPerArea * faceDelta * std::pow(side, D - 1)));
+    const double ripple = mean > 0.0 ? (*hi - *lo) / mean : 1.0;
+    out.push_back({"ripple_face", ripple, 0.0, ripple});
+  }
   return out;
 }
 

@@ -143,7 +143,7 @@ AccuracyFiles writeAccuracyFiles(const AccuracyReport& report, const std::string
     cells.logX = true;
     cells.logY = true;
     for (const char* m : {"volume_sphere", "inertia_sphere", "inertia_grain", "force_plane", "force_pair",
-                          "ripple_plane", "cap_volume", "restitution"}) {
+                          "force_face", "ripple_plane", "cap_volume", "restitution"}) {
       io::PlotSeries s;
       s.csv = files.csv;
       s.x = "cells_across";

@@ -18,6 +18,9 @@ struct PlotSeries {
   std::string title;         ///< legend entry (empty: the y column's name)
   std::string filterColumn;  ///< when not empty, only rows where this column ...
   std::string filterValue;   ///< ... equals this text (compared as written in the file)
+  /// How the series is drawn: as PlotSpec::lines says, or lines with a
+  /// marker at each point (a one-point series shows), or markers alone.
+  enum class Style { Spec, LinesPoints, Points } style = Style::Spec;
 };
 
 /// A plot: one PNG with one or more series.

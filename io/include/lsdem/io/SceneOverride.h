@@ -1,0 +1,33 @@
+#pragma once
+/// @file SceneOverride.h
+/// @brief Scene files with some keys replaced: the text of a scene with
+/// `section.key = value` settings applied, so a study (or a user) can run a
+/// shipped scene at another grid resolution, contact law or seed through
+/// exactly the path `lsdem run` takes.
+
+#include <string>
+#include <vector>
+
+namespace lsdem::io {
+
+/// One replaced key.
+struct SceneSetting {
+  /// Dotted path of the key ("effects.breakage.seed"). A `*` segment stands
+  /// for every table under its parent ("shapes.*.cells_across": the key in
+  /// each shape); tables on the path must exist, the last key is added when
+  /// missing. Array-of-tables entries (`[[particles]]`) are not addressed.
+  std::string key;
+  /// The value as TOML text: `20`, `0.5`, `"area_weighted"`, `[]`.
+  std::string value;
+};
+
+/// @brief The scene `text` with every setting applied, in order, written
+/// back as TOML (comments are not kept; keys and values are).
+/// @param file name of the scene for messages.
+/// @note Throws InputError naming `file` and the key for a syntax error in
+/// the text or a value, a table on the path that is missing or is not a
+/// table, or a `*` that matches no table.
+std::string overrideScene(const std::string& text, const std::vector<SceneSetting>& settings,
+                          const std::string& file = "scene");
+
+}  // namespace lsdem::io

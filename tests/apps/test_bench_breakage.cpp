@@ -1,0 +1,156 @@
+// `lsdem bench accuracy --breakage --quick` end to end, as CI runs it: the
+// shipped scenes on the quick ladder through `lsdem run`, the table, the
+// report with its budgets, the plots; and its option errors.
+
+#include "support/Files.h"
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out;  // stdout and stderr together
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(LSDEM_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  Result r{-1, ""};
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), int(buf.size()), pipe)) r.out += buf.data();
+  const int status = pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+// The rows of a CSV file as maps from its header's names.
+std::vector<std::map<std::string, std::string>> readCsv(const fs::path& path) {
+  std::istringstream in(lsdem::test::readFile(path));
+  std::vector<std::map<std::string, std::string>> rows;
+  std::string line;
+  std::vector<std::string> header;
+  const auto split = [](const std::string& l) {
+    std::vector<std::string> f;
+    std::string x;
+    std::istringstream s(l);
+    while (std::getline(s, x, ',')) f.push_back(x);
+    return f;
+  };
+  if (std::getline(in, line)) header = split(line);
+  while (std::getline(in, line)) {
+    const auto f = split(line);
+    std::map<std::string, std::string> row;
+    for (std::size_t i = 0; i < header.size() && i < f.size(); ++i) row[header[i]] = f[i];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+double num(const std::map<std::string, std::string>& row, const std::string& key) {
+  const auto it = row.find(key);
+  return it == row.end() || it->second.empty() ? std::nan("") : std::stod(it->second);
+}
+
+}  // namespace
+
+TEST(BenchBreakage, QuickStudyWritesItsTableReportAndPlots) {
+  const fs::path out = lsdem::test::tempPath("bench_breakage");
+  const Result r = run("bench accuracy --breakage --quick --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("fast:"), std::string::npos) << r.out;
+
+  // One row per case and setting: 3 grids, 1 node density, 1 law, 1 re-gridding, 2 seeds each.
+  const auto rows = readCsv(out / "breakage_accuracy.csv");
+  ASSERT_EQ(rows.size(), 3u * 6u);
+  std::map<std::string, int> perCase;
+  for (const auto& w : rows) {
+    ++perCase[w.at("case")];
+    EXPECT_EQ(num(w, "seeds"), 2.0) << w.at("case") << " " << w.at("knob");
+    const bool reference = w.at("reference") == "1";
+    EXPECT_EQ(reference, w.at("knob") == "cells" && num(w, "cells_across") == 40.0);
+    // The reference is its own: error 0; the others measure something.
+    if (reference) {
+      EXPECT_EQ(num(w, "psd_error"), 0.0);
+    } else {
+      EXPECT_GE(num(w, "psd_error"), 0.0);
+    }
+    // Every scene breaks its grains, is loaded, and costs something.
+    EXPECT_GT(num(w, "fragments"), 1.0) << w.at("case");
+    EXPECT_GT(num(w, "peak_stress_Pa"), 1e3) << w.at("case");
+    EXPECT_GT(num(w, "d90_m"), num(w, "d10_m")) << w.at("case");
+    EXPECT_GT(num(w, "d50_m"), 1e-5) << w.at("case");
+    EXPECT_LT(num(w, "d50_m"), 2e-3) << w.at("case");
+    EXPECT_GE(num(w, "fines_percent"), 0.0);
+    EXPECT_LT(num(w, "fines_percent"), 100.0);
+    EXPECT_GT(num(w, "cpu_seconds"), 0.0);
+    EXPECT_GT(num(w, "max_rss_MiB"), 1.0);
+  }
+  EXPECT_EQ(perCase.size(), 3u);
+  // The coarsest grid of the ladder differs from the finest somewhere.
+  double coarsest = 0.0;
+  for (const auto& w : rows) {
+    if (w.at("knob") == "cells" && num(w, "cells_across") == 10.0) coarsest += num(w, "psd_error");
+  }
+  EXPECT_GT(coarsest, 0.0);
+
+  // 36 runs, all finished, with the same seeds on every setting.
+  const auto runs = readCsv(out / "breakage_runs.csv");
+  ASSERT_EQ(runs.size(), 36u);
+  for (const auto& x : runs) {
+    EXPECT_EQ(x.at("ok"), "1") << x.at("error");
+    EXPECT_TRUE(x.at("seed") == "101" || x.at("seed") == "102") << x.at("seed");
+  }
+
+  // The report with its budgets, and the plots when gnuplot is there.
+  const std::string md = lsdem::test::readFile(out / "breakage_accuracy.md");
+  for (const char* part : {"## Seed noise", "## Observed orders", "| fast |", "| balanced |", "| publication |"}) {
+    EXPECT_NE(md.find(part), std::string::npos) << part;
+  }
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    EXPECT_TRUE(fs::is_regular_file(out / "psd_error_vs_time.png"));
+    EXPECT_TRUE(fs::is_regular_file(out / "psd_error_vs_cells.png"));
+  }
+
+  // --resume reads the finished runs again instead of running them: the
+  // same table, costs included; a run whose cost file is gone runs again.
+  const std::string table = lsdem::test::readFile(out / "breakage_accuracy.csv");
+  fs::remove(out / "runs" / "single_grain_c10_n1_pn_r0_s101.cost");
+  const Result again = run("bench accuracy --breakage --quick --resume --out " + out.string());
+  ASSERT_EQ(again.code, 0) << again.out;
+  EXPECT_TRUE(fs::is_regular_file(out / "runs" / "single_grain_c10_n1_pn_r0_s101.cost"));
+  const auto rerun = readCsv(out / "breakage_runs.csv");
+  ASSERT_EQ(rerun.size(), runs.size());
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (runs[i].at("case") == "single_grain" && runs[i].at("cells_across") == "10" && runs[i].at("seed") == "101" &&
+        runs[i].at("knob") == "cells") {
+      continue;  // run again: its CPU time is a new measurement
+    }
+    EXPECT_EQ(rerun[i].at("cpu_seconds"), runs[i].at("cpu_seconds")) << i;
+    EXPECT_EQ(rerun[i].at("psd_error_paired"), runs[i].at("psd_error_paired")) << i;
+  }
+}
+
+TEST(BenchBreakage, OptionErrorsAreOneLine) {
+  for (const char* args : {"bench accuracy --breakage --dim 3", "bench accuracy --seeds 3 --quick",
+                           "bench accuracy --resume --quick", "bench accuracy --breakage --jobs 0"}) {
+    const Result r = run(args);
+    EXPECT_NE(r.code, 0) << args;
+    EXPECT_FALSE(r.out.empty()) << args;
+  }
+  const Result r = run("bench accuracy --breakage --dim 3");
+  EXPECT_NE(r.out.find("2D scenes only"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find('\n'), r.out.size() - 1) << r.out;
+}
