@@ -385,7 +385,12 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       const double linear = grid.valueAtCells(g) - margin;
       const double clear = linear - cubicMargin;
       if (clear > 0.0) return certify ? clear * perSlopeCell : 0.0;
-      if (linear > cubic->cellMargin(grid.cellAtCells(g))) return 0.0;
+      const std::size_t cell = grid.cellAtCells(g);
+      if (linear > cubic->cellMargin(cell)) {
+        // Certified while it stays above the margin of the cells within one cell.
+        const double nearClear = linear - cubic->nearMargin(cell);
+        return certify && nearClear > 0.0 ? std::min(nearClear * perSlopeCell, 1.0) : 0.0;
+      }
       phi = grid.cubicValueAtCellsGradientBelow(g, 0.0, grad);
       if (!(phi < 0.0)) return 0.0;
     } else {

@@ -83,6 +83,22 @@ typename Shape<D>::CubicLookup cubicData(const Grid<D>& grid, double boundingRad
       data.cellSteps[n] = std::uint8_t(steps);
     }
   }
+  // The largest over the cells within one cell along every axis: a running
+  // maximum along each axis in turn (the index clamped to the grid).
+  data.nearSteps = data.cellSteps;
+  std::vector<std::uint8_t> scratch(grid.size());
+  std::size_t stride = 1;
+  for (int a = 0; a < D; ++a) {
+    Index<D> j = Index<D>::Zero();
+    for (std::size_t n = 0; n < grid.size(); ++n, grid.advance(j)) {
+      std::uint8_t m = data.nearSteps[n];
+      if (j[a] > 0) m = std::max(m, data.nearSteps[n - stride]);
+      if (j[a] + 1 < dims[a]) m = std::max(m, data.nearSteps[n + stride]);
+      scratch[n] = m;
+    }
+    data.nearSteps.swap(scratch);
+    stride *= std::size_t(dims[a]);
+  }
   return data;
 }
 

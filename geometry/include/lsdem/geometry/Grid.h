@@ -256,7 +256,7 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells, double th
 
 namespace detail {
 /// Catmull-Rom weights of the nodes i-1, i, i+1, i+2 at t in [0, 1] of cell i.
-inline void catmullRomWeights(double t, double w[4]) {
+[[gnu::always_inline]] inline void catmullRomWeights(double t, double w[4]) {
   const double t2 = t * t, t3 = t2 * t;
   w[0] = 0.5 * (-t3 + 2.0 * t2 - t);
   w[1] = 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0);
@@ -264,7 +264,7 @@ inline void catmullRomWeights(double t, double w[4]) {
   w[3] = 0.5 * (t3 - t2);
 }
 /// Their derivatives with respect to t.
-inline void catmullRomDerivatives(double t, double w[4]) {
+[[gnu::always_inline]] inline void catmullRomDerivatives(double t, double w[4]) {
   const double t2 = t * t;
   w[0] = 0.5 * (-3.0 * t2 + 4.0 * t - 1.0);
   w[1] = 0.5 * (9.0 * t2 - 10.0 * t);

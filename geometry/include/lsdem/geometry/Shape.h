@@ -148,10 +148,17 @@ class Shape {
     /// interpolant in the cell exceeds E_c the Catmull-Rom interpolant is
     /// positive: 0 for a cell where the cubic is positive throughout, else
     /// min(the cell's deviation bound, E) rounded up to a step of E / 255
-    /// (one byte per grid node).
+    /// (one byte per grid node, two with nearSteps).
     std::vector<std::uint8_t> cellSteps;
+    /// Per cell, the largest cellSteps of the cells within one cell of it
+    /// along every axis: every point within distance 1 (cells) of a point
+    /// of cell c lies in such a cell, so a multilinear value above
+    /// nearMargin(c) there makes the cubic positive.
+    std::vector<std::uint8_t> nearSteps;
     double cellUnit = 0.0;
     double cellMargin(std::size_t cell) const { return cellUnit * double(cellSteps[cell]); }
+    /// The margin over the cells within one cell of `cell`.
+    double nearMargin(std::size_t cell) const { return cellUnit * double(nearSteps[cell]); }
   };
   /// The tricubic look-up's data, computed on the first call (from any
   /// thread), so shapes that never meet the tricubic look-up never pay for
