@@ -247,8 +247,9 @@ constexpr double kCertificateSlack = 1e-6;
 // phi_lin > E (its certificate margin (phi_lin - E) / L; a node nearer than
 // that gets none), and the bounding sphere is Shape::cubicBoundingRadius().
 // A node with phi_lin <= E is still rejected without the cubic look-up when
-// phi_lin exceeds its cell's own margin E_c <= E (Shape::CubicLookup), with
-// no certificate margin, as when the cubic look-up finds it outside.
+// phi_lin exceeds its cell's own margin E_c <= E (Shape::CubicLookup): its
+// certificate margin min((phi_lin - E_1) / L, 1 cell), with E_1 the largest
+// cell margin within one cell (Shape::CubicLookup::nearSteps), else none.
 template <int D, ForceFormulation Formulation, bool Cubic>
 std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
@@ -381,7 +382,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     if constexpr (Cubic) {
       // The multilinear value first: above the cubic margin the cubic is
       // positive (Shape::cubicMargin), and most nodes tested are there;
-      // above its cell's margin too, with no certificate margin.
+      // above its cell's margin too.
       const double linear = grid.valueAtCells(g) - margin;
       const double clear = linear - cubicMargin;
       if (clear > 0.0) return certify ? clear * perSlopeCell : 0.0;
