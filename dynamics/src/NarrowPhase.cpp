@@ -246,6 +246,10 @@ constexpr double kCertificateSlack = 1e-6;
 // phi(c') - L r > E, a node is rejected without the cubic look-up when
 // phi_lin > E (its certificate margin (phi_lin - E) / L; a node nearer than
 // that gets none), and the bounding sphere is Shape::cubicBoundingRadius().
+// A node with phi_lin <= E is still rejected without the cubic look-up when
+// phi_lin exceeds its cell's own margin E_c <= E (Shape::CubicLookup): its
+// certificate margin min((phi_lin - E_1) / L, 1 cell), with E_1 the largest
+// cell margin within one cell (Shape::CubicLookup::nearSteps), else none.
 template <int D, ForceFormulation Formulation, bool Cubic>
 std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
@@ -265,7 +269,12 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // its centroid, the grid-frame image of the body origin) and its node box.
   const Vec<D> upper = (grid.dims() - 1).template cast<double>().matrix();
   const Vec<D> centre = (toGrid.translation - grid.origin()) / h;
-  const double reach = (Cubic ? other.cubicBoundingRadius() : other.boundingRadius()) / h;
+  constexpr LevelSetInterpolation interpolation = Cubic ? LevelSetInterpolation::Tricubic
+                                                        : LevelSetInterpolation::Trilinear;
+  const double reach = lookupRadius(other, interpolation) / h;
+  // The tricubic look-up's margins (taken once: the first call is synchronised).
+  const typename Shape<D>::CubicLookup* cubic = Cubic ? &other.cubicLookup() : nullptr;
+  const double cubicMargin = Cubic ? cubic->margin : 0.0;
   const double reach2 = reach * reach;
   const double slope = other.levelSetSlope();
   // Round-off of the look-up and of the mapped centre, far below any overlap that matters.
@@ -336,7 +345,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     // point of the box, no farther from any node in the box.
     const Vec<D> inside = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
     double above = grid.valueAtCells(inside) - (slope * cell.radius + margin);
-    if constexpr (Cubic) above -= other.cubicMargin();
+    if constexpr (Cubic) above -= cubicMargin;
     if (above > 0.0) {
       clear = above * perSlopeCell;
       return true;
@@ -372,9 +381,17 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     double phi;
     if constexpr (Cubic) {
       // The multilinear value first: above the cubic margin the cubic is
-      // positive (Shape::cubicMargin), and most nodes tested are there.
-      const double clear = grid.valueAtCells(g) - other.cubicMargin() - margin;
+      // positive (Shape::cubicMargin), and most nodes tested are there;
+      // above its cell's margin too.
+      const double linear = grid.valueAtCells(g) - margin;
+      const double clear = linear - cubicMargin;
       if (clear > 0.0) return certify ? clear * perSlopeCell : 0.0;
+      const std::size_t cell = grid.cellAtCells(g);
+      if (linear > cubic->cellMargin(cell)) {
+        // Certified while it stays above the margin of the cells within one cell.
+        const double nearClear = linear - cubic->nearMargin(cell);
+        return certify && nearClear > 0.0 ? std::min(nearClear * perSlopeCell, 1.0) : 0.0;
+      }
       phi = grid.cubicValueAtCellsGradientBelow(g, 0.0, grad);
       if (!(phi < 0.0)) return 0.0;
     } else {
@@ -958,8 +975,17 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   law.dt = dt;
   law.shearDt = shearDt;
 
-  // The look-up in the other body's level set, chosen once per compute().
+  // The look-up in the other body's level set, chosen once per compute():
+  // one direction's walk (collectLevelSet) with it.
   const bool cubic = law_.interpolation == LevelSetInterpolation::Tricubic;
+  const auto collect = [cubic](const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
+                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
+                               std::uint8_t ownerIsB, ThreadBuffers<D>& buf, const CertificateKey<D>* key) {
+    return cubic ? collectLevelSet<D, Formulation, true>(owner, Ro, xo, other, Rt, xt, directionWeight, normalSign,
+                                                         ownerIsB, buf, key)
+                 : collectLevelSet<D, Formulation, false>(owner, Ro, xo, other, Rt, xt, directionWeight, normalSign,
+                                                          ownerIsB, buf, key);
+  };
 
   // Tasks: one per candidate pair, then one per particle for the planes and one for the tools.
   const std::size_t n = p.size();
@@ -1072,8 +1098,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         ba = certificateKey(2 * k + 1, p.id[ib], p.id[ia]);
       }
       // Bounding spheres apart: no node can touch.
-      const double reach = cubic ? sa.cubicBoundingRadius() + sb.cubicBoundingRadius()
-                                 : sa.boundingRadius() + sb.boundingRadius();
+      const double reach = lookupRadius(sa, law_.interpolation) + lookupRadius(sb, law_.interpolation);
       if ((xb - xa).squaredNorm() > reach * reach) return;
       // Nodes of a in b, then nodes of b in a.
       const Mat<D>& Ra = rotations_[ia];
@@ -1081,13 +1106,8 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       const std::size_t begin = buf.nodes.size();
       const CertificateKey<D>* abKey = certify ? &ab : nullptr;
       const CertificateKey<D>* baKey = certify ? &ba : nullptr;
-      if (cubic) {
-        buf.nodeChecks += collectLevelSet<D, Formulation, true>(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf, abKey);
-        buf.nodeChecks += collectLevelSet<D, Formulation, true>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf, baKey);
-      } else {
-        buf.nodeChecks += collectLevelSet<D, Formulation, false>(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf, abKey);
-        buf.nodeChecks += collectLevelSet<D, Formulation, false>(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf, baKey);
-      }
+      buf.nodeChecks += collect(sa, Ra, xa, sb, Rb, xb, 0.5, 1.0, 0, buf, abKey);
+      buf.nodeChecks += collect(sb, Rb, xb, sa, Ra, xa, 0.5, -1.0, 1, buf, baKey);
       if (buf.nodes.size() == begin) return;
       // The law on the pair's node contacts.
       double radius = 0.0;
@@ -1138,17 +1158,12 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
         if (certify) key = certificateKey(2 * pairTasks + std::size_t(i) * tools.size() + j, p.id[std::size_t(i)],
                                           kToolTag | std::uint64_t(j));
         // Bounding spheres apart: no node can touch.
-        const double reach = s.boundingRadius() + (cubic ? ts.cubicBoundingRadius() : ts.boundingRadius());
+        const double reach = s.boundingRadius() + lookupRadius(ts, law_.interpolation);
         if ((tool.position - x).squaredNorm() > reach * reach) continue;
         const std::size_t begin = buf.nodes.size();
         const Mat<D> toolRotation = Rotation<D>::matrix(tool.orientation);
-        if (cubic) {
-          buf.nodeChecks += collectLevelSet<D, Formulation, true>(s, rotations_[std::size_t(i)], x, ts, toolRotation,
-                                                                  tool.position, 1.0, 1.0, 0, buf, certify ? &key : nullptr);
-        } else {
-          buf.nodeChecks += collectLevelSet<D, Formulation, false>(s, rotations_[std::size_t(i)], x, ts, toolRotation,
-                                                                   tool.position, 1.0, 1.0, 0, buf, certify ? &key : nullptr);
-        }
+        buf.nodeChecks += collect(s, rotations_[std::size_t(i)], x, ts, toolRotation, tool.position, 1.0, 1.0, 0, buf,
+                                  certify ? &key : nullptr);
         if (buf.nodes.size() == begin) continue;
         double radius = 0.0;
         if constexpr (Normal == NormalModel::Hertz) {

@@ -575,11 +575,9 @@ void World<D>::computeForces(double dtClosing) {
   // Broad phase: bounding spheres with a Verlet skin.
   auto t0 = Clock::now();
   radii_.resize(particles_.size());
-  // (The tricubic look-up's negative region reaches a little farther: Shape::cubicBoundingRadius.)
-  if (def_.contact.interpolation == LevelSetInterpolation::Tricubic) {
-    for (std::size_t i = 0; i < particles_.size(); ++i) radii_[i] = particles_.shape[i]->cubicBoundingRadius();
-  } else {
-    for (std::size_t i = 0; i < particles_.size(); ++i) radii_[i] = particles_.shape[i]->boundingRadius();
+  // (The tricubic look-up's negative region reaches a little farther: lookupRadius.)
+  for (std::size_t i = 0; i < particles_.size(); ++i) {
+    radii_[i] = lookupRadius(*particles_.shape[i], def_.contact.interpolation);
   }
   broad_.update(particles_.position, radii_, particles_.id);
   stageSeconds_[std::size_t(Stage::BroadPhase)] += secondsSince(t0);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -23,16 +24,14 @@ void validateContactOptions(const ShapeOptions& options) {
   }
 }
 
-// The tricubic look-up's margin and reach (Shape::cubicMargin,
-// cubicBoundingRadius) of a grid whose multilinear bounding radius about
-// `centroid` (grid frame) is `boundingRadius`: the cells where the cubic may
-// be <= 0 (smallest corner - deviation bound <= 0; elsewhere it is above the
-// multilinear interpolant's corner minimum less the bound, > 0).
-struct CubicData {
-  double margin = 0.0, boundingRadius = 0.0;
-};
+// The tricubic look-up's data (Shape::CubicLookup) of a grid whose
+// multilinear bounding radius about `centroid` (grid frame) is
+// `boundingRadius`: the cells where the cubic may be <= 0 (smallest corner -
+// deviation bound <= 0; elsewhere it is above the multilinear interpolant's
+// corner minimum less the bound, > 0) set the margin, the reach and their
+// own cell margins.
 template <int D>
-CubicData cubicData(const Grid<D>& grid, double boundingRadius, const Vec<D>& centroid) {
+typename Shape<D>::CubicLookup cubicData(const Grid<D>& grid, double boundingRadius, const Vec<D>& centroid) {
   const std::vector<float> deviation = grid.cubicDeviationBounds();
   const Index<D> dims = grid.dims();
   std::array<std::size_t, 1 << D> cornerOffset;
@@ -41,8 +40,11 @@ CubicData cubicData(const Grid<D>& grid, double boundingRadius, const Vec<D>& ce
     for (int a = 0; a < D; ++a) corner[a] = (c >> a) & 1;
     cornerOffset[std::size_t(c)] = grid.linear(corner);
   }
+  typename Shape<D>::CubicLookup data;
   double margin = 0.0;
   double reach2 = boundingRadius * boundingRadius;
+  // Per cell: its deviation bound where the cubic may be <= 0, else -1.
+  std::vector<double> cellBound(grid.size(), -1.0);
   Index<D> i = Index<D>::Zero();
   for (std::size_t n = 0; n < grid.size(); ++n, grid.advance(i)) {
     if ((i >= dims - 1).any()) continue;
@@ -53,6 +55,7 @@ CubicData cubicData(const Grid<D>& grid, double boundingRadius, const Vec<D>& ce
     }
     const double e = deviation[n];
     if (lo - e > 0.0) continue;
+    cellBound[n] = e;
     margin = std::max(margin, std::min(e, hi));
     for (int c = 0; c < (1 << D); ++c) {
       Index<D> corner = i;
@@ -60,7 +63,43 @@ CubicData cubicData(const Grid<D>& grid, double boundingRadius, const Vec<D>& ce
       reach2 = std::max(reach2, (grid.nodePosition(corner) - centroid).squaredNorm());
     }
   }
-  return {margin, std::sqrt(reach2)};
+  data.margin = margin;
+  data.boundingRadius = std::sqrt(reach2);
+  // Cell margins: in a cell where the cubic may be <= 0, a multilinear
+  // value above e (or above E >= min(e, hi), which it exceeds only when e
+  // <= hi, the value being <= hi in the cell) makes the cubic positive;
+  // elsewhere the cubic is positive throughout (0). Rounded up to whole
+  // steps of E / 255, the unit raised until 255 steps reach E.
+  double unit = margin / 255.0;
+  while (255.0 * unit < margin) unit = std::nextafter(unit, std::numeric_limits<double>::infinity());
+  data.cellUnit = unit;
+  data.cellSteps.assign(grid.size(), 0);
+  if (margin > 0.0) {
+    for (std::size_t n = 0; n < grid.size(); ++n) {
+      if (cellBound[n] < 0.0) continue;
+      const double bound = std::min(cellBound[n], margin);
+      double steps = std::min(std::ceil(bound / unit), 255.0);
+      while (steps < 255.0 && unit * steps < bound) steps += 1.0;
+      data.cellSteps[n] = std::uint8_t(steps);
+    }
+  }
+  // The largest over the cells within one cell along every axis: a running
+  // maximum along each axis in turn (the index clamped to the grid).
+  data.nearSteps = data.cellSteps;
+  std::vector<std::uint8_t> scratch(grid.size());
+  std::size_t stride = 1;
+  for (int a = 0; a < D; ++a) {
+    Index<D> j = Index<D>::Zero();
+    for (std::size_t n = 0; n < grid.size(); ++n, grid.advance(j)) {
+      std::uint8_t m = data.nearSteps[n];
+      if (j[a] > 0) m = std::max(m, data.nearSteps[n - stride]);
+      if (j[a] + 1 < dims[a]) m = std::max(m, data.nearSteps[n + stride]);
+      scratch[n] = m;
+    }
+    data.nearSteps.swap(scratch);
+    stride *= std::size_t(dims[a]);
+  }
+  return data;
 }
 
 }  // namespace
@@ -212,9 +251,7 @@ void Shape<D>::deriveSearchData() {
 template <int D>
 void Shape<D>::deriveCubicData() const {
   std::call_once(cubicOnce_.flag, [this] {
-    const CubicData data = cubicData(grid_, boundingRadius_, bodyToGrid_.translation);
-    cubicMargin_ = data.margin;
-    cubicBoundingRadius_ = data.boundingRadius;
+    cubic_ = cubicData(grid_, boundingRadius_, bodyToGrid_.translation);
   });
 }
 

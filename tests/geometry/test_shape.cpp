@@ -131,16 +131,40 @@ void checkCubicMarginAndReach(const Shape<D>& shape) {
   EXPECT_GE(E, 0.0);
   EXPECT_LT(E, 0.5 * g.spacing());  // small on a smooth grain: the rejection tests stay useful
   EXPECT_GE(shape.cubicBoundingRadius(), shape.boundingRadius());
+  const typename Shape<D>::CubicLookup& lookup = shape.cubicLookup();
+  ASSERT_EQ(lookup.cellSteps.size(), g.size());
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  int negative = 0;
+  int negative = 0, clearedByCell = 0, clearedByNear = 0;
   for (int k = 0; k < 200000; ++k) {
     Vec<D> c;
     for (int a = 0; a < D; ++a) c[a] = u(rng) * double(g.dims()[a] - 1);
     const double cubic = g.cubicValueAtCells(c);
+    const double linear = g.valueAtCells(c);
     // Where the multilinear value exceeds E the cubic is positive ...
-    if (g.valueAtCells(c) > E) {
+    if (linear > E) {
       ASSERT_GT(cubic, 0.0);
+    }
+    // ... and where it exceeds its cell's margin E_c <= E.
+    const double cellMargin = lookup.cellMargin(g.cellAtCells(c));
+    ASSERT_LE(cellMargin, E * (1.0 + 1e-12));
+    if (linear > cellMargin) {
+      ASSERT_GT(cubic, 0.0) << "cell margin " << cellMargin;
+      if (linear <= E) ++clearedByCell;
+    }
+    // A point within one cell of c (in the box) above c's near margin is
+    // outside the cubic too.
+    const double nearMargin = lookup.nearMargin(g.cellAtCells(c));
+    ASSERT_GE(nearMargin, cellMargin);
+    ASSERT_LE(nearMargin, E * (1.0 + 1e-12));
+    Vec<D> step;
+    for (int a = 0; a < D; ++a) step[a] = u(rng) - 0.5;
+    const Vec<D> moved = c + u(rng) * step / step.norm();
+    bool inBox = true;
+    for (int a = 0; a < D; ++a) inBox = inBox && moved[a] >= 0.0 && moved[a] <= double(g.dims()[a] - 1);
+    if (inBox && g.valueAtCells(moved) > nearMargin) {
+      ASSERT_GT(g.cubicValueAtCells(moved), 0.0) << "near margin " << nearMargin;
+      if (g.valueAtCells(moved) <= E) ++clearedByNear;
     }
     // ... and where the cubic is negative the point is in the cubic bounding sphere.
     if (cubic < 0.0) {
@@ -150,6 +174,9 @@ void checkCubicMarginAndReach(const Shape<D>& shape) {
     }
   }
   EXPECT_GT(negative, 1000);
+  // The cell margins clear points near the surface that E does not.
+  EXPECT_GT(clearedByCell, 100);
+  EXPECT_GT(clearedByNear, 20);
 }
 
 }  // namespace

@@ -79,6 +79,16 @@ struct BoundaryLoads {
   std::vector<Spin<D>> toolTorque;  ///< torque of the particles on each tool about ToolPose::position, N m
 };
 
+/// @brief The radius about a shape's centroid within which a node of
+/// another body can find it inside (world units): the bounding sphere of its
+/// level set as the narrow phase reads it, Shape::boundingRadius() for the
+/// multilinear look-up, Shape::cubicBoundingRadius() for the tricubic one.
+/// The broad phase's radius and the narrow phase's sphere tests.
+template <int D>
+double lookupRadius(const geometry::Shape<D>& shape, LevelSetInterpolation interpolation) {
+  return interpolation == LevelSetInterpolation::Tricubic ? shape.cubicBoundingRadius() : shape.boundingRadius();
+}
+
 /// The contact dashpot's part of one PairContact (pairDashpots() is aligned
 /// with pairContacts()): what the energy ledger needs to book the dashpot's
 /// work exactly (World.h), since the dashpot's force depends on the velocity.

@@ -152,6 +152,15 @@ class Grid {
     return interpolateCubic<GradientMode::Below>(g, &gradCells, threshold);
   }
 
+  /// @brief The cell holding grid coordinates g inside the node box, as the
+  /// look-ups choose it (the upper border in the last cell): the linear
+  /// offset of its lowest corner.
+  std::size_t cellAtCells(const Vec<D>& g) const {
+    Index<D> c;
+    for (int a = 0; a < D; ++a) c[a] = std::clamp(int(g[a]), 0, dims_[a] - 2);
+    return linear(c);
+  }
+
   /// @brief Per cell, a bound on |cubic - multilinear| over the cell (world
   /// units), stored at the cell's lowest corner (entries at the last node of
   /// an axis are 0). The tensor product is written as a telescoping sum,
@@ -247,7 +256,7 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells, double th
 
 namespace detail {
 /// Catmull-Rom weights of the nodes i-1, i, i+1, i+2 at t in [0, 1] of cell i.
-inline void catmullRomWeights(double t, double w[4]) {
+[[gnu::always_inline]] inline void catmullRomWeights(double t, double w[4]) {
   const double t2 = t * t, t3 = t2 * t;
   w[0] = 0.5 * (-t3 + 2.0 * t2 - t);
   w[1] = 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0);
@@ -255,7 +264,7 @@ inline void catmullRomWeights(double t, double w[4]) {
   w[3] = 0.5 * (t3 - t2);
 }
 /// Their derivatives with respect to t.
-inline void catmullRomDerivatives(double t, double w[4]) {
+[[gnu::always_inline]] inline void catmullRomDerivatives(double t, double w[4]) {
   const double t2 = t * t;
   w[0] = 0.5 * (-3.0 * t2 + 4.0 * t - 1.0);
   w[1] = 0.5 * (9.0 * t2 - 10.0 * t);
@@ -267,11 +276,15 @@ inline void catmullRomDerivatives(double t, double w[4]) {
 // The Catmull-Rom interpolant at grid coordinates g inside the box (see
 // cubicValueAtCells); with Mode Always (Below: where the value is below
 // `threshold`) also its derivative per cell length. Separable: the sums
-// along x first (per y[, z] row of the 4^D stencil), then y, then z.
+// along x first (per y[, z] row of the 4^D stencil), then y, then z. With a
+// gradient mode the rows' x-derivative sums are formed in the same pass as
+// their values (the stencil is gathered once); the arithmetic of each sum is
+// that of the value-only look-up, so the results agree bit for bit.
 template <int D>
 template <typename Grid<D>::GradientMode Mode>
 inline double Grid<D>::interpolateCubic(const Vec<D>& g, Vec<D>* gradCells, double threshold) const {
   // Cell, fraction, weights and the stencil's offsets per axis (clamped at the border).
+  constexpr bool withGradient = Mode != GradientMode::None;
   double w[D][4];
   std::size_t offset[D][4];
   std::size_t stride = 1;
@@ -283,54 +296,45 @@ inline double Grid<D>::interpolateCubic(const Vec<D>& g, Vec<D>* gradCells, doub
     for (int k = 0; k < 4; ++k) offset[a][k] = stride * std::size_t(std::clamp(ci + k - 1, 0, dims_[a] - 1));
     stride *= std::size_t(dims_[a]);
   }
+  double dx[4] = {0.0, 0.0, 0.0, 0.0};
+  if constexpr (withGradient) detail::catmullRomDerivatives(t[0], dx);
   const float* v = values_.data();
+  // One row of the stencil along x: its value sum and (with a gradient
+  // mode) its x-derivative sum.
+  const auto rowSums = [&](const float* r, double& value, double& derivative) {
+    const double r0 = r[offset[0][0]], r1 = r[offset[0][1]], r2 = r[offset[0][2]], r3 = r[offset[0][3]];
+    value = w[0][0] * r0 + w[0][1] * r1 + w[0][2] * r2 + w[0][3] * r3;
+    if constexpr (withGradient) derivative = dx[0] * r0 + dx[1] * r1 + dx[2] * r2 + dx[3] * r3;
+  };
   if constexpr (D == 2) {
-    double row[4];  // the x sums of the four rows
-    for (int j = 0; j < 4; ++j) {
-      const float* r = v + offset[1][j];
-      row[j] = w[0][0] * r[offset[0][0]] + w[0][1] * r[offset[0][1]] + w[0][2] * r[offset[0][2]] +
-               w[0][3] * r[offset[0][3]];
-    }
+    double row[4], rowDx[4];  // the x sums of the four rows
+    for (int j = 0; j < 4; ++j) rowSums(v + offset[1][j], row[j], rowDx[j]);
     const double value = w[1][0] * row[0] + w[1][1] * row[1] + w[1][2] * row[2] + w[1][3] * row[3];
     if (Mode == GradientMode::Always || (Mode == GradientMode::Below && value < threshold)) {
-      double dx[4], dy[4];
-      detail::catmullRomDerivatives(t[0], dx);
+      double dy[4];
       detail::catmullRomDerivatives(t[1], dy);
       double gx = 0.0;
-      for (int j = 0; j < 4; ++j) {
-        const float* r = v + offset[1][j];
-        gx += w[1][j] * (dx[0] * r[offset[0][0]] + dx[1] * r[offset[0][1]] + dx[2] * r[offset[0][2]] +
-                         dx[3] * r[offset[0][3]]);
-      }
+      for (int j = 0; j < 4; ++j) gx += w[1][j] * rowDx[j];
       (*gradCells)[0] = gx;
       (*gradCells)[1] = dy[0] * row[0] + dy[1] * row[1] + dy[2] * row[2] + dy[3] * row[3];
     }
     return value;
   } else {
-    double row[4][4];  // the x sums of the 16 rows, [z][y]
-    double plane[4];   // the y sums of the four planes
+    double row[4][4], rowDx[4][4];  // the x sums of the 16 rows, [z][y]
+    double plane[4];                // the y sums of the four planes
     for (int k = 0; k < 4; ++k) {
-      for (int j = 0; j < 4; ++j) {
-        const float* r = v + offset[2][k] + offset[1][j];
-        row[k][j] = w[0][0] * r[offset[0][0]] + w[0][1] * r[offset[0][1]] + w[0][2] * r[offset[0][2]] +
-                    w[0][3] * r[offset[0][3]];
-      }
+      for (int j = 0; j < 4; ++j) rowSums(v + offset[2][k] + offset[1][j], row[k][j], rowDx[k][j]);
       plane[k] = w[1][0] * row[k][0] + w[1][1] * row[k][1] + w[1][2] * row[k][2] + w[1][3] * row[k][3];
     }
     const double value = w[2][0] * plane[0] + w[2][1] * plane[1] + w[2][2] * plane[2] + w[2][3] * plane[3];
     if (Mode == GradientMode::Always || (Mode == GradientMode::Below && value < threshold)) {
-      double dx[4], dy[4], dz[4];
-      detail::catmullRomDerivatives(t[0], dx);
+      double dy[4], dz[4];
       detail::catmullRomDerivatives(t[1], dy);
       detail::catmullRomDerivatives(t[2], dz);
       double gx = 0.0, gy = 0.0;
       for (int k = 0; k < 4; ++k) {
         double px = 0.0;  // the y sum of the rows' x derivatives
-        for (int j = 0; j < 4; ++j) {
-          const float* r = v + offset[2][k] + offset[1][j];
-          px += w[1][j] * (dx[0] * r[offset[0][0]] + dx[1] * r[offset[0][1]] + dx[2] * r[offset[0][2]] +
-                           dx[3] * r[offset[0][3]]);
-        }
+        for (int j = 0; j < 4; ++j) px += w[1][j] * rowDx[k][j];
         gx += w[2][k] * px;
         gy += w[2][k] * (dy[0] * row[k][0] + dy[1] * row[k][1] + dy[2] * row[k][2] + dy[3] * row[k][3]);
       }

@@ -21,8 +21,10 @@
 #include "lsdem/geometry/Types.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 namespace lsdem::geometry {
 
@@ -129,26 +131,50 @@ class Shape {
   /// segment in the box), which lets one look-up at a sphere's centre show
   /// that every point of the sphere in the box is outside the shape.
   double levelSetSlope() const { return levelSetSlope_; }
-  /// A bound E >= 0 (world units) such that wherever the multilinear
-  /// interpolant exceeds E, the Catmull-Rom interpolant (Grid::cubicValueAtCells)
-  /// is positive: the largest over the cells where the cubic may be <= 0 of
-  /// min(the cell's deviation bound, its largest corner value)
-  /// (Grid::cubicDeviationBounds). So the narrow phase's multilinear bulk
-  /// rejection and separation certificates hold for the tricubic look-up
-  /// with their margins lowered by E. Computed on the first call (from any
+  /// The tricubic look-up's data (derived together on the first call).
+  struct CubicLookup {
+    /// A bound E >= 0 (world units) such that wherever the multilinear
+    /// interpolant exceeds E, the Catmull-Rom interpolant
+    /// (Grid::cubicValueAtCells) is positive: the largest over the cells
+    /// where the cubic may be <= 0 of min(the cell's deviation bound, its
+    /// largest corner value) (Grid::cubicDeviationBounds).
+    double margin = 0.0;
+    /// The bounding radius for the tricubic look-up (world units, >=
+    /// boundingRadius()): it also holds every cell where the Catmull-Rom
+    /// interpolant may be negative.
+    double boundingRadius = 0.0;
+    /// Per cell (indexed by its lowest corner's Grid::linear offset), E_c =
+    /// cellUnit x cellSteps[c] <= E such that wherever the multilinear
+    /// interpolant in the cell exceeds E_c the Catmull-Rom interpolant is
+    /// positive: 0 for a cell where the cubic is positive throughout, else
+    /// min(the cell's deviation bound, E) rounded up to a step of E / 255
+    /// (one byte per grid node, two with nearSteps).
+    std::vector<std::uint8_t> cellSteps;
+    /// Per cell, the largest cellSteps of the cells within one cell of it
+    /// along every axis: every point within distance 1 (cells) of a point
+    /// of cell c lies in such a cell, so a multilinear value above
+    /// nearMargin(c) there makes the cubic positive.
+    std::vector<std::uint8_t> nearSteps;
+    double cellUnit = 0.0;
+    double cellMargin(std::size_t cell) const { return cellUnit * double(cellSteps[cell]); }
+    /// The margin over the cells within one cell of `cell`.
+    double nearMargin(std::size_t cell) const { return cellUnit * double(nearSteps[cell]); }
+  };
+  /// The tricubic look-up's data, computed on the first call (from any
   /// thread), so shapes that never meet the tricubic look-up never pay for
-  /// it (a pass over the grid: ~12 ms at 64^3).
-  double cubicMargin() const {
+  /// it (a pass over the grid: ~12 ms at 64^3). The narrow phase's
+  /// multilinear bulk rejection and separation certificates hold for the
+  /// tricubic look-up with their margins lowered by `margin`; a single node
+  /// is cleared by its cell's own margin. Callers in a loop take the
+  /// reference once (the first-call check is a synchronised call).
+  const CubicLookup& cubicLookup() const {
     deriveCubicData();
-    return cubicMargin_;
+    return cubic_;
   }
-  /// The bounding radius for the tricubic look-up (world units, >=
-  /// boundingRadius()): it also holds every cell where the Catmull-Rom
-  /// interpolant may be negative. Computed with cubicMargin().
-  double cubicBoundingRadius() const {
-    deriveCubicData();
-    return cubicBoundingRadius_;
-  }
+  /// cubicLookup().margin.
+  double cubicMargin() const { return cubicLookup().margin; }
+  /// cubicLookup().boundingRadius.
+  double cubicBoundingRadius() const { return cubicLookup().boundingRadius; }
   /// Options the shape was made with.
   const ShapeOptions& options() const { return options_; }
   /// Bytes held by the shape (grid values and nodes).
@@ -177,7 +203,7 @@ class Shape {
   // Derived on construction (not stored in grain files or checkpoints).
   NodeTree<D> nodeTree_;
   double levelSetSlope_ = 0.0;
-  // Derived on first use (cubicMargin): the tricubic look-up's data. A
+  // Derived on first use (cubicLookup): the tricubic look-up's data. A
   // copy of a shape starts without them and derives its own.
   struct CubicOnce {
     std::once_flag flag;
@@ -186,8 +212,7 @@ class Shape {
     CubicOnce& operator=(const CubicOnce&) { return *this; }
   };
   mutable CubicOnce cubicOnce_;
-  mutable double cubicMargin_ = 0.0;
-  mutable double cubicBoundingRadius_ = 0.0;
+  mutable CubicLookup cubic_;
   void deriveCubicData() const;
   void deriveSearchData();
 };
