@@ -3,6 +3,7 @@
 // report with its budgets, the plots; and its option errors.
 
 #include "support/Files.h"
+#include "support/Process.h"
 #include <gtest/gtest.h>
 
 #include <array>
@@ -19,22 +20,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out;  // stdout and stderr together
-};
+using Result = lsdem::test::ProcessResult;
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(LSDEM_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  Result r{-1, ""};
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), int(buf.size()), pipe)) r.out += buf.data();
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+// `lsdem ARGS`, stdout and stderr together.
+Result run(const std::string& args) { return lsdem::test::runShell(std::string(LSDEM_BINARY) + " " + args); }
 
 // The rows of a CSV file as maps from its header's names.
 std::vector<std::map<std::string, std::string>> readCsv(const fs::path& path) {
@@ -69,8 +58,8 @@ double num(const std::map<std::string, std::string>& row, const std::string& key
 TEST(BenchBreakage, QuickStudyWritesItsTableReportAndPlots) {
   const fs::path out = lsdem::test::tempPath("bench_breakage");
   const Result r = run("bench accuracy --breakage --quick --out " + out.string());
-  ASSERT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("fast:"), std::string::npos) << r.out;
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("fast:"), std::string::npos) << r.output;
 
   // One row per case and setting: 3 grids, 1 node density, 1 law, 1 re-gridding, 2 seeds each.
   const auto rows = readCsv(out / "breakage_accuracy.csv");
@@ -129,7 +118,7 @@ TEST(BenchBreakage, QuickStudyWritesItsTableReportAndPlots) {
   const std::string table = lsdem::test::readFile(out / "breakage_accuracy.csv");
   fs::remove(out / "runs" / "single_grain_c10_n1_pn_r0_s101.cost");
   const Result again = run("bench accuracy --breakage --quick --resume --out " + out.string());
-  ASSERT_EQ(again.code, 0) << again.out;
+  ASSERT_EQ(again.code, 0) << again.output;
   EXPECT_TRUE(fs::is_regular_file(out / "runs" / "single_grain_c10_n1_pn_r0_s101.cost"));
   const auto rerun = readCsv(out / "breakage_runs.csv");
   ASSERT_EQ(rerun.size(), runs.size());
@@ -148,9 +137,9 @@ TEST(BenchBreakage, OptionErrorsAreOneLine) {
                            "bench accuracy --resume --quick", "bench accuracy --breakage --jobs 0"}) {
     const Result r = run(args);
     EXPECT_NE(r.code, 0) << args;
-    EXPECT_FALSE(r.out.empty()) << args;
+    EXPECT_FALSE(r.output.empty()) << args;
   }
   const Result r = run("bench accuracy --breakage --dim 3");
-  EXPECT_NE(r.out.find("2D scenes only"), std::string::npos) << r.out;
-  EXPECT_EQ(r.out.find('\n'), r.out.size() - 1) << r.out;
+  EXPECT_NE(r.output.find("2D scenes only"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find('\n'), r.output.size() - 1) << r.output;
 }

@@ -5,6 +5,7 @@
 // has nothing to plot (exit 2).
 
 #include "support/Files.h"
+#include "support/Process.h"
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/TriangleMesh.h"
 #include "lsdem/io/GrainFile.h"
@@ -25,21 +26,11 @@ using namespace lsdem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out;  // stdout and stderr together
-};
+using Result = lsdem::test::ProcessResult;
 
+// `ENV lsdem ARGS` (ENV: variable assignments), stdout and stderr together.
 Result run(const std::string& args, const std::string& env = "") {
-  const std::string cmd = env + " " + std::string(LSDEM_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  Result r{-1, ""};
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), int(buf.size()), pipe)) r.out += buf.data();
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return lsdem::test::runShell(env + " " + std::string(LSDEM_BINARY) + " " + args);
 }
 
 fs::path tempDir(const std::string& name) {
@@ -87,26 +78,26 @@ TEST(Mesh2ls, CubeBecomesAGrainFile) {
   geometry::writeStl(box(2.0, 10.0), (dir / "cube.stl").string());
   const std::string grain = (dir / "cube.lsg").string();
   const Result r = run("mesh2ls " + (dir / "cube.stl").string() + " --spacing 0.001 --scale 0.001 -o " + grain + " --json");
-  ASSERT_EQ(r.code, 0) << r.out;
+  ASSERT_EQ(r.code, 0) << r.output;
   // Volume 1e-6 m^3 (the sharp edges at 10 cells across cost ~1%), centroid at 7 mm.
-  const double volume = jsonNumber(r.out, "volume");
+  const double volume = jsonNumber(r.output, "volume");
   EXPECT_NEAR(volume, 1e-6, 0.02e-6);
-  EXPECT_DOUBLE_EQ(jsonNumber(r.out, "mesh_volume"), 1e-6);
-  for (int a = 0; a < 3; ++a) EXPECT_NEAR(jsonNumber(r.out, "centroid", a), 0.007, 1e-6);
-  EXPECT_GT(jsonNumber(r.out, "nodes"), 1000);
+  EXPECT_DOUBLE_EQ(jsonNumber(r.output, "mesh_volume"), 1e-6);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(jsonNumber(r.output, "centroid", a), 0.007, 1e-6);
+  EXPECT_GT(jsonNumber(r.output, "nodes"), 1000);
   // The file holds that grain.
   EXPECT_EQ(io::grainFileDimension(grain), 3);
   const auto shape = io::readGrainFile<3>(grain);
   EXPECT_EQ(shape->volume(), volume);
-  EXPECT_EQ(double(shape->nodes().size()), jsonNumber(r.out, "nodes"));
+  EXPECT_EQ(double(shape->nodes().size()), jsonNumber(r.output, "nodes"));
   EXPECT_NEAR(shape->bodyToGrid().translation[2], 0.007, 1e-6);
 
   // Binary form, 1 node per cell, text report.
   const std::string bin = (dir / "cube_bin.lsg").string();
   const Result b = run("mesh2ls " + (dir / "cube.stl").string() + " --spacing 0.001 --scale 0.001 --binary --nodes-per-cell 1 -o " + bin);
-  ASSERT_EQ(b.code, 0) << b.out;
-  EXPECT_NE(b.out.find("volume"), std::string::npos);
-  EXPECT_NE(b.out.find("centroid       (0.007, 0.007, 0.007) m"), std::string::npos) << b.out;
+  ASSERT_EQ(b.code, 0) << b.output;
+  EXPECT_NE(b.output.find("volume"), std::string::npos);
+  EXPECT_NE(b.output.find("centroid       (0.007, 0.007, 0.007) m"), std::string::npos) << b.output;
   std::ifstream in(bin, std::ios::binary);
   EXPECT_EQ(in.get(), 0x89);
   const auto coarse = io::readGrainFile<3>(bin);
@@ -123,25 +114,25 @@ TEST(Mesh2ls, BadInputEndsInOneLineAndExitCode2) {
   geometry::writeStl(open, openPath);
   const Result o = run("mesh2ls " + openPath + " --spacing 0.1 -o " + (dir / "x.lsg").string());
   EXPECT_EQ(o.code, 2);
-  EXPECT_EQ(o.out, "lsdem: " + openPath + ": mesh is not closed (3 border edges)\n");
+  EXPECT_EQ(o.output, "lsdem: " + openPath + ": mesh is not closed (3 border edges)\n");
   EXPECT_FALSE(fs::exists(dir / "x.lsg"));
   // Not a mesh at all.
   std::ofstream(dir / "junk.stl") << "hello\n";
   const Result j = run("mesh2ls " + (dir / "junk.stl").string() + " --spacing 0.1 -o " + (dir / "x.lsg").string());
   EXPECT_EQ(j.code, 2);
-  EXPECT_EQ(j.out.rfind("lsdem: " + (dir / "junk.stl").string() + ": cannot read mesh file", 0), 0u) << j.out;
-  EXPECT_EQ(std::count(j.out.begin(), j.out.end(), '\n'), 1);
+  EXPECT_EQ(j.output.rfind("lsdem: " + (dir / "junk.stl").string() + ": cannot read mesh file", 0), 0u) << j.output;
+  EXPECT_EQ(std::count(j.output.begin(), j.output.end(), '\n'), 1);
   // A missing file and bad numbers.
   const Result m = run("mesh2ls " + (dir / "missing.stl").string() + " --spacing 0.1 -o x.lsg");
   EXPECT_EQ(m.code, 2);
-  EXPECT_EQ(m.out, "lsdem: " + (dir / "missing.stl").string() + ": no such mesh file\n");
+  EXPECT_EQ(m.output, "lsdem: " + (dir / "missing.stl").string() + ": no such mesh file\n");
   geometry::writeStl(box(0.0, 1.0), (dir / "cube.stl").string());
   const Result s = run("mesh2ls " + (dir / "cube.stl").string() + " --spacing 0 -o x.lsg");
   EXPECT_EQ(s.code, 2);
-  EXPECT_EQ(s.out, "lsdem: --spacing: must be positive, got 0\n");
+  EXPECT_EQ(s.output, "lsdem: --spacing: must be positive, got 0\n");
   const Result c = run("mesh2ls " + (dir / "cube.stl").string() + " --spacing 0.1 --scale -2 -o x.lsg");
   EXPECT_EQ(c.code, 2);
-  EXPECT_EQ(c.out, "lsdem: --scale: must be positive, got -2\n");
+  EXPECT_EQ(c.output, "lsdem: --scale: must be positive, got -2\n");
   // A required option missing: CLI11's usage error, non-zero.
   EXPECT_NE(run("mesh2ls " + (dir / "cube.stl").string() + " -o x.lsg").code, 0);
 }
@@ -151,8 +142,8 @@ TEST(Plot, RunFolderToPngs) {
   // An empty folder: one line, exit 2.
   const Result e = run("plot " + dir.string());
   EXPECT_EQ(e.code, 2);
-  EXPECT_EQ(e.out.rfind("lsdem: " + dir.string() + ": holds none of history.csv", 0), 0u) << e.out;
-  EXPECT_EQ(std::count(e.out.begin(), e.out.end(), '\n'), 1);
+  EXPECT_EQ(e.output.rfind("lsdem: " + dir.string() + ": holds none of history.csv", 0), 0u) << e.output;
+  EXPECT_EQ(std::count(e.output.begin(), e.output.end(), '\n'), 1);
 
   // A history with a specimen and a breakage log.
   {
@@ -170,18 +161,18 @@ TEST(Plot, RunFolderToPngs) {
   // Without gnuplot (PATH emptied): the message and exit 3.
   const Result n = run("plot " + dir.string(), "PATH=/nonexistent-lsdem");
   EXPECT_EQ(n.code, 3);
-  EXPECT_EQ(n.out, "lsdem plot: gnuplot is not installed (apt-get install gnuplot-nox); the CSV files in " + dir.string() +
+  EXPECT_EQ(n.output, "lsdem plot: gnuplot is not installed (apt-get install gnuplot-nox); the CSV files in " + dir.string() +
                        " can be plotted with any tool\n");
   // With gnuplot: PNG files in DIR/plots, or in --out.
   const Result probe = run("plot " + dir.string() + " --out " + (dir / "p").string());
   if (probe.code == 3) GTEST_SKIP() << "gnuplot is not installed";
-  ASSERT_EQ(probe.code, 0) << probe.out;
+  ASSERT_EQ(probe.code, 0) << probe.output;
   for (const char* png : {"energies.png", "breakages.png", "stress_strain.png", "void_ratio.png", "breakage_stress.png"}) {
     EXPECT_TRUE(isPng(dir / "p" / png)) << png;
-    EXPECT_NE(probe.out.find(png), std::string::npos) << probe.out;
+    EXPECT_NE(probe.output.find(png), std::string::npos) << probe.output;
   }
   const Result d = run("plot " + dir.string());
-  ASSERT_EQ(d.code, 0) << d.out;
+  ASSERT_EQ(d.code, 0) << d.output;
   EXPECT_TRUE(isPng(dir / "plots" / "stress_strain.png"));
-  EXPECT_NE(d.out.find("wrote " + (dir / "plots" / "void_ratio.png").string()), std::string::npos) << d.out;
+  EXPECT_NE(d.output.find("wrote " + (dir / "plots" / "void_ratio.png").string()), std::string::npos) << d.output;
 }

@@ -4,6 +4,7 @@
 // line; a missing gnuplot exits 3.
 
 #include "support/Files.h"
+#include "support/Process.h"
 #include "lsdem/io/VtpRead.h"
 
 #include <gtest/gtest.h>
@@ -24,21 +25,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out;  // stdout and stderr together
-};
+using Result = lsdem::test::ProcessResult;
 
+// `ENV lsdem ARGS` (ENV: variable assignments), stdout and stderr together.
 Result run(const std::string& args, const std::string& env = "") {
-  const std::string cmd = env + " " + std::string(LSDEM_BINARY) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  Result r{-1, ""};
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), int(buf.size()), pipe)) r.out += buf.data();
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+  return lsdem::test::runShell(env + " " + std::string(LSDEM_BINARY) + " " + args);
 }
 
 // One folder per process: ctest runs the tests of this file side by side, each
@@ -128,7 +119,7 @@ fs::path runScene(const std::string& name, const char* text) {
   const fs::path out = tempDir() / (name + "-out");
   fs::remove_all(out);
   const Result r = run("run " + scene.string() + " --out " + out.string() + " --quiet");
-  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(r.code, 0) << r.output;
   return out;
 }
 
@@ -188,43 +179,43 @@ TEST_F(Render, DrawsPngIn2dAnd3d) {
   fs::remove(png2);
   fs::remove(png3);
   Result r = run("render " + out2d_.string() + " -o " + png2.string() + " --size 320x240");
-  EXPECT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("2D, frame 2"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("2 particles"), std::string::npos) << r.out;
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("2D, frame 2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("2 particles"), std::string::npos) << r.output;
   EXPECT_TRUE(isPng(png2));
   r = run("render " + out3d_.string() + " --frame 0 --view 30,20 --color generation -o " + png3.string());
-  EXPECT_EQ(r.code, 0) << r.out;
-  EXPECT_NE(r.out.find("3D, frame 0"), std::string::npos) << r.out;
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("3D, frame 0"), std::string::npos) << r.output;
   EXPECT_TRUE(isPng(png3));
   r = run("render " + out3d_.string() + " --series particles --up y -o " + pngp.string());
-  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_TRUE(isPng(pngp));
   // The script is kept on request and draws the same image.
   const fs::path gp = tempDir() / "two.gp";
   r = run("render " + out2d_.string() + " -o " + png2.string() + " --script " + gp.string());
-  EXPECT_EQ(r.code, 0) << r.out;
+  EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_GT(fs::file_size(gp), 100u);
 }
 
 TEST_F(Render, BadInputExitsTwoWithOneLine) {
   const std::string png = (tempDir() / "bad.png").string();
   const Result noDir = run("render " + (tempDir() / "nowhere").string() + " -o " + png);
-  EXPECT_EQ(noDir.code, 2) << noDir.out;
-  EXPECT_NE(noDir.out.find("is not a folder"), std::string::npos) << noDir.out;
+  EXPECT_EQ(noDir.code, 2) << noDir.output;
+  EXPECT_NE(noDir.output.find("is not a folder"), std::string::npos) << noDir.output;
   const Result notRun = run("render " + tempDir().string() + " -o " + png);
-  EXPECT_EQ(notRun.code, 2) << notRun.out;
-  EXPECT_NE(notRun.out.find("has no surfaces.pvd"), std::string::npos) << notRun.out;
+  EXPECT_EQ(notRun.code, 2) << notRun.output;
+  EXPECT_NE(notRun.output.find("has no surfaces.pvd"), std::string::npos) << notRun.output;
   const Result frame = run("render " + out2d_.string() + " --frame 7 -o " + png);
-  EXPECT_EQ(frame.code, 2) << frame.out;
-  EXPECT_NE(frame.out.find("frame 7 does not exist"), std::string::npos) << frame.out;
-  EXPECT_NE(frame.out.find("frames 0 to 2"), std::string::npos) << frame.out;
+  EXPECT_EQ(frame.code, 2) << frame.output;
+  EXPECT_NE(frame.output.find("frame 7 does not exist"), std::string::npos) << frame.output;
+  EXPECT_NE(frame.output.find("frames 0 to 2"), std::string::npos) << frame.output;
   for (const std::string opt : {"--frame x", "--view 30", "--size 10x10", "--color red", "--series nodes"}) {
     const Result r = run("render " + out2d_.string() + " " + opt + " -o " + png);
-    EXPECT_EQ(r.code, 2) << opt << ": " << r.out;
-    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+    EXPECT_EQ(r.code, 2) << opt << ": " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   }
   const Result jpg = run("render " + out2d_.string() + " -o x.jpg");
-  EXPECT_EQ(jpg.code, 2) << jpg.out;
+  EXPECT_EQ(jpg.code, 2) << jpg.output;
 }
 
 TEST_F(Render, MissingGnuplotExitsThree) {
@@ -232,6 +223,6 @@ TEST_F(Render, MissingGnuplotExitsThree) {
   fs::create_directories(empty);
   const Result r = run("render " + out2d_.string() + " -o " + (tempDir() / "none.png").string(),
                        "env PATH=" + empty.string());
-  EXPECT_EQ(r.code, 3) << r.out;
-  EXPECT_NE(r.out.find("gnuplot is not installed"), std::string::npos) << r.out;
+  EXPECT_EQ(r.code, 3) << r.output;
+  EXPECT_NE(r.output.find("gnuplot is not installed"), std::string::npos) << r.output;
 }

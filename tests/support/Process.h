@@ -10,6 +10,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -78,6 +80,20 @@ inline ProcessResult runCaptured(const std::vector<std::string>& args, long long
   for (ssize_t n; (n = read(fds[0], buf, sizeof(buf))) > 0;) r.output.append(buf, std::size_t(n));
   close(fds[0]);
   r.code = waitForExit(pid);
+  return r;
+}
+
+/// @brief Runs a shell command line to the end, as a user types it (so it
+/// may start with variable assignments), with stdout and stderr captured
+/// together.
+inline ProcessResult runShell(const std::string& commandLine) {
+  ProcessResult r;
+  FILE* pipe = popen((commandLine + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), int(buf.size()), pipe)) r.output += buf.data();
+  const int status = pclose(pipe);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
 }
 
