@@ -496,13 +496,7 @@ std::vector<std::size_t> World<D>::replace(std::vector<Replacement<D>>& splits) 
   }
   // Parents leave, highest index first (swap-removal keeps the others valid);
   // the children enter in order and bring their kinetic energy.
-  for (std::size_t i : parents) {
-    particles_.remove(i);
-    if (!ghost_.empty()) {
-      ghost_[i] = ghost_.back();
-      ghost_.pop_back();
-    }
-  }
+  for (std::size_t i : parents) dropParticle(i);
   std::vector<std::size_t> added;
   for (const Replacement<D>& s : splits) {
     for (const ParticleDef<D>& def : s.children) {

@@ -106,8 +106,7 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   const dynamics::Particles<D>& p = world_.particles();
   for (std::size_t i = 0; i < p.size(); ++i) {
     largestRadius_ = std::max({largestRadius_, p.shape[i]->boundingRadius(), p.shape[i]->cubicBoundingRadius()});
-    const std::uint64_t h = shapeHash(p.shape[i]);
-    (void)h;
+    shapeHash(p.shape[i]);  // registers the shape under its hash
   }
   skin_ = wd.broadPhase.skin > 0.0 ? wd.broadPhase.skin : 0.1 * largestRadius_;
   checkSameWorldEverywhere();
@@ -120,7 +119,7 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   // rank keeps its own particles and their ghosts.
   std::vector<Vec<D>> points(p.position.begin(), p.position.end());
   std::vector<double> weights(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) weights[i] = double(std::max<std::size_t>(1, p.shape[i]->nodes().size()));
+  for (std::size_t i = 0; i < p.size(); ++i) weights[i] = weight(i);
   decomposition_ = Decomposition<D>::build(points, weights, ranks_);
   for (std::size_t i = p.size(); i-- > 0;) {
     if (decomposition_.owner(p.position[i]) == rank_) continue;
@@ -134,7 +133,7 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
 
 template <int D>
 void DistributedWorld<D>::checkSameWorldEverywhere() const {
-  // Particle count, ids and shape hashes summed in a fixed order: equal on every rank.
+  // A digest of the particle count, ids and shape hashes, in index order: equal on every rank.
   const dynamics::Particles<D>& p = world_.particles();
   std::uint64_t digest = p.size();
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -158,6 +157,11 @@ std::uint64_t DistributedWorld<D>::shapeHash(const std::shared_ptr<const geometr
   hashOf_.emplace(shape.get(), h);
   shapes_.emplace(h, shape);
   return h;
+}
+
+template <int D>
+double DistributedWorld<D>::weight(std::size_t index) const {
+  return double(std::max<std::size_t>(1, world_.particles().shape[index]->nodes().size()));
 }
 
 template <int D>
@@ -353,11 +357,11 @@ void DistributedWorld<D>::exchange() {
 template <int D>
 void DistributedWorld<D>::rebalance() {
   const dynamics::Particles<D>& p = world_.particles();
-  double weight = 0.0;
+  double own = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (!world_.isGhost(i)) weight += double(std::max<std::size_t>(1, p.shape[i]->nodes().size()));
+    if (!world_.isGhost(i)) own += weight(i);
   }
-  double largest = weight, total = weight;
+  double largest = own, total = own;
   check(MPI_Allreduce(MPI_IN_PLACE, &largest, 1, MPI_DOUBLE, MPI_MAX, comm_), "Allreduce");
   check(MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
   if (!(total > 0.0) || !(largest > def_.rebalanceImbalance * total / ranks_)) return;
@@ -366,7 +370,7 @@ void DistributedWorld<D>::rebalance() {
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (world_.isGhost(i)) continue;
     for (int a = 0; a < D; ++a) mine.push_back(p.position[i][a]);
-    mine.push_back(double(std::max<std::size_t>(1, p.shape[i]->nodes().size())));
+    mine.push_back(weight(i));
   }
   int count = int(mine.size());
   std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
@@ -381,7 +385,7 @@ void DistributedWorld<D>::rebalance() {
         "Allgatherv");
   std::vector<Vec<D>> points;
   std::vector<double> weights;
-  for (std::size_t k = 0; k + D < all.size() + 1; k += D + 1) {
+  for (std::size_t k = 0; k < all.size(); k += D + 1) {
     Vec<D> x;
     for (int a = 0; a < D; ++a) x[a] = all[k + std::size_t(a)];
     points.push_back(x);

@@ -118,6 +118,8 @@ class DistributedWorld {
   void checkSameWorldEverywhere() const;
   std::uint64_t shapeHash(const std::shared_ptr<const geometry::Shape<D>>& shape);
   double reach(std::size_t index) const;
+  // Local particle `index`'s cost in the decomposition: its surface nodes (at least 1).
+  double weight(std::size_t index) const;
 
   MPI_Comm comm_;
   dynamics::World<D>& world_;
