@@ -247,9 +247,13 @@ constexpr double kCertificateSlack = 1e-6;
 // phi_lin > E (its certificate margin (phi_lin - E) / L; a node nearer than
 // that gets none), and the bounding sphere is Shape::cubicBoundingRadius().
 // A node with phi_lin <= E is still rejected without the cubic look-up when
-// phi_lin exceeds its cell's own margin E_c <= E (Shape::CubicLookup): its
-// certificate margin min((phi_lin - E_1) / L, 1 cell), with E_1 the largest
-// cell margin within one cell (Shape::CubicLookup::nearSteps), else none.
+// phi_lin exceeds its cell's own margin E_c <= E (Shape::CubicLookup). A node
+// rejected by a margin keeps the largest certificate margin that holds:
+// (phi_lin - E) / L anywhere; min((phi_lin - E_1) / L, 1 cell), with E_1 the
+// largest cell margin within one cell (Shape::CubicLookup::nearSteps); and
+// min((phi_lin - E_c) / L, its distance from its cell's faces), since while
+// it stays in its cell E_c holds. A node whose cubic value phi >= 0 keeps
+// phi / L_c, L_c >= |grad| of the cubic in the box (CubicLookup::slope).
 template <int D, ForceFormulation Formulation, bool Cubic>
 std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>& xo, const Shape<D>& other,
                               const Mat<D>& Rt, const Vec<D>& xt, double directionWeight, double normalSign,
@@ -317,7 +321,18 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   double clearCells = std::numeric_limits<double>::infinity();
   double clearNodes = std::numeric_limits<double>::infinity();
   const double perSlopeCell = certify ? 1.0 / (slope * h) : 0.0;
+  [[maybe_unused]] const double perCubicSlopeCell = certify && Cubic ? 1.0 / (cubic->slope * h) : 0.0;
   std::uint64_t tested = 0;
+  // How far g may move (cells) and stay in the cell cellAtCells(g): its
+  // distance from the cell's nearest face.
+  [[maybe_unused]] const auto withinCell = [&grid](const Vec<D>& g) {
+    double d = 1.0;
+    for (int a = 0; a < D; ++a) {
+      const double f = g[a] - double(std::clamp(int(g[a]), 0, grid.dims()[a] - 2));
+      d = std::min({d, f, 1.0 - f});
+    }
+    return d;
+  };
   // How far g lies beyond the node box along its worst axis (<= 0 inside).
   const auto beyondBox = [upper](const Vec<D>& g) {
     return std::max((-g.array()).maxCoeff(), (g.array() - upper.array()).maxCoeff());
@@ -385,15 +400,19 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       // above its cell's margin too.
       const double linear = grid.valueAtCells(g) - margin;
       const double clear = linear - cubicMargin;
-      if (clear > 0.0) return certify ? clear * perSlopeCell : 0.0;
+      if (clear > 0.0) {
+        const double m = clear * perSlopeCell;  // 0 without certificates
+        if (m >= 1.0 || !certify) return m;
+        return std::max(m, std::min((linear - cubic->nearMargin(grid.cellAtCells(g))) * perSlopeCell, 1.0));
+      }
       const std::size_t cell = grid.cellAtCells(g);
       if (linear > cubic->cellMargin(cell)) {
-        // Certified while it stays above the margin of the cells within one cell.
-        const double nearClear = linear - cubic->nearMargin(cell);
-        return certify && nearClear > 0.0 ? std::min(nearClear * perSlopeCell, 1.0) : 0.0;
+        if (!certify) return 0.0;
+        return std::max(std::min((linear - cubic->nearMargin(cell)) * perSlopeCell, 1.0),
+                        std::min((linear - cubic->cellMargin(cell)) * perSlopeCell, withinCell(g)));
       }
       phi = grid.cubicValueAtCellsGradientBelow(g, 0.0, grad);
-      if (!(phi < 0.0)) return 0.0;
+      if (!(phi < 0.0)) return certify ? (phi - margin) * perCubicSlopeCell : 0.0;
     } else {
       phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
       if (!(phi < 0.0)) return certify ? (phi - margin) * perSlopeCell : 0.0;

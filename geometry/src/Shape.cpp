@@ -83,6 +83,26 @@ typename Shape<D>::CubicLookup cubicData(const Grid<D>& grid, double boundingRad
       data.cellSteps[n] = std::uint8_t(steps);
     }
   }
+  // The gradient bound. Per axis, the Catmull-Rom derivative of four values
+  // v0..v3 at t is sum_k a_k(t) (v_{k+1} - v_k), with a_0 = (3t - 1)(t - 1) / 2,
+  // a_1 = (1 + 6t - 6t^2) / 2, a_2 = t (3t - 2) / 2, and sum_k |a_k| <= 3/2
+  // (at t = 1/2); along every other axis the weights sum in absolute value to
+  // 1 + t (1 - t) <= 5/4. A stencil clamped at the border repeats a node (a
+  // difference of 0), so the largest difference of grid neighbours bounds all.
+  {
+    std::array<double, D> largest{};
+    std::size_t stride = 1;
+    for (int a = 0; a < D; ++a) {
+      Index<D> j = Index<D>::Zero();
+      for (std::size_t n = 0; n < grid.size(); ++n, grid.advance(j)) {
+        if (j[a] + 1 < dims[a]) largest[a] = std::max(largest[a], std::abs(double(grid[n + stride]) - double(grid[n])));
+      }
+      stride *= std::size_t(dims[a]);
+    }
+    double sum2 = 0.0;
+    for (int a = 0; a < D; ++a) sum2 += largest[a] * largest[a];
+    data.slope = 1.5 * std::pow(1.25, D - 1) * std::sqrt(sum2) / grid.spacing();
+  }
   // The largest over the cells within one cell along every axis: a running
   // maximum along each axis in turn (the index clamped to the grid).
   data.nearSteps = data.cellSteps;

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -123,6 +124,9 @@ TEST(Shape, BoundingSphereHoldsTheWholeInterpolatedGrain) {
 
 namespace {
 
+// How loose CubicLookup::slope may be against the steepest sampled gradient.
+constexpr double kSlopeBoundFactor = 4.0;
+
 // Random points of a shape's grid box (grid coordinates), over every cell.
 template <int D>
 void checkCubicMarginAndReach(const Shape<D>& shape) {
@@ -136,10 +140,17 @@ void checkCubicMarginAndReach(const Shape<D>& shape) {
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int negative = 0, clearedByCell = 0, clearedByNear = 0;
+  double steepest = 0.0;  // the largest |grad| of the cubic sampled, world units per world unit
   for (int k = 0; k < 200000; ++k) {
     Vec<D> c;
     for (int a = 0; a < D; ++a) c[a] = u(rng) * double(g.dims()[a] - 1);
     const double cubic = g.cubicValueAtCells(c);
+    // The gradient bound that certifies a node the cubic clears (CubicLookup::slope).
+    Vec<D> gradCells;
+    g.cubicValueAndGradientAtCells(c, gradCells);
+    const double steep = gradCells.norm() / g.spacing();
+    ASSERT_LE(steep, lookup.slope * (1.0 + 1e-12));
+    steepest = std::max(steepest, steep);
     const double linear = g.valueAtCells(c);
     // Where the multilinear value exceeds E the cubic is positive ...
     if (linear > E) {
@@ -174,6 +185,10 @@ void checkCubicMarginAndReach(const Shape<D>& shape) {
     }
   }
   EXPECT_GT(negative, 1000);
+  // A bound, not a guess: within a small factor of the steepest sampled.
+  EXPECT_LT(lookup.slope, kSlopeBoundFactor * steepest);
+  std::printf("cubic gradient bound %.3f, steepest sampled %.3f (ratio %.2f)\n", lookup.slope, steepest,
+              lookup.slope / steepest);
   // The cell margins clear points near the surface that E does not.
   EXPECT_GT(clearedByCell, 100);
   EXPECT_GT(clearedByNear, 20);

@@ -156,6 +156,12 @@ class Shape {
     /// nearMargin(c) there makes the cubic positive.
     std::vector<std::uint8_t> nearSteps;
     double cellUnit = 0.0;
+    /// An upper bound of |grad| of the Catmull-Rom interpolant in the node
+    /// box (world units per world unit): per axis a, |d/dx_a| <= 1.5 x
+    /// 1.25^(D-1) x the largest difference of neighbouring grid values along
+    /// a, over the spacing (cubicData). So a point where the cubic is phi >= 0
+    /// keeps it >= 0 while it moves less than phi / slope within the box.
+    double slope = 0.0;
     double cellMargin(std::size_t cell) const { return cellUnit * double(cellSteps[cell]); }
     /// The margin over the cells within one cell of `cell`.
     double nearMargin(std::size_t cell) const { return cellUnit * double(nearSteps[cell]); }
