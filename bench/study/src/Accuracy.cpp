@@ -341,7 +341,8 @@ std::string accuracyMarkdown(const AccuracyReport& report) {
   md << "Regenerate: `lsdem bench accuracy --dim " << report.dimension << (report.quick ? " --quick" : "")
      << "` (" << std::lround(report.wallSeconds) << " s wall, " << std::lround(report.cpuSeconds)
      << " s CPU on this machine). Costs are CPU times of one thread (the timed runs are single-threaded), "
-        "so other work on the machine hardly changes them.\n\n";
+        "but other work on the machine still raises them (shared caches and memory bandwidth: up to 2x on a "
+        "loaded 2-core machine), so compare costs from one run, or from runs on an idle machine.\n\n";
 
   // The settings in the order of the sweep, with their cost.
   struct Row {
