@@ -1,0 +1,336 @@
+#!/usr/bin/env python3
+"""Slope of the normal compression line (NCL) of lsdem oedometer runs against
+McDowell & de Bono (2013): log e = log e_y - (1 / (2 b)) log(sigma / sigma_y),
+with the size effect on mean particle strength sigma_av ~ d^-b; for Weibull
+strengths with the volume size effect (lsdem eq. 11-13) b = 3 / m, so the
+slope -d log e / d log sigma is m / 6 (docs/validation.md).
+
+Usage:
+  python3 bench/validation/ncl.py [--out DIR] [--plot PNG] RUN=SCENE.toml ...
+  python3 bench/validation/ncl.py --self-test
+
+Each RUN is an `lsdem run` output folder (history.csv, removed.csv,
+summary.json) of a scene with [output.specimen]; SCENE is its scene file
+(read for [contact] friction_from, the test's start, the Weibull modulus, the
+density and the specimen area). Pure Python 3 (no numpy); gnuplot draws the
+plot when it is installed.
+
+What it computes, per run (rows of history.csv from the test's start):
+  sigma_v   history.csv stress_Pa (load of the platen / area)
+  e         history.csv void_ratio: (h A - V_s) / V_s with V_s the volume of
+            the particles present (fines removed from the specimen excluded)
+  e_fines   the same with the removed fines counted as solid:
+            V_s + (volume of the fines removed so far, removed.csv)
+  yield     sigma_y: the stress where e first falls 0.01 below the straight
+            e - log10(sigma) line through the breakage onset with the slope
+            of the curve before it (the knee; scripts/oedometer.sh's rule)
+  NCL       the rows with sigma >= 2 sigma_y (--factor), up to the time the
+            platen starts to slow down (the last --tail-s seconds are left
+            out) and only rows at a new stress maximum (the loading envelope:
+            the stress drops after breakage events are skipped)
+  slope     least squares of log10 e on log10 sigma over the NCL rows
+            (-slope is compared with m / 6), also for the first and second
+            half of the NCL stretch in log sigma (a curvature check) and for
+            e_fines.
+"""
+
+import argparse
+import csv
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+
+def scene_values(path):
+    """friction_from, weibull_modulus, density, area from a scene file."""
+    text = open(path).read()
+
+    def num(key):
+        m = re.search(r"^\s*" + key + r"\s*=\s*([-0-9.eE+]+)", text, re.M)
+        if not m:
+            raise SystemExit(f"ncl.py: {path} has no '{key}'")
+        return float(m.group(1))
+
+    return {"friction_from": num("friction_from"), "m": num("weibull_modulus"),
+            "density": num("density"), "area": num("area")}
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def fit(xs, ys):
+    """Least squares y = a + s x: (s, a, r2)."""
+    n = len(xs)
+    if n < 3:
+        return float("nan"), float("nan"), float("nan")
+    mx, my = sum(xs) / n, sum(ys) / n
+    sxx = sum((x - mx) ** 2 for x in xs)
+    sxy = sum((x - mx) * (y - my) for x, y in zip(xs, ys))
+    syy = sum((y - my) ** 2 for y in ys)
+    s = sxy / sxx
+    a = my - s * mx
+    r2 = sxy * sxy / (sxx * syy) if syy > 0 else 1.0
+    return s, a, r2
+
+
+def yield_stress(rows):
+    """The knee: rows are dicts with s (Pa), e, b (breakages), from the test's start."""
+    onset = next((k for k, r in enumerate(rows) if r["b"] > rows[0]["b"]), None)
+    if onset is None:
+        return None, None
+    so = rows[onset]["s"]
+    a = next((k for k in range(onset) if rows[k]["s"] > 0.05 * so), None)
+    slope = 0.0
+    if a is not None and a < onset and rows[a]["s"] > 0 and so > rows[a]["s"]:
+        slope = (rows[onset]["e"] - rows[a]["e"]) / math.log10(so / rows[a]["s"])
+    for r in rows[onset:]:
+        if r["s"] <= 0:
+            continue
+        line = rows[onset]["e"] + slope * math.log10(r["s"] / so)
+        if r["e"] < line - 0.01:
+            return so, r["s"]
+    return so, None
+
+
+def ncl_rows(rows, sy, factor, t_end):
+    """Rows of the loading envelope with sigma >= factor sigma_y and t <= t_end."""
+    out, smax = [], 0.0
+    for r in rows:
+        if r["t"] > t_end:
+            break
+        if r["s"] > smax:
+            smax = r["s"]
+            if r["s"] >= factor * sy and r["e"] > 0:
+                out.append(r)
+    return out
+
+
+def slopes(sel, key):
+    xs = [math.log10(r["s"]) for r in sel]
+    ys = [math.log10(r[key]) for r in sel]
+    s, a, r2 = fit(xs, ys)
+    res = {"slope": -s, "intercept": a, "r2": r2, "n": len(sel)}
+    if len(sel) >= 6:
+        mid = 0.5 * (xs[0] + xs[-1])
+        lo = [(x, y) for x, y in zip(xs, ys) if x <= mid]
+        hi = [(x, y) for x, y in zip(xs, ys) if x > mid]
+        res["slope_first_half"] = -fit([p[0] for p in lo], [p[1] for p in lo])[0]
+        res["slope_second_half"] = -fit([p[0] for p in hi], [p[1] for p in hi])[0]
+    return res
+
+
+def analyse(run, scene, factor, tail_s):
+    sc = scene_values(scene)
+    hist = read_csv(os.path.join(run, "history.csv"))
+    removed = []
+    rpath = os.path.join(run, "removed.csv")
+    if os.path.exists(rpath):
+        removed = [(float(r["time_s"]), float(r["volume"]), float(r["mass_kg"]))
+                   for r in read_csv(rpath) if r["reason"] == "fines"]
+    removed.sort()
+    rows, k, vf = [], 0, 0.0
+    for h in hist:
+        t = float(h["time_s"])
+        while k < len(removed) and removed[k][0] <= t + 1e-15:
+            vf += removed[k][1]
+            k += 1
+        if t + 1e-12 < sc["friction_from"]:
+            continue
+        height, s, e = float(h["height_m"]), float(h["stress_Pa"]), float(h["void_ratio"])
+        total = height * sc["area"]
+        vs = total / (1.0 + e)
+        ke, ue = float(h.get("kinetic_J") or 0), float(h.get("elastic_J") or 0)
+        rows.append({"t": t, "h": height, "s": s, "e": e, "e_fines": (total - vs - vf) / (vs + vf),
+                     "b": int(float(h["breakages"])), "p": int(float(h["particles"])),
+                     "ke_ratio": ke / ue if ue > 0 else 0.0, "vf": vf, "vs": vs})
+    if not rows:
+        raise SystemExit(f"ncl.py: {run}: no history rows after friction_from {sc['friction_from']}")
+    h0 = rows[0]["h"]
+    onset, sy = yield_stress(rows)
+    # The end of the scene's platen path (duration) when the run reached it; a
+    # cut-off run ends earlier and keeps every row.
+    summary = {}
+    spath = os.path.join(run, "summary.json")
+    if os.path.exists(spath):
+        summary = json.load(open(spath))
+    duration = None
+    m = re.search(r"^\s*duration\s*=\s*([-0-9.eE+]+)", open(scene).read(), re.M)
+    if m:
+        duration = float(m.group(1))
+    t_last = rows[-1]["t"]
+    t_end = duration - tail_s if duration is not None and t_last > duration - tail_s else t_last
+    res = {"run": run, "scene": scene, "m": sc["m"], "theory": sc["m"] / 6.0,
+           "start_time_s": rows[0]["t"], "start_height_m": h0, "e0": rows[0]["e"], "s0_MPa": rows[0]["s"] / 1e6,
+           "onset_MPa": onset / 1e6 if onset else None, "yield_MPa": sy / 1e6 if sy else None,
+           "end_time_s": t_last, "end_strain": (h0 - rows[-1]["h"]) / h0, "end_MPa": rows[-1]["s"] / 1e6,
+           "max_MPa": max(r["s"] for r in rows) / 1e6,
+           "end_e": rows[-1]["e"], "end_e_fines": rows[-1]["e_fines"],
+           "breakages": rows[-1]["b"], "particles": rows[-1]["p"],
+           "fines_percent_of_solids": 100.0 * rows[-1]["vf"] / (rows[-1]["vs"] + rows[-1]["vf"]),
+           "max_ke_ratio_above_0.5MPa": max((r["ke_ratio"] for r in rows if r["s"] > 0.5e6), default=0.0),
+           "steps": summary.get("steps"), "wall_s": summary.get("wall_time"), "factor": factor}
+    if sy:
+        sel = ncl_rows(rows, sy, factor, t_end)
+        res["ncl_from_MPa"] = sel[0]["s"] / 1e6 if sel else None
+        res["ncl_to_MPa"] = sel[-1]["s"] / 1e6 if sel else None
+        res["ncl_decades"] = math.log10(sel[-1]["s"] / sel[0]["s"]) if len(sel) > 1 else 0.0
+        res["fit"] = slopes(sel, "e")
+        res["fit_fines"] = slopes(sel, "e_fines")
+        res["sensitivity"] = {}
+        for f in (1.5, 3.0):
+            s2 = ncl_rows(rows, sy, f, t_end)
+            res["sensitivity"][str(f)] = slopes(s2, "e")["slope"] if len(s2) >= 3 else None
+        res["diff_percent"] = 100.0 * (res["fit"]["slope"] - res["theory"]) / res["theory"]
+    return res, rows
+
+
+def write_outputs(results, curves, outdir, plot):
+    os.makedirs(outdir, exist_ok=True)
+    for res, rows in zip(results, curves):
+        tag = "m%g" % res["m"]
+        with open(os.path.join(outdir, f"curve_{tag}.dat"), "w") as f:
+            f.write("# time_s stress_Pa void_ratio void_ratio_with_fines breakages particles\n")
+            for r in rows:
+                if r["s"] > 0:
+                    f.write(f"{r['t']:.9g} {r['s']:.6g} {r['e']:.6g} {r['e_fines']:.6g} {r['b']} {r['p']}\n")
+    with open(os.path.join(outdir, "ncl.json"), "w") as f:
+        json.dump(results, f, indent=2)
+    with open(os.path.join(outdir, "ncl.csv"), "w") as f:
+        f.write("m,theory_m_over_6,slope,diff_percent,slope_with_fines,slope_first_half,slope_second_half,"
+                "slope_from_1.5_sigma_y,slope_from_3_sigma_y,r2,points,yield_MPa,ncl_from_MPa,ncl_to_MPa,ncl_decades,"
+                "end_strain,end_e,max_MPa,breakages,particles,fines_percent_of_solids,max_ke_ratio\n")
+        for r in results:
+            fi = r.get("fit") or {}
+            g = lambda v, p=4: ("nan" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{p}g}")
+            f.write(",".join([g(r["m"]), g(r["theory"]), g(fi.get("slope")), g(r.get("diff_percent"), 3),
+                              g((r.get("fit_fines") or {}).get("slope")), g(fi.get("slope_first_half")),
+                              g(fi.get("slope_second_half")), g(r.get("sensitivity", {}).get("1.5")),
+                              g(r.get("sensitivity", {}).get("3.0")), g(fi.get("r2")), str(fi.get("n", 0)),
+                              g(r["yield_MPa"]), g(r.get("ncl_from_MPa")), g(r.get("ncl_to_MPa")),
+                              g(r.get("ncl_decades"), 3), g(r["end_strain"]), g(r["end_e"]), g(r["max_MPa"]),
+                              str(r["breakages"]), str(r["particles"]), g(r["fines_percent_of_solids"], 3),
+                              g(r["max_ke_ratio_above_0.5MPa"], 3)]) + "\n")
+    if not plot or not shutil.which("gnuplot"):
+        return
+    lines, styles = [], ["lc rgb '#1f77b4'", "lc rgb '#d62728'", "lc rgb '#2ca02c'", "lc rgb '#9467bd'"]
+    for i, r in enumerate(results):
+        tag = "m%g" % r["m"]
+        st = styles[i % len(styles)]
+        dat = os.path.join(outdir, f"curve_{tag}.dat")
+        lines.append(f"'{dat}' using ($2/1e6):3 with lines lw 2 {st} title 'lsdem, m = {r['m']:g}'")
+        fi = r.get("fit")
+        if fi and r.get("ncl_from_MPa"):
+            a, s = fi["intercept"], fi["slope"]
+            lo, hi = r["ncl_from_MPa"] * 1e6, r["ncl_to_MPa"] * 1e6
+            # the fit (dashed) and the theory's slope m/6 through the fit's middle (dotted)
+            xm = 0.5 * (math.log10(lo) + math.log10(hi))
+            ym = a - s * xm
+            lines.append(f"(x >= {lo/1e6:g} && x <= {hi/1e6:g}) ? 10**({a:.6g} - {s:.6g}*log10(x*1e6)) : 1/0 "
+                         f"with lines dt 2 lw 2 {st} title 'fit: slope {s:.3f}'")
+            lo2, hi2 = lo / 2.0, hi * 2.0
+            lines.append(f"(x >= {lo2/1e6:g} && x <= {hi2/1e6:g}) ? 10**({ym:.6g} - {r['theory']:.6g}*(log10(x*1e6) - {xm:.6g})) : 1/0 "
+                         f"with lines dt 3 lw 2 {st} title 'm/6 = {r['theory']:.3f}'")
+        if r.get("yield_MPa"):
+            lines.append(f"'+' using ({r['yield_MPa']:g}):(NaN) notitle")
+    gp = f"""set terminal pngcairo size 900,650 noenhanced
+set output '{plot}'
+set logscale xy
+set grid xtics ytics mxtics mytics
+set samples 400
+set xrange [0.5:*]
+set xlabel 'vertical stress sigma_v (MPa)'
+set ylabel 'void ratio e'
+set title 'Normal compression line, 3D oedometer (505 grains): lsdem against slope m/6'
+set key bottom left
+plot {', '.join(l for l in lines if not l.startswith("'+'"))}
+"""
+    os.makedirs(os.path.dirname(os.path.abspath(plot)), exist_ok=True)
+    subprocess.run(["gnuplot"], input=gp, text=True, check=True)
+
+
+def table(results):
+    print("| m | theory m/6 | NCL slope | difference | with fines as solid | first / second half | "
+          "yield (MPa) | NCL stretch (MPa) | decades | points |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for r in results:
+        fi = r.get("fit")
+        if not fi:
+            print(f"| {r['m']:g} | {r['theory']:.3f} | no NCL (no yield found) | | | | | | | |")
+            continue
+        print(f"| {r['m']:g} | {r['theory']:.3f} | {fi['slope']:.3f} | {r['diff_percent']:+.0f} % | "
+              f"{r['fit_fines']['slope']:.3f} | {fi.get('slope_first_half', float('nan')):.3f} / "
+              f"{fi.get('slope_second_half', float('nan')):.3f} | {r['yield_MPa']:.3g} | "
+              f"{r['ncl_from_MPa']:.3g}-{r['ncl_to_MPa']:.3g} | {r['ncl_decades']:.2f} | {fi['n']} |")
+
+
+def self_test():
+    """A synthetic NCL: e = 0.6 flat-ish to sigma_y = 5 MPa, then e_y (sigma/sigma_y)^-(m/6); the fit must
+    find m/6 within 1 % on the stretch from 2 sigma_y."""
+    import tempfile
+    ok = True
+    for m in (3.0, 6.0):
+        d = tempfile.mkdtemp(prefix="ncl-selftest-")
+        scene = os.path.join(d, "scene.toml")
+        with open(scene, "w") as f:
+            f.write(f"friction_from = 0.01\ndensity = 2450.0\nweibull_modulus = {m}\narea = 1.0e-4\nduration = 0.03\n")
+        sy, ey, a = 5e6, 0.55, 1e-4
+        with open(os.path.join(d, "history.csv"), "w") as f:
+            f.write("time_s,height_m,stress_Pa,strain,void_ratio,breakages,particles,kinetic_J,elastic_J\n")
+            vs = 5e-3 * a / 1.6
+            for i in range(2001):
+                t = 0.01 + 0.02 * i / 2000
+                s = 0.2e6 * 10 ** (3.0 * i / 2000)  # 0.2 MPa .. 200 MPa
+                e = 0.6 - 0.05 * math.log10(s / 0.2e6) / math.log10(sy / 0.2e6) if s < sy else ey * (s / sy) ** (-m / 6)
+                # a smooth knee: blend over 0.1 decade
+                h = (1 + e) * vs / a
+                b = 0 if s < 0.9 * sy else int(10 * math.log10(s / (0.9 * sy)) * 100)
+                f.write(f"{t},{h},{s},0,{e},{b},100,1e-9,1e-6\n")
+        res, _ = analyse(d, scene, 2.0, 0.0)
+        err = abs(res["fit"]["slope"] - m / 6) / (m / 6)
+        print(f"self-test m = {m:g}: yield {res['yield_MPa']:.3g} MPa, slope {res['fit']['slope']:.4f}, "
+              f"m/6 {m/6:.4f}, error {100*err:.2f} %")
+        ok = ok and err < 0.01 and 4e6 < res["yield_MPa"] * 1e6 < 7e6
+        shutil.rmtree(d)
+    print("self-test", "passed" if ok else "FAILED")
+    return 0 if ok else 1
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("runs", nargs="*", help="RUN_DIR=SCENE.toml")
+    ap.add_argument("--out", default="ncl-out", help="folder for ncl.csv, ncl.json and the curves")
+    ap.add_argument("--plot", default=None, help="PNG of log e against log sigma_v (gnuplot)")
+    ap.add_argument("--factor", type=float, default=2.0, help="the NCL starts at factor x sigma_y (2)")
+    ap.add_argument("--tail-s", type=float, default=0.001,
+                    help="s left out at the end of the platen path, where it slows down (0.001)")
+    ap.add_argument("--self-test", action="store_true", help="check the fit on a synthetic power law")
+    args = ap.parse_args()
+    if args.self_test:
+        return self_test()
+    if not args.runs:
+        ap.error("give RUN_DIR=SCENE.toml arguments (or --self-test)")
+    results, curves = [], []
+    for spec in args.runs:
+        run, _, scene = spec.partition("=")
+        res, rows = analyse(run, scene, args.factor, args.tail_s)
+        results.append(res)
+        curves.append(rows)
+    write_outputs(results, curves, args.out, args.plot)
+    table(results)
+    for r in results:
+        print(f"m = {r['m']:g}: e0 {r['e0']:.3f} at {r['s0_MPa']:.3g} MPa; onset {r['onset_MPa']} MPa; "
+              f"end strain {r['end_strain']:.3f}, e {r['end_e']:.3f} ({r['end_e_fines']:.3f} with fines), "
+              f"max {r['max_MPa']:.3g} MPa; {r['breakages']} breakages, {r['particles']} particles, "
+              f"fines {r['fines_percent_of_solids']:.2f} % of the solids; max KE/elastic {r['max_ke_ratio_above_0.5MPa']:.3g}; "
+              f"steps {r['steps']}, wall {r['wall_s']} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
