@@ -59,6 +59,16 @@ def scene_values(path):
             "density": num("density"), "area": num("area")}
 
 
+def load_end_time(path):
+    """The time of the platen's lowest key frame (the end of the loading), or None."""
+    frames = re.findall(r"^\s*time\s*=\s*([-0-9.eE+]+)\s*\n\s*position\s*=\s*\[[^,]+,\s*([-0-9.eE+]+)",
+                        open(path).read(), re.M)
+    if not frames:
+        return None
+    lowest = min(frames, key=lambda f: (float(f[1]), float(f[0])))
+    return float(lowest[0])
+
+
 def read_csv(path):
     with open(path, newline="") as f:
         return list(csv.DictReader(f))
@@ -146,7 +156,9 @@ def analyse(run, scene, factor, tail_s):
         total = height * sc["area"]
         vs = total / (1.0 + e)
         ke, ue = float(h.get("kinetic_J") or 0), float(h.get("elastic_J") or 0)
+        dh = 2.0 * ue / (s * sc["area"]) if s > 0 else 0.0
         rows.append({"t": t, "h": height, "s": s, "e": e, "e_fines": (total - vs - vf) / (vs + vf),
+                     "e_plastic": ((height + dh) * sc["area"] - vs) / vs, "dh_el": dh,
                      "b": int(float(h["breakages"])), "p": int(float(h["particles"])),
                      "ke_ratio": ke / ue if ue > 0 else 0.0, "vf": vf, "vs": vs})
     if not rows:
@@ -159,29 +171,42 @@ def analyse(run, scene, factor, tail_s):
     spath = os.path.join(run, "summary.json")
     if os.path.exists(spath):
         summary = json.load(open(spath))
-    duration = None
-    m = re.search(r"^\s*duration\s*=\s*([-0-9.eE+]+)", open(scene).read(), re.M)
-    if m:
-        duration = float(m.group(1))
+    t_load_end = load_end_time(scene)
     t_last = rows[-1]["t"]
-    t_end = duration - tail_s if duration is not None and t_last > duration - tail_s else t_last
+    t_end = t_load_end - tail_s if t_load_end is not None and t_last > t_load_end - tail_s else t_last
+    loading = [r for r in rows if t_load_end is None or r["t"] <= t_load_end + 1e-12]
+    last = loading[-1]
     res = {"run": run, "scene": scene, "m": sc["m"], "theory": sc["m"] / 6.0,
            "start_time_s": rows[0]["t"], "start_height_m": h0, "e0": rows[0]["e"], "s0_MPa": rows[0]["s"] / 1e6,
            "onset_MPa": onset / 1e6 if onset else None, "yield_MPa": sy / 1e6 if sy else None,
-           "end_time_s": t_last, "end_strain": (h0 - rows[-1]["h"]) / h0, "end_MPa": rows[-1]["s"] / 1e6,
-           "max_MPa": max(r["s"] for r in rows) / 1e6,
-           "end_e": rows[-1]["e"], "end_e_fines": rows[-1]["e_fines"],
-           "breakages": rows[-1]["b"], "particles": rows[-1]["p"],
-           "fines_percent_of_solids": 100.0 * rows[-1]["vf"] / (rows[-1]["vs"] + rows[-1]["vf"]),
+           "end_time_s": last["t"], "end_strain": (h0 - last["h"]) / h0, "end_MPa": last["s"] / 1e6,
+           "max_MPa": max(r["s"] for r in loading) / 1e6,
+           "end_e": last["e"], "end_e_fines": last["e_fines"], "end_e_plastic_estimate": last["e_plastic"],
+           "end_dh_el_estimate_mm": 1e3 * last["dh_el"], "end_height_mm": 1e3 * last["h"],
+           "breakages": last["b"], "particles": last["p"],
+           "fines_percent_of_solids": 100.0 * last["vf"] / (last["vs"] + last["vf"]),
            "max_ke_ratio_above_0.5MPa": max((r["ke_ratio"] for r in rows if r["s"] > 0.5e6), default=0.0),
-           "steps": summary.get("steps"), "wall_s": summary.get("wall_time"), "factor": factor}
-    if sy:
-        sel = ncl_rows(rows, sy, factor, t_end)
+           "steps": summary.get("steps"), "wall_s": summary.get("wall_time"), "factor": factor,
+           "run_end_time_s": t_last}
+    # Unloading (rows after the loading's end): the height where the platen's
+    # stress first falls under 1 % of the stress at the end of the loading.
+    after = [r for r in rows if t_load_end is not None and r["t"] > t_load_end + 1e-12]
+    zero = next((r for r in after if r["s"] < 0.01 * last["s"]), None)
+    if zero:
+        res["unloaded_height_mm"] = 1e3 * zero["h"]
+        res["rebound_mm"] = 1e3 * (zero["h"] - last["h"])
+        res["unloaded_e"] = zero["e"]
+    elif after:
+        res["unloading_reached_mm"] = 1e3 * after[-1]["h"]
+        res["unloading_stress_MPa"] = after[-1]["s"] / 1e6
+    sel = ncl_rows(rows, sy, factor, t_end) if sy else []
+    if len(sel) >= 3:
         res["ncl_from_MPa"] = sel[0]["s"] / 1e6 if sel else None
         res["ncl_to_MPa"] = sel[-1]["s"] / 1e6 if sel else None
         res["ncl_decades"] = math.log10(sel[-1]["s"] / sel[0]["s"]) if len(sel) > 1 else 0.0
         res["fit"] = slopes(sel, "e")
         res["fit_fines"] = slopes(sel, "e_fines")
+        res["fit_plastic"] = slopes(sel, "e_plastic")
         res["sensitivity"] = {}
         for f in (1.5, 3.0):
             s2 = ncl_rows(rows, sy, f, t_end)
@@ -195,15 +220,17 @@ def write_outputs(results, curves, outdir, plot):
     for res, rows in zip(results, curves):
         tag = "m%g" % res["m"]
         with open(os.path.join(outdir, f"curve_{tag}.dat"), "w") as f:
-            f.write("# time_s stress_Pa void_ratio void_ratio_with_fines breakages particles\n")
+            f.write("# time_s stress_Pa void_ratio void_ratio_with_fines breakages particles "
+                    "void_ratio_plastic_estimate\n")
             for r in rows:
-                if r["s"] > 0:
-                    f.write(f"{r['t']:.9g} {r['s']:.6g} {r['e']:.6g} {r['e_fines']:.6g} {r['b']} {r['p']}\n")
+                if r["s"] > 0 and (res["run_end_time_s"] <= res["end_time_s"] or r["t"] <= res["end_time_s"]):
+                    f.write(f"{r['t']:.9g} {r['s']:.6g} {r['e']:.6g} {r['e_fines']:.6g} {r['b']} {r['p']} "
+                            f"{r['e_plastic']:.6g}\n")
     with open(os.path.join(outdir, "ncl.json"), "w") as f:
         json.dump(results, f, indent=2)
     with open(os.path.join(outdir, "ncl.csv"), "w") as f:
         f.write("m,theory_m_over_6,slope,diff_percent,slope_with_fines,slope_first_half,slope_second_half,"
-                "slope_from_1.5_sigma_y,slope_from_3_sigma_y,r2,points,yield_MPa,ncl_from_MPa,ncl_to_MPa,ncl_decades,"
+                "slope_from_1.5_sigma_y,slope_from_3_sigma_y,slope_plastic_estimate,r2,points,yield_MPa,ncl_from_MPa,ncl_to_MPa,ncl_decades,"
                 "end_strain,end_e,max_MPa,breakages,particles,fines_percent_of_solids,max_ke_ratio\n")
         for r in results:
             fi = r.get("fit") or {}
@@ -211,7 +238,8 @@ def write_outputs(results, curves, outdir, plot):
             f.write(",".join([g(r["m"]), g(r["theory"]), g(fi.get("slope")), g(r.get("diff_percent"), 3),
                               g((r.get("fit_fines") or {}).get("slope")), g(fi.get("slope_first_half")),
                               g(fi.get("slope_second_half")), g(r.get("sensitivity", {}).get("1.5")),
-                              g(r.get("sensitivity", {}).get("3.0")), g(fi.get("r2")), str(fi.get("n", 0)),
+                              g(r.get("sensitivity", {}).get("3.0")), g((r.get("fit_plastic") or {}).get("slope")),
+                              g(fi.get("r2")), str(fi.get("n", 0)),
                               g(r["yield_MPa"]), g(r.get("ncl_from_MPa")), g(r.get("ncl_to_MPa")),
                               g(r.get("ncl_decades"), 3), g(r["end_strain"]), g(r["end_e"]), g(r["max_MPa"]),
                               str(r["breakages"]), str(r["particles"]), g(r["fines_percent_of_solids"], 3),
@@ -256,16 +284,17 @@ plot {', '.join(l for l in lines if not l.startswith("'+'"))}
 
 def table(results):
     print("| m | theory m/6 | NCL slope | difference | with fines as solid | first / second half | "
-          "yield (MPa) | NCL stretch (MPa) | decades | points |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+          "overlap removed (2U/F) | yield (MPa) | NCL stretch (MPa) | decades | points |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in results:
         fi = r.get("fit")
         if not fi:
-            print(f"| {r['m']:g} | {r['theory']:.3f} | no NCL (no yield found) | | | | | | | |")
+            why = "no yield found" if not r["yield_MPa"] else "fewer than 3 points above %g sigma_y" % r["factor"]
+            print(f"| {r['m']:g} | {r['theory']:.3f} | no NCL ({why}) | | | | | | | | |")
             continue
         print(f"| {r['m']:g} | {r['theory']:.3f} | {fi['slope']:.3f} | {r['diff_percent']:+.0f} % | "
               f"{r['fit_fines']['slope']:.3f} | {fi.get('slope_first_half', float('nan')):.3f} / "
-              f"{fi.get('slope_second_half', float('nan')):.3f} | {r['yield_MPa']:.3g} | "
+              f"{fi.get('slope_second_half', float('nan')):.3f} | {r['fit_plastic']['slope']:.3f} | {r['yield_MPa']:.3g} | "
               f"{r['ncl_from_MPa']:.3g}-{r['ncl_to_MPa']:.3g} | {r['ncl_decades']:.2f} | {fi['n']} |")
 
 
@@ -328,7 +357,13 @@ def main():
               f"end strain {r['end_strain']:.3f}, e {r['end_e']:.3f} ({r['end_e_fines']:.3f} with fines), "
               f"max {r['max_MPa']:.3g} MPa; {r['breakages']} breakages, {r['particles']} particles, "
               f"fines {r['fines_percent_of_solids']:.2f} % of the solids; max KE/elastic {r['max_ke_ratio_above_0.5MPa']:.3g}; "
-              f"steps {r['steps']}, wall {r['wall_s']} s")
+              f"steps {r['steps']}, wall {r['wall_s']} s; end of loading: h {r['end_height_mm']:.4f} mm, "
+              f"2U/F {r['end_dh_el_estimate_mm']:.4f} mm, e without it {r['end_e_plastic_estimate']:.3f}; "
+              f"unloading: " + (f"stress gone at h {r['unloaded_height_mm']:.4f} mm (rebound {r['rebound_mm']:.4f} mm, "
+                                f"e {r['unloaded_e']:.3f})" if "rebound_mm" in r else
+                                f"reached {r.get('unloading_reached_mm', float('nan')):.4f} mm at "
+                                f"{r.get('unloading_stress_MPa', float('nan')):.3g} MPa" if "unloading_reached_mm" in r
+                                else "none"))
     return 0
 
 
