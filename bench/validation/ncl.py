@@ -25,7 +25,7 @@ What it computes, per run (rows of history.csv from the test's start):
             e - log10(sigma) line through the breakage onset with the slope
             of the curve before it (the knee; scripts/oedometer.sh's rule)
   NCL       the rows with sigma >= 2 sigma_y (--factor), up to the time the
-            platen starts to slow down (the last --tail-s seconds are left
+            platen slows to rest (the last --tail-s seconds of the loading are left
             out) and only rows at a new stress maximum (the loading envelope:
             the stress drops after breakage events are skipped)
   slope     least squares of log10 e on log10 sigma over the NCL rows
@@ -246,37 +246,45 @@ def write_outputs(results, curves, outdir, plot):
                               g(r["max_ke_ratio_above_0.5MPa"], 3)]) + "\n")
     if not plot or not shutil.which("gnuplot"):
         return
-    lines, styles = [], ["lc rgb '#1f77b4'", "lc rgb '#d62728'", "lc rgb '#2ca02c'", "lc rgb '#9467bd'"]
-    for i, r in enumerate(results):
-        tag = "m%g" % r["m"]
-        st = styles[i % len(styles)]
-        dat = os.path.join(outdir, f"curve_{tag}.dat")
-        lines.append(f"'{dat}' using ($2/1e6):3 with lines lw 2 {st} title 'lsdem, m = {r['m']:g}'")
-        fi = r.get("fit")
-        if fi and r.get("ncl_from_MPa"):
-            a, s = fi["intercept"], fi["slope"]
-            lo, hi = r["ncl_from_MPa"] * 1e6, r["ncl_to_MPa"] * 1e6
-            # the fit (dashed) and the theory's slope m/6 through the fit's middle (dotted)
-            xm = 0.5 * (math.log10(lo) + math.log10(hi))
-            ym = a - s * xm
-            lines.append(f"(x >= {lo/1e6:g} && x <= {hi/1e6:g}) ? 10**({a:.6g} - {s:.6g}*log10(x*1e6)) : 1/0 "
-                         f"with lines dt 2 lw 2 {st} title 'fit: slope {s:.3f}'")
-            lo2, hi2 = lo / 2.0, hi * 2.0
-            lines.append(f"(x >= {lo2/1e6:g} && x <= {hi2/1e6:g}) ? 10**({ym:.6g} - {r['theory']:.6g}*(log10(x*1e6) - {xm:.6g})) : 1/0 "
-                         f"with lines dt 3 lw 2 {st} title 'm/6 = {r['theory']:.3f}'")
-        if r.get("yield_MPa"):
-            lines.append(f"'+' using ({r['yield_MPa']:g}):(NaN) notitle")
-    gp = f"""set terminal pngcairo size 900,650 noenhanced
+    styles = ["lc rgb '#1f77b4'", "lc rgb '#d62728'", "lc rgb '#2ca02c'", "lc rgb '#9467bd'"]
+
+    def panel(col, fitkey, what):
+        lines = []
+        for i, r in enumerate(results):
+            tag = "m%g" % r["m"]
+            st = styles[i % len(styles)]
+            dat = os.path.join(outdir, f"curve_{tag}.dat")
+            lines.append(f"'{dat}' using ($2/1e6):{col} with lines lw 2 {st} title 'lsdem, m = {r['m']:g}'")
+            fi = r.get(fitkey)
+            if fi and r.get("ncl_from_MPa"):
+                a, sl = fi["intercept"], fi["slope"]
+                lo, hi = r["ncl_from_MPa"] * 1e6, r["ncl_to_MPa"] * 1e6
+                # the fit (dashed) and the theory's slope m/6 through the fit's middle (dotted)
+                xm = 0.5 * (math.log10(lo) + math.log10(hi))
+                ym = a - sl * xm
+                lines.append(f"(x >= {lo/1e6:g} && x <= {hi/1e6:g}) ? 10**({a:.6g} - {sl:.6g}*log10(x*1e6)) : 1/0 "
+                             f"with lines dt 2 lw 3 {st} title 'fit from 2 sigma_y: slope {sl:.3f}'")
+                lo2, hi2 = lo / 2.0, hi * 2.0
+                lines.append(f"(x >= {lo2/1e6:g} && x <= {hi2/1e6:g}) ? "
+                             f"10**({ym:.6g} - {r['theory']:.6g}*(log10(x*1e6) - {xm:.6g})) : 1/0 "
+                             f"with lines dt 3 lw 2 {st} title 'slope m/6 = {r['theory']:.3f}'")
+        return f"set title '{what}'\nplot " + ", ".join(lines) + "\n"
+
+    gp = f"""set terminal pngcairo size 1400,620 noenhanced
 set output '{plot}'
+set multiplot layout 1,2
 set logscale xy
 set grid xtics ytics mxtics mytics
 set samples 400
-set xrange [0.5:*]
+set xrange [0.5:60]
+set yrange [0.08:0.8]
 set xlabel 'vertical stress sigma_v (MPa)'
 set ylabel 'void ratio e'
-set title 'Normal compression line, 3D oedometer (505 grains): lsdem against slope m/6'
 set key bottom left
-plot {', '.join(l for l in lines if not l.startswith("'+'"))}
+{panel(3, "fit", "e from the loaded height (contact overlap counts as compression)")}
+set ylabel 'void ratio e + 2U/F (estimate)'
+{panel(7, "fit_plastic", "e with the stored elastic compression 2U/F added back")}
+unset multiplot
 """
     os.makedirs(os.path.dirname(os.path.abspath(plot)), exist_ok=True)
     subprocess.run(["gnuplot"], input=gp, text=True, check=True)
@@ -336,8 +344,8 @@ def main():
     ap.add_argument("--out", default="ncl-out", help="folder for ncl.csv, ncl.json and the curves")
     ap.add_argument("--plot", default=None, help="PNG of log e against log sigma_v (gnuplot)")
     ap.add_argument("--factor", type=float, default=2.0, help="the NCL starts at factor x sigma_y (2)")
-    ap.add_argument("--tail-s", type=float, default=0.001,
-                    help="s left out at the end of the platen path, where it slows down (0.001)")
+    ap.add_argument("--tail-s", type=float, default=0.0002,
+                    help="s left out at the end of the loading, where the platen slows to rest (0.0002)")
     ap.add_argument("--self-test", action="store_true", help="check the fit on a synthetic power law")
     args = ap.parse_args()
     if args.self_test:
