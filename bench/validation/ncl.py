@@ -226,6 +226,11 @@ def write_outputs(results, curves, outdir, plot):
                 if r["s"] > 0 and (res["run_end_time_s"] <= res["end_time_s"] or r["t"] <= res["end_time_s"]):
                     f.write(f"{r['t']:.9g} {r['s']:.6g} {r['e']:.6g} {r['e_fines']:.6g} {r['b']} {r['p']} "
                             f"{r['e_plastic']:.6g}\n")
+        with open(os.path.join(outdir, f"unloading_{tag}.dat"), "w") as f:
+            f.write("# time_s stress_Pa void_ratio height_m (after the end of the loading)\n")
+            for r in rows:
+                if r["t"] > res["end_time_s"] and r["s"] > 0:
+                    f.write(f"{r['t']:.9g} {r['s']:.6g} {r['e']:.6g} {r['h']:.6g}\n")
     with open(os.path.join(outdir, "ncl.json"), "w") as f:
         json.dump(results, f, indent=2)
     with open(os.path.join(outdir, "ncl.csv"), "w") as f:
@@ -255,6 +260,9 @@ def write_outputs(results, curves, outdir, plot):
             st = styles[i % len(styles)]
             dat = os.path.join(outdir, f"curve_{tag}.dat")
             lines.append(f"'{dat}' using ($2/1e6):{col} with lines lw 2 {st} title 'lsdem, m = {r['m']:g}'")
+            unl = os.path.join(outdir, f"unloading_{tag}.dat")
+            if col == 3 and os.path.exists(unl) and os.path.getsize(unl) > 80:
+                lines.append(f"'{unl}' using ($2/1e6):3 with lines lw 1 {st} title 'unloading, m = {r['m']:g}'")
             fi = r.get(fitkey)
             if fi and r.get("ncl_from_MPa"):
                 a, sl = fi["intercept"], fi["slope"]
