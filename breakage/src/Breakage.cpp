@@ -99,9 +99,11 @@ template <int D>
 void Breakage<D>::afterStep(World<D>& world) {
   const Particles<D>& p = world.particles();
 
-  // (i) Weibull strengths (eq. 12) for particles that have none, keyed by global id.
+  // (i) Weibull strengths (eq. 12) for particles that have none, keyed by
+  // global id. In a distributed run each rank breaks its own particles only
+  // (a mirror is its owner's: World::isGhost).
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (p.strength[i] <= 0.0) {
+    if (p.strength[i] <= 0.0 && !world.isGhost(i)) {
       world.setStrength(i, sampleStrength(def_.weibull, def_.seed, p.id[i], p.shape[i]->descriptors().equivalentDiameter));
     }
   }
@@ -126,6 +128,7 @@ void Breakage<D>::queueFailures(World<D>& world) {
   grainStresses(p, world.contacts(), stress_);
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (stress_[i].isZero(0.0) || !std::isfinite(p.strength[i])) continue;  // infinite: unsplittable
+    if (world.isGhost(i)) continue;  // its owner's
     const Vec<3> principal = principalStressTriple<D>(stress_[i]);
     if (!criterion_->fails(principal, p.strength[i])) continue;
     const Shape<D>& shape = *p.shape[i];
@@ -154,10 +157,14 @@ void Breakage<D>::queueFailures(World<D>& world) {
     manualDone_[m] = true;
     const auto it = std::find(p.id.begin(), p.id.end(), mb.particle);
     if (it == p.id.end()) {
-      manualNotApplied_.push_back({now, mb.particle, "no particle with this id (broken or removed earlier)"});
+      // In a distributed run it may be another rank's.
+      if (!world.isDistributed()) {
+        manualNotApplied_.push_back({now, mb.particle, "no particle with this id (broken or removed earlier)"});
+      }
       continue;
     }
     const std::size_t i = std::size_t(it - p.id.begin());
+    if (world.isGhost(i)) continue;  // its owner breaks it
     double value = 0.0;
     if (i < stress_.size() && !stress_[i].isZero(0.0)) {
       value = criterion_->characteristicStress(principalStressTriple<D>(stress_[i]));
@@ -184,6 +191,7 @@ void Breakage<D>::queueChips(const World<D>& world) {
   for (std::size_t i = 0; i < p.size(); ++i) {
     const std::span<const ContactLoad<D>> loads = loads_.of(i);
     if (loads.empty() || !std::isfinite(p.strength[i])) continue;  // no contact; unsplittable
+    if (world.isGhost(i)) continue;  // its owner's
     const Shape<D>& shape = *p.shape[i];
     const double shallowest = chip.minDepthCells * shape.grid().spacing();
     // The contact whose pressure exceeds its chipping strength the most,
@@ -225,12 +233,20 @@ geometry::SignedDistance<D> Breakage<D>::clearanceAround(const World<D>& world, 
   const Shape<D>& shape = *p.shape[i];
   const Vec<D> centre = p.position[i];
   const double reach = shape.boundingRadius() + 4.0 * shape.grid().spacing();
-  around_.clear();
+  // The particles in reach in global id order: the look-up below skips a
+  // body by its bounding sphere, and a grid's level set can fall a little
+  // below that bound, so the order must not depend on the store's (a
+  // distributed run holds the same particles in another order).
+  near_.clear();
   for (std::size_t j = 0; j < p.size(); ++j) {
     if (j == i) continue;
-    const double radius = p.shape[j]->boundingRadius();
-    if ((p.position[j] - centre).norm() > reach + radius) continue;
-    around_.push_back({p.shape[j].get(), p.rotation(j), p.position[j], Vec<D>::Zero(), radius});
+    if ((p.position[j] - centre).norm() > reach + p.shape[j]->boundingRadius()) continue;
+    near_.push_back(j);
+  }
+  std::sort(near_.begin(), near_.end(), [&](std::size_t a, std::size_t b) { return p.id[a] < p.id[b]; });
+  around_.clear();
+  for (std::size_t j : near_) {
+    around_.push_back({p.shape[j].get(), p.rotation(j), p.position[j], Vec<D>::Zero(), p.shape[j]->boundingRadius()});
   }
   for (const dynamics::Plane<D>& plane : world.planes()) {
     around_.push_back({nullptr, Mat<D>::Identity(), plane.point, plane.normal, 0.0});
@@ -259,10 +275,10 @@ geometry::SignedDistance<D> Breakage<D>::clearanceAround(const World<D>& world, 
 }
 
 template <int D>
-std::vector<typename Breakage<D>::Inherited> Breakage<D>::inheritedRestOverlaps(
+std::vector<dynamics::ChildBirth::Rest> Breakage<D>::inheritedRestOverlaps(
     const std::vector<typename dynamics::ContactSolver<D>::RestOverlap>& rest, std::uint64_t parentId,
     const Shape<D>& parent, const Fragment<D>& f) {
-  std::vector<Inherited> out;
+  std::vector<dynamics::ChildBirth::Rest> out;
   // A parent node's rest overlaps go to the fragment's nodes within half a
   // parent cell of it (the node itself, where the fragment kept it; the nodes
   // made afresh around it, where it was re-gridded).
@@ -291,8 +307,6 @@ void Breakage<D>::applyQueue(World<D>& world) {
   const double m = def_.weibull.modulus;
   std::sort(queue_.begin(), queue_.end(), [](const Pending& a, const Pending& b) { return a.id < b.id; });
   splits_.clear();
-  addCutFace_.clear();
-  addInherited_.clear();
   std::vector<std::size_t> addEvent;
   const std::size_t firstEvent = events_.size();
   // The springs each particle holds, for the energy check (stale records: unknown).
@@ -437,8 +451,8 @@ void Breakage<D>::applyQueue(World<D>& world) {
         ev.finesVolumes.push_back(f.volume);
       } else {
         product.children.push_back(std::move(def));
-        addCutFace_.push_back(f.cutFaceNodes);
-        addInherited_.push_back(inheritedRestOverlaps(rest, q.id, shape, f));
+        // Its contacts start relaxed: new-face nodes, and the parent's rest overlaps.
+        if (def_.relaxNewContacts) product.births.push_back({f.cutFaceNodes, inheritedRestOverlaps(rest, q.id, shape, f)});
         addEvent.push_back(events_.size());
         ev.childVolumes.push_back(f.volume);
       }
@@ -450,22 +464,16 @@ void Breakage<D>::applyQueue(World<D>& world) {
   if (splits_.empty()) return;
 
   // Parents leave, their fines are recorded, fragments enter in the order of
-  // their parents' ids (World::replace keeps the ledger and the time step).
+  // their parents' ids with their births (World::replace keeps the ledger and
+  // the time step, and gives the ids: it writes them into the defs).
   const std::vector<std::size_t> added = world.replace(splits_);
   eventOf_.assign(p.size(), -1);
-  for (std::size_t k = 0; k < added.size(); ++k) {
-    const std::size_t i = added[k];
-    events_[addEvent[k]].children.push_back(p.id[i]);
-    eventOf_[i] = std::int64_t(addEvent[k]);
-    // Its contacts start relaxed: new-face nodes, and the parent's rest overlaps.
-    if (!def_.relaxNewContacts) continue;
-    world.markNewborn(p.id[i], addCutFace_[k]);
-    for (const Inherited& r : addInherited_[k]) {
-      if (r.childOwns) {
-        world.inheritRestOverlap(p.id[i], r.key, r.node, r.restOverlap);
-      } else {
-        world.inheritRestOverlap(r.key, p.id[i], r.node, r.restOverlap);
-      }
+  std::size_t k = 0;
+  for (const dynamics::Replacement<D>& s : splits_) {
+    for (const ParticleDef<D>& child : s.children) {
+      events_[addEvent[k]].children.push_back(child.id);
+      eventOf_[added[k]] = std::int64_t(addEvent[k]);
+      ++k;
     }
   }
   checkEnergy(world, firstEvent);

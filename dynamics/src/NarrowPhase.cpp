@@ -1470,23 +1470,25 @@ template <int D>
 void ContactSolver<D>::adoptHistory(std::uint64_t id, const ParticleHistory& history) {
   std::erase_if(history_, [&](const HistoryPair& h) { return h.idA == id || h.other == id; });
   if (history.pairs.empty()) return;
-  // The arrays the history points into, aligned with nodes_ before appending.
+  // The arrays the history points into, aligned with nodes_ before appending
+  // (kept when either side has them: a solver whose last compute() found no
+  // contact holds none yet).
   const std::size_t base = nodes_.size();
-  if (!history.shear.empty() && shear_.size() != base) shear_.resize(base, Vec<D>::Zero());
-  if (!history.preload.empty() && preload_.size() != base) {
-    preload_.resize(base, 0.0);
-  }
+  const bool withShear = !history.shear.empty() || !shear_.empty();
+  const bool withPreload = !history.preload.empty() || !preload_.empty();
+  if (withShear) shear_.resize(base, Vec<D>::Zero());
+  if (withPreload) preload_.resize(base, 0.0);
   if (historyKeys_.size() != base) buildHistoryKeysFor(base);
   nodes_.insert(nodes_.end(), history.nodes.begin(), history.nodes.end());
   for (const NodeContact<D>& c : history.nodes) historyKeys_.push_back(nodeKey(c));
-  if (!shear_.empty()) {
+  if (withShear) {
     if (history.shear.empty()) {
       shear_.resize(nodes_.size(), Vec<D>::Zero());
     } else {
       shear_.insert(shear_.end(), history.shear.begin(), history.shear.end());
     }
   }
-  if (!preload_.empty()) {
+  if (withPreload) {
     if (history.preload.empty()) {
       preload_.resize(nodes_.size(), 0.0);
     } else {

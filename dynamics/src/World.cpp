@@ -476,17 +476,39 @@ std::vector<std::size_t> World<D>::replace(std::vector<Replacement<D>>& splits) 
       throw std::out_of_range("World::replace: parent index " + std::to_string(s.parent) + " of " +
                               std::to_string(particles_.size()) + " particles");
     }
+    if (!s.births.empty() && s.births.size() != s.children.size()) {
+      throw std::invalid_argument("World::replace: " + std::to_string(s.births.size()) + " births for " +
+                                  std::to_string(s.children.size()) + " children");
+    }
     parents.push_back(s.parent);
   }
   std::sort(parents.begin(), parents.end(), std::greater<>());
   if (std::adjacent_find(parents.begin(), parents.end()) != parents.end()) {
     throw std::out_of_range("World::replace: a parent given twice");
   }
+  // A distributed run: the run's ids for this batch (collective).
+  if (coordinator_) {
+    if (coordinatedThisStep_) {
+      throw std::logic_error("World::replace: a distributed run replaces particles at most once per step");
+    }
+    splitRequests_.clear();
+    for (const Replacement<D>& s : splits) {
+      const ParticleId parent = particles_.id[s.parent];
+      if (!splitRequests_.empty() && !(splitRequests_.back().parent < parent)) {
+        throw std::invalid_argument("World::replace: a distributed run needs the splits in ascending parent id");
+      }
+      splitRequests_.push_back({parent, s.fines.size(), s.children.size()});
+    }
+    coordinatedThisStep_ = true;
+    coordinator_->allocateIds(splitRequests_, splitIds_);
+  }
   // The ledger, split by split: the fines' kinetic energy is brought (by a
   // fragment) and carried away at once; the parent's leaves with it.
-  for (Replacement<D>& s : splits) {
-    for (auto& [r, kinetic] : s.fines) {
-      r.id = particles_.nextId();
+  for (std::size_t k = 0; k < splits.size(); ++k) {
+    Replacement<D>& s = splits[k];
+    for (std::size_t f = 0; f < s.fines.size(); ++f) {
+      auto& [r, kinetic] = s.fines[f];
+      r.id = coordinator_ ? splitIds_[k].firstFine + f : particles_.nextId();
       particles_.reserveIdsBelow(r.id + 1);
       r.time = time_;
       energy_.addedEnergy += kinetic;
@@ -495,19 +517,75 @@ std::vector<std::size_t> World<D>::replace(std::vector<Replacement<D>>& splits) 
     energy_.addedEnergy -= particles_.kineticEnergy(s.parent);
   }
   // Parents leave, highest index first (swap-removal keeps the others valid);
-  // the children enter in order and bring their kinetic energy.
+  // the children enter in order with their births and bring their kinetic energy.
   for (std::size_t i : parents) dropParticle(i);
   std::vector<std::size_t> added;
-  for (const Replacement<D>& s : splits) {
-    for (const ParticleDef<D>& def : s.children) {
+  born_.clear();
+  for (std::size_t k = 0; k < splits.size(); ++k) {
+    Replacement<D>& s = splits[k];
+    for (std::size_t c = 0; c < s.children.size(); ++c) {
+      ParticleDef<D>& def = s.children[c];
+      if (coordinator_) def.id = splitIds_[k].firstChild + c;
       const std::size_t i = particles_.add(def);
+      def.id = particles_.id[i];
       if (!ghost_.empty()) ghost_.push_back(0);
       energy_.addedEnergy += particles_.kineticEnergy(i);
       added.push_back(i);
+      const ChildBirth* birth = s.births.empty() ? nullptr : &s.births[c];
+      if (birth) markBirth(def.id, *birth);
+      if (coordinator_) born_.push_back({def.id, birth});
     }
   }
+  const std::size_t dtChangesBefore = dtChanges_.size();
+  const double dtBefore = dt_;
   particlesChanged();
+  if (!coordinator_) return added;
+
+  // A distributed run: the run's time step and the mirrors (collective),
+  // which may reorder the particles; each child stays here (its own, or a
+  // mirror when its centroid lies in another part: it is within reach).
+  finishCoordination(dtChangesBefore, dtBefore);
+  std::vector<std::pair<ParticleId, std::size_t>> byId;
+  byId.reserve(added.size());
+  for (std::size_t k = 0; k < born_.size(); ++k) byId.emplace_back(born_[k].id, k);
+  std::sort(byId.begin(), byId.end());
+  std::size_t found = 0;
+  for (std::size_t i = 0; i < particles_.size(); ++i) {
+    const auto it = std::lower_bound(byId.begin(), byId.end(), std::pair<ParticleId, std::size_t>{particles_.id[i], 0});
+    if (it == byId.end() || it->first != particles_.id[i]) continue;
+    added[it->second] = i;
+    ++found;
+  }
+  if (found != added.size()) {
+    throw std::logic_error("World::replace: a child left this part of the distributed run at its birth");
+  }
   return added;
+}
+
+template <int D>
+void World<D>::finishCoordination(std::size_t dtChangesBefore, double dtBefore) {
+  // Each part saw its own particles and mirrors; the run's step is the smallest.
+  dt_ = coordinator_->agreeTimeStep(dt_);
+  dtChanges_.resize(dtChangesBefore);
+  if (dt_ != dtBefore) dtChanges_.push_back({time_, dt_, limit_});
+  coordinator_->particlesReplaced(born_);
+  // One world re-evaluates all its contacts after a replacement (at once or
+  // at the next step); so does every part, whether or not its own set changed.
+  broad_.invalidate();
+  forcesValid_ = false;
+  energyCurrent_ = false;
+}
+
+template <int D>
+void World<D>::markBirth(std::uint64_t id, const ChildBirth& birth) {
+  contacts_.markNewborn(id, birth.newFaceNodes);
+  for (const ChildBirth::Rest& r : birth.rests) {
+    if (r.childOwns) {
+      contacts_.inheritRestOverlap(id, r.key, r.node, r.restOverlap);
+    } else {
+      contacts_.inheritRestOverlap(r.key, id, r.node, r.restOverlap);
+    }
+  }
 }
 
 template <int D>
@@ -721,6 +799,15 @@ void World<D>::finishStep() {
     if (effects_[e]->readsContacts()) refreshContacts();
     effects_[e]->afterStep(*this);
     effectSeconds_[e] += secondsSince(te);
+  }
+  // A distributed run: a step that replaced nothing here still takes part
+  // in the run's collective calls (ParticleSetCoordinator.h).
+  if (coordinator_) {
+    if (!coordinatedThisStep_) {
+      born_.clear();
+      if (coordinator_->allocateIds({}, splitIds_) > 0) finishCoordination(dtChanges_.size(), dt_);
+    }
+    coordinatedThisStep_ = false;
   }
   stageSeconds_[std::size_t(Stage::AfterStep)] += secondsSince(t0);
 

@@ -87,6 +87,10 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   check(MPI_Comm_size(comm_, &ranks_), "Comm_size");
   const dynamics::WorldDef<D>& wd = world_.def();
   for (const std::string& name : world_.effectNames()) {
+    if (name == "breakage") {
+      coordinated_ = true;
+      continue;
+    }
     if (name != "gravity" && name != "global_damping" && name != "local_damping") {
       throw std::invalid_argument("a distributed run does not support the effect '" + name +
                                   "' yet (docs/parallel.md); run it on one rank");
@@ -104,11 +108,17 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   if (world_.steps() != 0) throw std::invalid_argument("a distributed run starts from a world that has not stepped");
 
   const dynamics::Particles<D>& p = world_.particles();
+  double spacing = 0.0;  // the coarsest grid
   for (std::size_t i = 0; i < p.size(); ++i) {
-    largestRadius_ = std::max({largestRadius_, p.shape[i]->boundingRadius(), p.shape[i]->cubicBoundingRadius()});
+    largestRadius_ = std::max(largestRadius_, radius(i));
+    spacing = std::max(spacing, p.shape[i]->grid().spacing());
     shapeHash(p.shape[i]);  // registers the shape under its hash
   }
   skin_ = wd.broadPhase.skin > 0.0 ? wd.broadPhase.skin : 0.1 * largestRadius_;
+  // A split looks at the bodies within 4 of its grain's cells
+  // (Breakage::clearanceAround): they must be here.
+  if (coordinated_) skin_ = std::max(skin_, 4.0 * spacing);
+  nextId_ = p.nextId();
   checkSameWorldEverywhere();
   shapesAt_.assign(std::size_t(ranks_), {});
   for (auto& held : shapesAt_) {
@@ -129,16 +139,22 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
       world_.detachParticle(i);
     }
   }
+  if (coordinated_) world_.setCoordinator(this);
+}
+
+template <int D>
+DistributedWorld<D>::~DistributedWorld() {
+  if (coordinated_) world_.setCoordinator(nullptr);
 }
 
 template <int D>
 void DistributedWorld<D>::checkSameWorldEverywhere() const {
   // A digest of the particle count, ids and shape hashes, in index order: equal on every rank.
   const dynamics::Particles<D>& p = world_.particles();
-  std::uint64_t digest = p.size();
+  std::uint64_t digest = p.size() * 1099511628211ull ^ p.nextId();
   for (std::size_t i = 0; i < p.size(); ++i) {
     digest = digest * 1099511628211ull ^ p.id[i];
-    digest = digest * 1099511628211ull ^ hashOf_.at(p.shape[i].get());
+    digest = digest * 1099511628211ull ^ hashOf_.at(p.shape[i].get()).hash;
   }
   std::uint64_t lo = digest, hi = digest;
   check(MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_UINT64_T, MPI_MIN, comm_), "Allreduce");
@@ -151,10 +167,11 @@ void DistributedWorld<D>::checkSameWorldEverywhere() const {
 
 template <int D>
 std::uint64_t DistributedWorld<D>::shapeHash(const std::shared_ptr<const geometry::Shape<D>>& shape) {
+  // A hit needs the shape alive: a freed fragment's address may now hold another shape.
   const auto it = hashOf_.find(shape.get());
-  if (it != hashOf_.end()) return it->second;
+  if (it != hashOf_.end() && !it->second.alive.expired()) return it->second.hash;
   const std::uint64_t h = fnv1a(grainBytes(*shape));
-  hashOf_.emplace(shape.get(), h);
+  hashOf_[shape.get()] = {h, shape};
   shapes_.emplace(h, shape);
   return h;
 }
@@ -165,9 +182,14 @@ double DistributedWorld<D>::weight(std::size_t index) const {
 }
 
 template <int D>
-double DistributedWorld<D>::reach(std::size_t index) const {
+double DistributedWorld<D>::radius(std::size_t index) const {
   const geometry::Shape<D>& s = *world_.particles().shape[index];
-  return std::max(s.boundingRadius(), s.cubicBoundingRadius()) + largestRadius_ + skin_;
+  return std::max(s.boundingRadius(), s.cubicBoundingRadius());
+}
+
+template <int D>
+double DistributedWorld<D>::reach(std::size_t index) const {
+  return radius(index) + largestRadius_ + skin_;
 }
 
 template <int D>
@@ -199,14 +221,22 @@ void DistributedWorld<D>::run(std::uint64_t n) {
 }
 
 template <int D>
-void DistributedWorld<D>::exchange() {
+void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born) {
   const auto t0 = std::chrono::steady_clock::now();
   const dynamics::Particles<D>& p = world_.particles();
   const std::size_t n = p.size();
+  // The births of the particles just born here, by id (empty but after a split).
+  std::vector<dynamics::BornParticle> births;
+  for (const dynamics::BornParticle& b : born) {
+    if (b.birth) births.push_back(b);
+  }
+  const auto idLess = [](const dynamics::BornParticle& a, const dynamics::BornParticle& b) { return a.id < b.id; };
+  std::sort(births.begin(), births.end(), idLess);
 
   // What each rank gets: the shapes it lacks, then one record per particle
-  // (owner, id, shape, mass and motion), then the contact history of the
-  // particles it takes over.
+  // (owner, id, shape, mass and motion, strength), with the contact history
+  // of the particles it takes over, then how the contacts of the particles
+  // just born start (their births).
   std::vector<StateWriter> out(static_cast<std::size_t>(ranks_));
   std::vector<std::vector<std::size_t>> sent(static_cast<std::size_t>(ranks_));
   std::vector<int> newOwner(n, rank_);
@@ -260,6 +290,27 @@ void DistributedWorld<D>::exchange() {
         ++stats_.migrations;
       }
     }
+    // Births (breakage runs only: the other runs' messages are as before).
+    std::uint64_t bornHere = 0;
+    if (!births.empty()) {
+      for (std::size_t i : list) bornHere += std::binary_search(births.begin(), births.end(), dynamics::BornParticle{p.id[i], nullptr}, idLess);
+    }
+    if (coordinated_) w.put(bornHere);
+    if (bornHere > 0) {
+      for (std::size_t i : list) {
+        const auto it = std::lower_bound(births.begin(), births.end(), dynamics::BornParticle{p.id[i], nullptr}, idLess);
+        if (it == births.end() || it->id != p.id[i]) continue;
+        w.put(it->id);
+        putRaw(w, it->birth->newFaceNodes);
+        w.put(std::uint64_t(it->birth->rests.size()));
+        for (const dynamics::ChildBirth::Rest& r : it->birth->rests) {
+          w.put(r.key);
+          w.put(r.node);
+          w.put(r.restOverlap);
+          w.put(std::uint8_t(r.childOwns));
+        }
+      }
+    }
     stats_.ghostsSent += list.size();
     stats_.bytesSent += w.bytes().size();
     ++stats_.messagesSent;
@@ -297,7 +348,7 @@ void DistributedWorld<D>::exchange() {
       std::istringstream s(grain, std::ios::binary);
       auto shape = io::readGrain<D>(s, "rank " + std::to_string(q));
       shapes_.emplace(h, shape);
-      hashOf_.emplace(shape.get(), h);
+      hashOf_[shape.get()] = {h, shape};  // this copy lives on only when it was new here
       shapesAt_[std::size_t(q)].insert(h);  // the sender holds it
     }
     for (std::uint64_t k = 0, count = r.get<std::uint64_t>(); k < count; ++k) {
@@ -327,6 +378,7 @@ void DistributedWorld<D>::exchange() {
       const auto it = local.find(def.id);
       if (it != local.end()) {
         world_.setMotion(it->second, def.position, def.orientation, def.velocity, def.angularVelocity);
+        world_.setStrength(it->second, def.strength);  // its owner's (sampled, or made unbreakable)
         keep[it->second] = 1;
         world_.setGhost(it->second, owner != rank_);
       } else {
@@ -339,6 +391,19 @@ void DistributedWorld<D>::exchange() {
         world_.setGhost(world_.addParticle(def), owner != rank_);
         keep.push_back(1);
       }
+    }
+    for (std::uint64_t k = 0, count = coordinated_ ? r.get<std::uint64_t>() : 0; k < count; ++k) {
+      const ParticleId id = r.get<ParticleId>();
+      dynamics::ChildBirth birth;
+      getRaw(r, birth.newFaceNodes);
+      birth.rests.resize(std::size_t(r.get<std::uint64_t>()));
+      for (dynamics::ChildBirth::Rest& rest : birth.rests) {
+        rest.key = r.get<std::uint64_t>();
+        rest.node = r.get<std::uint32_t>();
+        rest.restOverlap = r.get<double>();
+        rest.childOwns = r.get<std::uint8_t>() != 0;
+      }
+      world_.markBirth(id, birth);
     }
     if (!r.atEnd()) throw std::runtime_error("MPI exchange: message from rank " + std::to_string(q) + " is malformed");
   }
@@ -470,7 +535,97 @@ std::vector<typename DistributedWorld<D>::ParticleState> DistributedWorld<D>::ga
     w.put(p.velocity[i]);
     w.put(p.angularVelocity[i]);
   }
-  int count = int(w.bytes().size());
+  std::vector<ParticleState> states;
+  for (const std::vector<char>& bytes : gatherBytes(w.bytes(), root)) {
+    StateReader r(bytes.data(), bytes.size());
+    while (!r.atEnd()) {
+      ParticleState s;
+      s.id = r.get<ParticleId>();
+      s.position = r.get<Vec<D>>();
+      s.orientation = r.get<dynamics::Orientation<D>>();
+      s.velocity = r.get<Vec<D>>();
+      s.angularVelocity = r.get<dynamics::Spin<D>>();
+      states.push_back(s);
+    }
+  }
+  std::sort(states.begin(), states.end(), [](const ParticleState& a, const ParticleState& b) { return a.id < b.id; });
+  return states;
+}
+
+template <int D>
+std::uint64_t DistributedWorld<D>::allocateIds(std::span<const dynamics::SplitRequest> batch,
+                                               std::vector<dynamics::SplitIds>& ids) {
+  // Every rank's split count, then, when some rank split, every split.
+  ids.clear();
+  const int mine = int(batch.size());
+  std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
+  check(MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_), "Allgather");
+  int total = 0;
+  for (int q = 0; q < ranks_; ++q) {
+    offsets[std::size_t(q)] = 3 * total;
+    total += counts[std::size_t(q)];
+    counts[std::size_t(q)] *= 3;
+  }
+  if (total == 0) return 0;
+  std::vector<std::uint64_t> send;
+  send.reserve(3 * batch.size());
+  for (const dynamics::SplitRequest& r : batch) send.insert(send.end(), {r.parent, r.fines, r.children});
+  std::vector<std::uint64_t> all(3 * std::size_t(total));
+  check(MPI_Allgatherv(send.data(), 3 * mine, MPI_UINT64_T, all.data(), counts.data(), offsets.data(), MPI_UINT64_T,
+                       comm_),
+        "Allgatherv");
+  // The run's batch in ascending parent id, numbered as one world numbers it
+  // (World::replace): every fine first, then every child.
+  std::vector<dynamics::SplitRequest> runBatch(static_cast<std::size_t>(total));
+  std::uint64_t fines = 0;
+  for (std::size_t k = 0; k < runBatch.size(); ++k) {
+    runBatch[k] = {all[3 * k], all[3 * k + 1], all[3 * k + 2]};
+    fines += runBatch[k].fines;
+  }
+  const auto byParent = [](const dynamics::SplitRequest& a, const dynamics::SplitRequest& b) { return a.parent < b.parent; };
+  std::sort(runBatch.begin(), runBatch.end(), byParent);
+  std::vector<dynamics::SplitIds> first(runBatch.size());
+  std::uint64_t fine = nextId_, child = nextId_ + fines;
+  for (std::size_t k = 0; k < runBatch.size(); ++k) {
+    if (k > 0 && runBatch[k].parent == runBatch[k - 1].parent) {
+      throw std::logic_error("distributed breakage: particle " + std::to_string(runBatch[k].parent) +
+                             " was split on two ranks");
+    }
+    first[k] = {fine, child};
+    fine += runBatch[k].fines;
+    child += runBatch[k].children;
+  }
+  nextId_ = child;
+  for (const dynamics::SplitRequest& r : batch) {
+    const auto it = std::lower_bound(runBatch.begin(), runBatch.end(), r, byParent);
+    ids.push_back(first[std::size_t(it - runBatch.begin())]);
+  }
+  return std::uint64_t(total);
+}
+
+template <int D>
+double DistributedWorld<D>::agreeTimeStep(double dt) {
+  // The smallest step, and the largest radius: a fragment can reach farther
+  // from its own centroid than its parent did, and r_max bounds every radius.
+  const dynamics::Particles<D>& p = world_.particles();
+  double largest = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!world_.isGhost(i)) largest = std::max(largest, radius(i));
+  }
+  double v[2] = {dt, -largest};
+  check(MPI_Allreduce(MPI_IN_PLACE, v, 2, MPI_DOUBLE, MPI_MIN, comm_), "Allreduce");
+  largestRadius_ = std::max(largestRadius_, -v[1]);
+  return v[0];
+}
+
+template <int D>
+void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornParticle> born) {
+  exchange(born);
+}
+
+template <int D>
+std::vector<std::vector<char>> DistributedWorld<D>::gatherBytes(const std::vector<char>& bytes, int root) const {
+  int count = int(bytes.size());
   std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
   check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, comm_), "Gather");
   int total = 0;
@@ -479,22 +634,76 @@ std::vector<typename DistributedWorld<D>::ParticleState> DistributedWorld<D>::ga
     total += counts[std::size_t(q)];
   }
   std::vector<char> all(rank_ == root ? std::size_t(total) : 0);
-  check(MPI_Gatherv(w.bytes().data(), count, MPI_CHAR, all.data(), counts.data(), offsets.data(), MPI_CHAR, root, comm_),
+  check(MPI_Gatherv(bytes.data(), count, MPI_CHAR, all.data(), counts.data(), offsets.data(), MPI_CHAR, root, comm_),
         "Gatherv");
-  std::vector<ParticleState> states;
-  if (rank_ != root) return states;
-  StateReader r(all.data(), all.size());
-  while (!r.atEnd()) {
-    ParticleState s;
-    s.id = r.get<ParticleId>();
-    s.position = r.get<Vec<D>>();
-    s.orientation = r.get<dynamics::Orientation<D>>();
-    s.velocity = r.get<Vec<D>>();
-    s.angularVelocity = r.get<dynamics::Spin<D>>();
-    states.push_back(s);
+  std::vector<std::vector<char>> parts;
+  if (rank_ != root) return parts;
+  for (int q = 0; q < ranks_; ++q) {
+    const auto at = all.begin() + offsets[std::size_t(q)];
+    parts.emplace_back(at, at + counts[std::size_t(q)]);
   }
-  std::sort(states.begin(), states.end(), [](const ParticleState& a, const ParticleState& b) { return a.id < b.id; });
-  return states;
+  return parts;
+}
+
+template <int D>
+std::vector<dynamics::RemovedParticle> DistributedWorld<D>::gatherRemoved(int root) const {
+  StateWriter w;
+  for (const dynamics::RemovedParticle& r : world_.removed()) {
+    w.put(r.id);
+    w.put(r.time);
+    w.put(r.mass);
+    w.put(r.volume);
+    w.put(r.sieveSize);
+    w.putString(r.reason);
+  }
+  std::vector<dynamics::RemovedParticle> removed;
+  for (const std::vector<char>& bytes : gatherBytes(w.bytes(), root)) {
+    StateReader r(bytes.data(), bytes.size());
+    while (!r.atEnd()) {
+      dynamics::RemovedParticle x;
+      x.id = r.get<std::uint64_t>();
+      x.time = r.get<double>();
+      x.mass = r.get<double>();
+      x.volume = r.get<double>();
+      x.sieveSize = r.get<double>();
+      x.reason = r.getString();
+      removed.push_back(std::move(x));
+    }
+  }
+  std::sort(removed.begin(), removed.end(), [](const auto& a, const auto& b) {
+    return a.time < b.time || (a.time == b.time && a.id < b.id);
+  });
+  return removed;
+}
+
+template <int D>
+double DistributedWorld<D>::particleMass() const {
+  double m = 0.0;
+  for (std::size_t i = 0; i < world_.particles().size(); ++i) {
+    if (!world_.isGhost(i)) m += world_.unscaledMass(i);
+  }
+  check(MPI_Allreduce(MPI_IN_PLACE, &m, 1, MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
+  return m;
+}
+
+template <int D>
+std::vector<breakage::BreakageEvent<D>> DistributedWorld<D>::gatherBreakageEvents(const breakage::Breakage<D>& effect,
+                                                                                  int root) const {
+  // Each rank's log through the effect's own state (saveState / loadState).
+  StateWriter w;
+  effect.saveState(w);
+  std::vector<breakage::BreakageEvent<D>> events;
+  for (const std::vector<char>& bytes : gatherBytes(w.bytes(), root)) {
+    breakage::Breakage<D> part(effect.def());
+    StateReader r(bytes.data(), bytes.size());
+    part.loadState(r);
+    events.insert(events.end(), part.events().begin(), part.events().end());
+  }
+  // One world applies a step's splits in ascending parent id.
+  std::stable_sort(events.begin(), events.end(), [](const auto& a, const auto& b) {
+    return a.time < b.time || (a.time == b.time && a.parent < b.parent);
+  });
+  return events;
 }
 
 template class DistributedWorld<2>;

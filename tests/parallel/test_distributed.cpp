@@ -234,19 +234,3 @@ TEST(DistributedWorld, RefusesWorldsThatDifferBetweenRanks) {
 
 }  // namespace
 }  // namespace lsdem
-
-int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  // Only rank 0 prints; every rank runs every test (they are collective).
-  if (lsdem::rankOf(MPI_COMM_WORLD) != 0) {
-    delete ::testing::UnitTest::GetInstance()->listeners().Release(
-        ::testing::UnitTest::GetInstance()->listeners().default_result_printer());
-  }
-  const int failed = RUN_ALL_TESTS();
-  // A failure on any rank fails the run on all.
-  int any = failed;
-  MPI_Allreduce(MPI_IN_PLACE, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-  MPI_Finalize();
-  return any;
-}

@@ -74,6 +74,11 @@
 /// particles, the world evaluates the contacts again before it runs
 /// (World::step). Effects may be declared in any order.
 ///
+/// Distributed runs (parallel/DistributedWorld.h): a world's ghosts (World::
+/// isGhost) are never given a strength, queued or split here: their owner
+/// does it. World::replace then agrees the ids, the time step and the other
+/// ranks' mirrors with the other ranks before it returns.
+///
 /// Cost: an absent effect costs nothing (the scene adds it). A present one
 /// walks the particles and the contact records once per step into buffers it
 /// reuses; it allocates only when it breaks something.
@@ -327,19 +332,11 @@ class Breakage final : public dynamics::Effect<D> {
     double radius = 0.0;                        ///< bounding radius
   };
   std::vector<Neighbour> around_;
+  std::vector<std::size_t> near_;  // clearanceAround's particles in reach, by global id
   std::vector<Pending> queue_;
   std::vector<dynamics::Replacement<D>> splits_;  // this batch's, in the order of the parents' ids
-  std::vector<std::vector<std::uint32_t>> addCutFace_;  // per fragment that enters (in splits_ order): Fragment::cutFaceNodes
-  // A rest overlap a fragment takes over: of its node (childOwns; key = the
-  // partner), or of another body's node inside it (key = that body's id).
-  struct Inherited {
-    std::uint64_t key = 0;
-    std::uint32_t node = 0;
-    double restOverlap = 0.0;
-    bool childOwns = true;
-  };
-  std::vector<std::vector<Inherited>> addInherited_;  // aligned with addCutFace_
-  static std::vector<Inherited> inheritedRestOverlaps(
+  // The rest overlaps fragment `f` of the parent takes over (ChildBirth::Rest).
+  static std::vector<dynamics::ChildBirth::Rest> inheritedRestOverlaps(
       const std::vector<typename dynamics::ContactSolver<D>::RestOverlap>& rest, std::uint64_t parentId,
       const geometry::Shape<D>& parent, const Fragment<D>& f);
   // Log and totals.

@@ -21,6 +21,7 @@
 #include "lsdem/dynamics/Effect.h"
 #include "lsdem/dynamics/Motion.h"
 #include "lsdem/dynamics/NarrowPhase.h"
+#include "lsdem/dynamics/ParticleSetCoordinator.h"
 #include "lsdem/dynamics/Particles.h"
 #include "lsdem/dynamics/State.h"
 #include "lsdem/dynamics/Wall.h"
@@ -185,12 +186,14 @@ struct RemovedParticle {
 /// One particle's split, for World::replace: the fragments that enter as
 /// particles, and the matter the split removes at once (fines) as removal
 /// records with the kinetic energy each carried (J); replace() gives those
-/// records their ids and time.
+/// records their ids and time, and writes each child's id into its def.
 template <int D>
 struct Replacement {
   std::size_t parent = 0;  ///< index of the particle that leaves
   std::vector<ParticleDef<D>> children;
   std::vector<std::pair<RemovedParticle, double>> fines;
+  /// How the children's contacts start (markBirth): empty, or one per child.
+  std::vector<ChildBirth> births;
 };
 
 /// Stages of the step whose wall-clock time is reported. Energy: what the
@@ -253,26 +256,41 @@ class World {
   void addEffect(std::unique_ptr<Effect<D>> effect);
   /// @brief Replaces particles by others (breakage): each parent leaves (no
   /// removal record: its matter goes on in its fragments), its fines are
-  /// recorded as removed, then the children enter, in the order given; the
-  /// ledger books the kinetic energy this adds (the children's and the
-  /// fines', less the parents') and what the fines carry away; then
-  /// particlesChanged(). Returns the children's indices, in order.
-  /// @note Throws std::out_of_range for a parent index out of range or given twice.
+  /// recorded as removed, then the children enter, in the order given, with
+  /// their births (markBirth); the ledger books the kinetic energy this adds
+  /// (the children's and the fines', less the parents') and what the fines
+  /// carry away; then particlesChanged(). Ids: the fines of every split, in
+  /// order, then the children of every split, from the next free id.
+  /// Returns the children's indices, in order.
+  ///
+  /// In a distributed run (setCoordinator) the coordinator gives the ids (as
+  /// one world holding the whole run would), the time step becomes the run's,
+  /// and the other worlds' mirrors are brought up to the new set before this
+  /// returns; a child whose centroid lies in another world's part is then
+  /// that world's and a mirror here (isGhost).
+  /// @note Throws std::out_of_range for a parent index out of range or given
+  /// twice; with a coordinator, std::invalid_argument for parents not in
+  /// ascending id and std::logic_error for a second replace() in one step.
   std::vector<std::size_t> replace(std::vector<Replacement<D>>& splits);
+  /// @brief Makes this world one part of a run spread over several (a
+  /// distributed run; ParticleSetCoordinator.h): replace() then goes through
+  /// `coordinator`, and every step that replaced nothing still takes part in
+  /// its collective calls (finishStep). Null (the default): a world of its
+  /// own, which never calls one.
+  void setCoordinator(ParticleSetCoordinator* coordinator) { coordinator_ = coordinator; }
+  /// @brief Whether this world is one part of a distributed run (setCoordinator).
+  bool isDistributed() const { return coordinator_ != nullptr; }
   /// @brief Sets particle i's strength (breakage: eq. 12-13; infinite: unbreakable).
   void setStrength(std::size_t i, double strength) { particles_.strength.at(i) = strength; }
   /// @brief Tells the world particles were replaced in bulk: the broad phase
   /// rebuilds and the time step is re-checked (replace() calls it).
   void particlesChanged();
-  /// @brief Marks nodes of particle `id` as born this step (a fragment's new
-  /// face): their contacts found at the next evaluation start relaxed
-  /// (ContactSolver::markNewborn).
-  void markNewborn(std::uint64_t id, std::span<const std::uint32_t> nodes) { contacts_.markNewborn(id, nodes); }
-  /// @brief A rest overlap particle `id` takes over from its parent
-  /// (ContactSolver::inheritRestOverlap).
-  void inheritRestOverlap(std::uint64_t id, std::uint64_t partner, std::uint32_t node, double restOverlap) {
-    contacts_.inheritRestOverlap(id, partner, node, restOverlap);
-  }
+  /// @brief How particle `id`'s contacts found at the next evaluation start
+  /// (a fragment just born; replace() calls it for its children, a
+  /// distributed run for a child mirrored from its owner): the nodes of its
+  /// new face start relaxed (ContactSolver::markNewborn), and it takes over
+  /// its parent's rest overlaps (ContactSolver::inheritRestOverlap).
+  void markBirth(std::uint64_t id, const ChildBirth& birth);
 
   // ---- running ----
   /// @brief Advances one step of dt(): beginStep() then finishStep().
@@ -447,6 +465,16 @@ class World {
   std::vector<std::uint8_t> ghost_;
   // The candidate pairs without those of two ghosts (only with ghosts).
   std::vector<std::array<std::uint32_t, 2>> pairsWithoutGhostPairs_;
+
+  // A distributed run (setCoordinator): null in a world of its own.
+  ParticleSetCoordinator* coordinator_ = nullptr;
+  bool coordinatedThisStep_ = false;  // replace() took part in this step's collective calls
+  std::vector<SplitRequest> splitRequests_;
+  std::vector<SplitIds> splitIds_;
+  std::vector<BornParticle> born_;
+  // The rest of a step's collective calls once the run's batch is known (not
+  // empty): the run's time step, then the mirrors.
+  void finishCoordination(std::size_t dtChangesBefore, double dtBefore);
 
   double time_ = 0.0;
   std::uint64_t steps_ = 0;

@@ -6,8 +6,9 @@
 /// Each rank holds a World<D> with the particles it owns (centroid in its
 /// subdomain, Decomposition) and ghosts: mirrors of other ranks' particles
 /// within reach of its subdomain, reach_i = r_i + r_max + skin (r: bounding
-/// radii, r_max the largest in the run), so every particle that can touch
-/// an owned one is present. A step is
+/// radii, r_max the largest in the run; in breakage runs the skin is at least
+/// 4 cells of the coarsest grid, what a split looks at around its grain), so
+/// every particle that can touch an owned one is present. A step is
 ///
 ///     world.beginStep()        half kick and drift of every local particle
 ///     exchange()               owners send poses and velocities to the ranks
@@ -28,12 +29,31 @@
 /// sends a shape to another rank once, the first time one of its particles
 /// is sent there; shapes every rank built from the scene are never sent.
 ///
+/// Breakage (docs/parallel.md "Breakage across ranks"): each rank breaks its
+/// own particles only (their grain stresses come from contacts it computes
+/// whole). The rank's world is coordinated through this object
+/// (dynamics::ParticleSetCoordinator): once per step every rank joins one
+/// all-gather of its splits (parent id, fines, children), so fragment and
+/// fines ids are those one world would give (ascending parent id, fines
+/// first); after a step with splits anywhere, the ranks take the smallest
+/// time step and exchange at once (an extra exchange between steps), so
+/// parents' mirrors leave, fragments' mirrors arrive (shapes once by hash)
+/// with how their contacts start (new-face nodes, inherited rest overlaps),
+/// a fragment whose centroid lies in another subdomain goes to its owner,
+/// and every rank re-evaluates its contacts once, as one world does. A
+/// breakage run equals the serial one bit for bit (tests/parallel/
+/// test_breakage.cpp). gatherRemoved(), particleMass() and
+/// gatherBreakageEvents() (BreakageLog.h) give the run's fines, mass balance
+/// and breakage log.
+///
 /// Not yet distributed (the constructor refuses them with the reason):
-/// breakage and other effects that change the particle set (outflow, feeds),
-/// density scaling, servo platens (a servo reads the boundary load, which is
-/// split over the ranks). Gravity and damping work. The energy ledger of a
-/// rank's world counts its ghosts as well and is not a global budget.
+/// effects that change the particle set other than breakage (outflow,
+/// feeds), density scaling, servo platens (a servo reads the boundary load,
+/// which is split over the ranks). Gravity and damping work. The energy
+/// ledger of a rank's world counts its ghosts as well and is not a global
+/// budget; so do a breakage event's fragment springs (its energy check).
 
+#include "lsdem/breakage/Breakage.h"
 #include "lsdem/dynamics/World.h"
 #include "lsdem/parallel/Decomposition.h"
 
@@ -41,6 +61,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -68,7 +89,7 @@ struct ExchangeStats {
 };
 
 template <int D>
-class DistributedWorld {
+class DistributedWorld : private dynamics::ParticleSetCoordinator {
  public:
   using ParticleId = dynamics::ParticleId;
 
@@ -88,6 +109,9 @@ class DistributedWorld {
   /// @note Throws std::invalid_argument when the worlds differ between ranks
   /// or the scene uses what is not distributed yet (see the file comment).
   DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, const DistributedDef& def = {});
+  ~DistributedWorld() override;
+  DistributedWorld(const DistributedWorld&) = delete;
+  DistributedWorld& operator=(const DistributedWorld&) = delete;
 
   /// @brief Advances one step (collective: every rank calls it).
   void step();
@@ -111,13 +135,35 @@ class DistributedWorld {
   /// @brief Every particle's state, sorted by id, on rank `root` (empty on
   /// the others; collective).
   std::vector<ParticleState> gather(int root) const;
+  /// @brief Every removal record of the run (breakage fines), sorted by
+  /// (time, id) as one world records them, on rank `root` (empty on the
+  /// others; collective).
+  std::vector<dynamics::RemovedParticle> gatherRemoved(int root) const;
+  /// @brief The true mass of the run's particles, kg, summed over the ranks
+  /// (collective; to round-off the serial World::particleMass, another order).
+  double particleMass() const;
+  /// @brief The run's breakage log: every rank's events of `effect` (this
+  /// rank's world's Breakage), sorted by (time, parent id) as one world
+  /// applies them, on rank `root` (empty on the others; collective).
+  std::vector<breakage::BreakageEvent<D>> gatherBreakageEvents(const breakage::Breakage<D>& effect, int root) const;
 
  private:
-  void exchange();
+  // Sends every owned particle to the ranks in reach (and to its new owner);
+  // `born`: particles just born here, whose births go along.
+  void exchange(std::span<const dynamics::BornParticle> born = {});
+  // dynamics::ParticleSetCoordinator (breakage runs only).
+  std::uint64_t allocateIds(std::span<const dynamics::SplitRequest> batch,
+                            std::vector<dynamics::SplitIds>& ids) override;
+  double agreeTimeStep(double dt) override;
+  void particlesReplaced(std::span<const dynamics::BornParticle> born) override;
   void rebalance();
   void checkSameWorldEverywhere() const;
   std::uint64_t shapeHash(const std::shared_ptr<const geometry::Shape<D>>& shape);
   double reach(std::size_t index) const;
+  // Local particle `index`'s bounding radius (the tricubic one when larger).
+  double radius(std::size_t index) const;
+  // Every rank's `bytes`, in rank order, on rank `root` (empty on the others; collective).
+  std::vector<std::vector<char>> gatherBytes(const std::vector<char>& bytes, int root) const;
   // Local particle `index`'s cost in the decomposition: its surface nodes (at least 1).
   double weight(std::size_t index) const;
 
@@ -128,9 +174,17 @@ class DistributedWorld {
   Decomposition<D> decomposition_;
   double largestRadius_ = 0.0;       // r_max
   double skin_ = 0.0;
+  bool coordinated_ = false;         // the world changes its particle set (breakage): world_.setCoordinator(this)
+  dynamics::ParticleId nextId_ = 0;  // the run's next free global id (coordinated runs)
   // Shapes by content hash, and the hash of each shape this rank holds.
   std::unordered_map<std::uint64_t, std::shared_ptr<const geometry::Shape<D>>> shapes_;
-  std::unordered_map<const geometry::Shape<D>*, std::uint64_t> hashOf_;
+  // By the shape's address, valid only while `alive` (breakage frees shapes,
+  // and a new one can take a freed one's address).
+  struct HashedShape {
+    std::uint64_t hash = 0;
+    std::weak_ptr<const geometry::Shape<D>> alive;
+  };
+  std::unordered_map<const geometry::Shape<D>*, HashedShape> hashOf_;
   // The shapes each rank is known to hold (built from the scene, or sent).
   std::vector<std::unordered_set<std::uint64_t>> shapesAt_;
   ExchangeStats stats_;
