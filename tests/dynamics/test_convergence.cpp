@@ -59,6 +59,18 @@ constexpr Method kGridNodes{false, LevelSetInterpolation::Trilinear};
 constexpr Method kExactNodes{true, LevelSetInterpolation::Trilinear};
 constexpr Method kExactTricubic{true, LevelSetInterpolation::Tricubic};
 
+// The elastic law the force ratios below measure: kn = 1e6, no friction, no damping.
+ContactLawDef elasticLaw(ForceFormulation formulation,
+                         LevelSetInterpolation interpolation = LevelSetInterpolation::Trilinear) {
+  ContactLawDef law;
+  law.formulation = formulation;
+  law.interpolation = interpolation;
+  law.kn = 1e6;
+  law.hasFriction = false;
+  law.hasDamping = false;
+  return law;
+}
+
 // Orientation k of a fixed sequence (golden-ratio angles; Shoemake rotations
 // from the R3 sequence), the same the accuracy study uses.
 template <int D>
@@ -95,12 +107,7 @@ template <int D>
 double forceRatio(double cells, double nodesPerCell, ForceFormulation formulation, Method method = kGridNodes) {
   const double R = 0.5, delta = 0.02 * R;
   const auto shape = sphere<D>(R, cells, nodesPerCell, method.exactNodes);
-  ContactLawDef law;
-  law.formulation = formulation;
-  law.interpolation = method.interpolation;
-  law.kn = 1e6;
-  law.hasFriction = false;
-  law.hasDamping = false;
+  const ContactLawDef law = elasticLaw(formulation, method.interpolation);
   ContactSolver<D> solver(law);
   Plane<D> floor;
   floor.normal = Vec<D>::Unit(1);
@@ -148,12 +155,7 @@ template <int D>
 double pairForceRatio(const std::shared_ptr<const geometry::Shape<D>>& shape, ForceFormulation formulation,
                       LevelSetInterpolation interpolation, double surfaceRadius = 0.5) {
   const double R = 0.5, delta = 0.02 * R;
-  ContactLawDef law;
-  law.formulation = formulation;
-  law.interpolation = interpolation;
-  law.kn = 1e6;
-  law.hasFriction = false;
-  law.hasDamping = false;
+  const ContactLawDef law = elasticLaw(formulation, interpolation);
   ContactSolver<D> solver(law);
   const std::vector<typename ContactSolver<D>::Pair> pairs{{0u, 1u}};
   double mean = 0.0;
@@ -238,11 +240,7 @@ double volumeRadius(const geometry::TriangleMesh& mesh) { return std::cbrt(3.0 *
 double meshForceRatio(double cells, bool exactNodes) {
   const double R = 0.5, delta = 0.02 * R;
   const MeshSphere ball = meshSphere(cells, exactNodes);
-  ContactLawDef law;
-  law.formulation = ForceFormulation::AreaWeighted;
-  law.kn = 1e6;
-  law.hasFriction = false;
-  law.hasDamping = false;
+  const ContactLawDef law = elasticLaw(ForceFormulation::AreaWeighted);
   ContactSolver<3> solver(law);
   Plane<3> floor;
   floor.normal = Vec<3>::Unit(1);
@@ -468,11 +466,7 @@ double scannedSphereForceRatio(double voxels, bool cubicNodes) {
   const auto shape = geometry::Shape<3>::fromGridAndNodes(std::move(grid), std::move(nodes), shapeOptions);
   const double radius = std::cbrt(3.0 * double(stats[0].voxels) * h * h * h / (4.0 * kPi));
   const double delta = 0.02 * R;
-  ContactLawDef law;
-  law.formulation = ForceFormulation::AreaWeighted;
-  law.kn = 1e6;
-  law.hasFriction = false;
-  law.hasDamping = false;
+  const ContactLawDef law = elasticLaw(ForceFormulation::AreaWeighted);
   ContactSolver<3> solver(law);
   Plane<3> floor;
   floor.normal = Vec<3>::Unit(1);

@@ -10,6 +10,7 @@
 #include "lsdem/io/Scene.h"
 #include "lsdem/io/SceneOverride.h"
 #include "support/Files.h"
+#include "support/Mpi.h"
 
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -18,7 +19,6 @@
 #include <chrono>
 #include <cstdint>
 #include <fstream>
-#include <sstream>
 #include <string>
 #include <variant>
 #include <vector>
@@ -28,11 +28,7 @@ namespace {
 
 using parallel::DistributedWorld;
 
-int rankOf(MPI_Comm comm) {
-  int r = 0;
-  MPI_Comm_rank(comm, &r);
-  return r;
-}
+using test::rankOf;
 
 // A shipped three-grains scene with `settings` applied and the text
 // replacements `edits` (from, to) made, read as `lsdem run` reads it.
@@ -40,10 +36,7 @@ template <int D>
 io::SceneDef<D> threeGrains(const std::string& name, const std::vector<io::SceneSetting>& settings,
                             const std::vector<std::pair<std::string, std::string>>& edits) {
   const std::string file = std::string(LSDEM_SOURCE_DIR) + "/apps/scenes/three_grains/" + name;
-  std::ifstream in(file);
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string scene = text.str();
+  std::string scene = test::readFile(file);
   for (const auto& [from, to] : edits) {
     const std::size_t at = scene.find(from);
     if (at == std::string::npos) throw std::runtime_error("test scene: '" + from + "' not in " + file);

@@ -5,6 +5,7 @@
 #include "lsdem/parallel/DistributedWorld.h"
 
 #include "lsdem/geometry/ShapeDef.h"
+#include "support/Mpi.h"
 
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -25,11 +26,7 @@ using dynamics::WorldDef;
 using parallel::DistributedWorld;
 using geometry::Vec;
 
-int rankOf(MPI_Comm comm) {
-  int r = 0;
-  MPI_Comm_rank(comm, &r);
-  return r;
-}
+using test::rankOf;
 
 // Three grain shapes: a sphere, an ellipsoid and a random grain, 10 cells across.
 template <int D>
