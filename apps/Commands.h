@@ -7,6 +7,11 @@
 
 namespace lsdem::apps {
 
+/// The MPI ranks `lsdem` runs on (1 unless started by mpirun with -np > 1, in
+/// a build with LSDEM_MPI), and this process's rank.
+int mpiRanks();
+int mpiRank();
+
 /// `lsdem shape FILE.toml [--json]`: mass properties, descriptors, grid and nodes of one shape.
 void addShapeCommand(CLI::App& app);
 

@@ -8,6 +8,10 @@
 
 #include "lsdem/io/Run.h"
 
+#ifdef LSDEM_HAVE_MPI
+#include "lsdem/parallel/DistributedRun.h"
+#endif
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -71,9 +75,14 @@ void runCommand(const RunArgs& a) {
   o.check = a.check;
   o.splitEnergyLimit = a.splitEnergyLimit;
   o.stop = &gStop;
-  o.note = [](const std::string& line) { std::cerr << "lsdem: note: " << line << '\n'; };
+  // On several MPI ranks, rank 0 writes the outputs and speaks for the run.
+  const bool speaks = mpiRank() == 0;
+#ifdef LSDEM_HAVE_MPI
+  if (mpiRanks() > 1) o.engine = parallel::distributedRun(MPI_COMM_WORLD);
+#endif
+  if (speaks) o.note = [](const std::string& line) { std::cerr << "lsdem: note: " << line << '\n'; };
   const bool terminal = isatty(fileno(stderr)) != 0;
-  if (!a.quiet) {
+  if (!a.quiet && speaks) {
     o.progress = [terminal](const io::RunProgress& p) {
       // Fields in display order, each with its rank (lower: dropped first)
       // so the line fits 80 columns: the least needed go when it would not.
@@ -120,8 +129,9 @@ void runCommand(const RunArgs& a) {
   const io::RunResult r = io::runScene(o);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
-  if (!a.quiet) {
-    std::cout << (r.stopped ? "stopped" : "finished") << ": " << r.steps << " steps, t = " << r.time << " s, "
+  if (!a.quiet && speaks) {
+    std::cout << (mpiRanks() > 1 ? "on " + std::to_string(mpiRanks()) + " MPI ranks, " : std::string())
+              << (r.stopped ? "stopped" : "finished") << ": " << r.steps << " steps, t = " << r.time << " s, "
               << r.particles << " particles, " << r.breakages << " breakages, mass balance " << r.massBalanceError
               << " (relative), wall " << duration(r.wallSeconds) << "\n"
               << "outputs in " << r.outDir << (r.stopped ? " (continue with: lsdem run --resume " + r.outDir + ")" : "")

@@ -11,10 +11,80 @@
 
 #include <CLI/CLI.hpp>
 
+#ifdef LSDEM_HAVE_MPI
+#include <mpi.h>
+
+#include <chrono>
+#include <thread>
+#endif
+
+#include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <iostream>
+#include <string>
+
+namespace lsdem::apps {
+namespace {
+int gRanks = 1, gRank = 0;
+}
+int mpiRanks() { return gRanks; }
+int mpiRank() { return gRank; }
+}  // namespace lsdem::apps
+
+namespace {
+
+// Under mpirun (docs/parallel.md "lsdem run on N ranks"): MPI starts before
+// the command line is read, and a failure on any rank ends every rank.
+struct Mpi {
+  bool started = false;
+  Mpi(int& argc, char**& argv) {
+#ifdef LSDEM_HAVE_MPI
+    // Started by a launcher (Open MPI, PMIx, MPICH), not by hand.
+    if (!std::getenv("OMPI_COMM_WORLD_SIZE") && !std::getenv("PMIX_RANK") && !std::getenv("PMI_SIZE")) return;
+    int provided = 0;
+    MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+    started = true;
+    MPI_Comm_size(MPI_COMM_WORLD, &lsdem::apps::gRanks);
+    MPI_Comm_rank(MPI_COMM_WORLD, &lsdem::apps::gRank);
+#else
+    (void)argc;
+    (void)argv;
+#endif
+  }
+  ~Mpi() {
+#ifdef LSDEM_HAVE_MPI
+    if (started) MPI_Finalize();
+#endif
+  }
+  // The exit of a process that failed with `message` (code `code`): on several
+  // ranks, one line naming the rank, then every rank ends (mpirun exits with
+  // `code`). Every rank meets the same bad input: rank 0 says it, the others
+  // wait to be ended with it.
+  int fail(int code, const std::string& message, bool sameOnEveryRank) {
+    const int ranks = lsdem::apps::mpiRanks(), rank = lsdem::apps::mpiRank();
+    if (ranks <= 1) {
+      std::cerr << message << '\n';
+      return code;
+    }
+#ifdef LSDEM_HAVE_MPI
+    if (sameOnEveryRank && rank != 0) std::this_thread::sleep_for(std::chrono::seconds(5));
+    std::string line = message;
+    if (line.rfind("lsdem: ", 0) == 0) line = line.substr(7);
+    std::cerr << "lsdem: rank " << rank << " of " << ranks << ": " << line << std::endl;
+    MPI_Abort(MPI_COMM_WORLD, code);
+#endif
+    return code;
+  }
+};
+
+}  // namespace
 
 int main(int argc, char** argv) {
+  Mpi mpi(argc, argv);
+  if (lsdem::apps::mpiRanks() > 1 && (argc < 2 || std::strcmp(argv[1], "run") != 0)) {
+    return mpi.fail(2, "lsdem: only `lsdem run` runs on several MPI ranks", true);
+  }
   CLI::App app{"lsdem: Level Set DEM with brittle breakage by level-set splitting (2D and 3D)", "lsdem"};
   app.set_version_flag("--version", std::string("lsdem ") + LSDEM_VERSION);
   app.require_subcommand(1);
@@ -38,14 +108,12 @@ int main(int argc, char** argv) {
   } catch (const CLI::RuntimeError& e) {
     return e.get_exit_code();  // a subcommand's exit code (stopped runs, failed checks)
   } catch (const CLI::ParseError& e) {
-    app.exit(e);  // prints the usage error
-    return 2;
+    if (lsdem::apps::mpiRank() == 0) app.exit(e);  // prints the usage error
+    return lsdem::apps::mpiRanks() > 1 ? mpi.fail(2, "lsdem: bad command line", true) : 2;
   } catch (const lsdem::io::InputError& e) {
-    std::cerr << "lsdem: " << e.what() << '\n';
-    return 2;
+    return mpi.fail(2, std::string("lsdem: ") + e.what(), true);
   } catch (const std::exception& e) {
-    std::cerr << "lsdem: error: " << e.what() << '\n';
-    return 1;
+    return mpi.fail(1, std::string("lsdem: error: ") + e.what(), false);
   }
   return 0;
 }

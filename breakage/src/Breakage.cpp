@@ -600,6 +600,51 @@ void Breakage<D>::saveState(dynamics::StateWriter& out) const {
 }
 
 template <int D>
+void Breakage<D>::mergeLogs(const Breakage& base, std::span<const Breakage* const> parts) {
+  events_ = base.events_;
+  manualNotApplied_ = base.manualNotApplied_;
+  manualDone_ = base.manualDone_;
+  rawVolumeError_ = base.rawVolumeError_;
+  finesMass_ = base.finesMass_;
+  unsplit_ = base.unsplit_;
+  unsplittable_ = base.unsplittable_;
+  chips_ = base.chips_;
+  unresolvedChips_ = base.unresolvedChips_;
+  unchecked_ = base.unchecked_;
+  largestGain_ = base.largestGain_;
+  largestGainJoules_ = base.largestGainJoules_;
+  for (const Breakage* part : parts) {
+    if (part->events_.size() < base.events_.size() || part->manualDone_.size() != base.manualDone_.size() ||
+        part->manualNotApplied_.size() < base.manualNotApplied_.size()) {
+      throw std::invalid_argument("Breakage::mergeLogs: a part did not start from the base log");
+    }
+    events_.insert(events_.end(), part->events_.begin() + std::ptrdiff_t(base.events_.size()), part->events_.end());
+    manualNotApplied_.insert(manualNotApplied_.end(),
+                             part->manualNotApplied_.begin() + std::ptrdiff_t(base.manualNotApplied_.size()),
+                             part->manualNotApplied_.end());
+    for (std::size_t m = 0; m < manualDone_.size(); ++m) manualDone_[m] = manualDone_[m] || part->manualDone_[m];
+    rawVolumeError_ += part->rawVolumeError_ - base.rawVolumeError_;
+    finesMass_ += part->finesMass_ - base.finesMass_;
+    unsplit_ += part->unsplit_ - base.unsplit_;
+    unsplittable_ += part->unsplittable_ - base.unsplittable_;
+    chips_ += part->chips_ - base.chips_;
+    unresolvedChips_ += part->unresolvedChips_ - base.unresolvedChips_;
+    unchecked_ += part->unchecked_ - base.unchecked_;
+    if (part->largestGain_ > largestGain_) {
+      largestGain_ = part->largestGain_;
+      largestGainJoules_ = part->largestGainJoules_;
+    }
+  }
+  // One world applies a step's splits in ascending parent id.
+  const auto later = [](const auto& a, const auto& b) {
+    return a.time < b.time || (a.time == b.time && a.parent < b.parent);
+  };
+  std::stable_sort(events_.begin() + std::ptrdiff_t(base.events_.size()), events_.end(), later);
+  std::stable_sort(manualNotApplied_.begin() + std::ptrdiff_t(base.manualNotApplied_.size()), manualNotApplied_.end(),
+                   [](const auto& a, const auto& b) { return a.time < b.time; });
+}
+
+template <int D>
 void Breakage<D>::loadState(dynamics::StateReader& in) {
   // A checkpoint of the release before chips ("breakage 3") holds none.
   const std::string tag = in.getString();

@@ -565,9 +565,10 @@ std::vector<std::size_t> World<D>::replace(std::vector<Replacement<D>>& splits) 
 template <int D>
 void World<D>::finishCoordination(std::size_t dtChangesBefore, double dtBefore) {
   // Each part saw its own particles and mirrors; the run's step is the smallest.
-  dt_ = coordinator_->agreeTimeStep(dt_);
+  TimeStepLimit runLimit = limit_;
+  dt_ = coordinator_->agreeTimeStep(dt_, runLimit);
   dtChanges_.resize(dtChangesBefore);
-  if (dt_ != dtBefore) dtChanges_.push_back({time_, dt_, limit_});
+  if (dt_ != dtBefore) dtChanges_.push_back({time_, dt_, runLimit});
   coordinator_->particlesReplaced(born_);
   // One world re-evaluates all its contacts after a replacement (at once or
   // at the next step); so does every part, whether or not its own set changed.
@@ -752,6 +753,50 @@ void World<D>::refreshContacts() {
 }
 
 template <int D>
+void World<D>::showRunOf(const World& run, std::span<const ShownParticle> shown) {
+  if (run.tools_.size() != tools_.size() || run.planes_.size() != planes_.size() ||
+      run.effects_.size() != effects_.size()) {
+    throw std::invalid_argument("World::showRunOf: the run has other tools, planes or effects than this world");
+  }
+  if (shown.size() != particles_.size()) {
+    throw std::invalid_argument("World::showRunOf: " + std::to_string(shown.size()) + " particles shown, " +
+                                std::to_string(particles_.size()) + " held");
+  }
+  // The critical step of the whole set (particles came and went), then the run's step.
+  if (!particles_.empty()) updateTimeStep(false);
+  time_ = run.time_;
+  steps_ = run.steps_;
+  dt_ = run.dt_;
+  dtChanges_ = run.dtChanges_;
+  toolPoses_ = run.toolPoses_;
+  planes_ = run.planes_;
+  forcesValid_ = false;
+  energyCurrent_ = false;
+  std::vector<Vec<D>> velocity(shown.size());
+  std::vector<Spin<D>> spin(shown.size());
+  for (std::size_t i = 0; i < shown.size(); ++i) {
+    velocity[i] = shown[i].forceVelocity;
+    spin[i] = shown[i].forceSpin;
+  }
+  particles_.velocity.swap(velocity);
+  particles_.angularVelocity.swap(spin);
+  refreshContacts();
+  particles_.velocity.swap(velocity);
+  particles_.angularVelocity.swap(spin);
+  for (std::size_t i = 0; i < shown.size(); ++i) {
+    particles_.force[i] = shown[i].force;
+    particles_.torque[i] = shown[i].torque;
+    if (shown[i].history && !contacts_.overwriteHistory(particles_.id[i], *shown[i].history)) {
+      throw std::logic_error("World::showRunOf: the contact history of particle " + std::to_string(particles_.id[i]) +
+                             " does not fit the contacts found for it");
+    }
+  }
+  energyCurrent_ = false;
+  stageSeconds_ = run.stageSeconds_;
+  effectSeconds_ = run.effectSeconds_;
+}
+
+template <int D>
 void World<D>::step() {
   beginStep();
   finishStep();
@@ -763,7 +808,8 @@ void World<D>::beginStep() {
     throw std::logic_error("no time step: give dt, or add particles so the automatic step can be estimated");
   }
   // Forces of the current state, once, before the first step or after changes.
-  refreshContacts();
+  if (!keepForces_) refreshContacts();
+  keepForces_ = false;
 
   // The opening half kick books the work of the forces it applies.
   auto t0 = Clock::now();

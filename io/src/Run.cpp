@@ -43,13 +43,20 @@ class Runner {
       scene_.world.checkFinite = true;
       scene_.world.energyLedger = true;  // the splits' energy check measures against the run's energy scale
     }
-    sw_ = buildWorld(scene_);
-    if (options_.check && sw_.breakage) sw_.breakage->setSplitEnergyLimit(options_.splitEnergyLimit);
-    World& world = *sw_.world;
+    // A distributed run: the process that writes the outputs steps a world of
+    // its own (part_) and records from sw_, the view of the whole run; the
+    // others step sw_.
+    const RunEngineFactory* engine = options_.engine.get();
+    writes_ = !engine || engine->writesOutputs;
+    sw_ = buildWorld(engine && writes_ ? viewScene() : scene_);
+    if (engine && writes_) part_ = buildWorld(scene_);
+    if (options_.check && stepped().breakage) stepped().breakage->setSplitEnergyLimit(options_.splitEnergyLimit);
+    World& world = *stepped().world;
     // Everything is read and checked before any output changes.
     std::string runState;
     if (resume) {
       runState = loadCheckpoint<D>(checkpointFile(), world);
+      if (&world != sw_.world.get()) loadCheckpoint<D>(checkpointFile(), *sw_.world);
     } else {
       context_.basis.initialMass = sw_.initialMass;
       if (scene_.specimen) context_.basis.specimenHeight = specimenHeight(*scene_.specimen, world);
@@ -57,20 +64,29 @@ class Runner {
     end_ = runEnd(scene_, options_, world);
     if (!resume) checkRunLimits(scene_, options_, world, end_, sw_.initialMass);
     checkpoints_ = checkpointSchedule(scene_, end_, world);
+    // (Every process keeps the schedules; only the one that writes records.)
     recorders_ = makeRecorders(context_, end_);
     if (resume) loadRunState(runState);
-    claimOutputFolder(resume);
-    // The copy of the scene the run read: its identity for a resume (a
-    // forced resume with another scene replaces it).
-    if (!resume || readWholeFile((context_.out / "scene.toml").string(), false) != sceneText_) {
-      writeFileAtomically(context_.out / "scene.toml", sceneText_);
+    if (engine) engine_ = makeEngine(*engine);
+    if (writes_) {
+      claimOutputFolder(resume);
+      // The copy of the scene the run read: its identity for a resume (a
+      // forced resume with another scene replaces it).
+      if (!resume || readWholeFile((context_.out / "scene.toml").string(), false) != sceneText_) {
+        writeFileAtomically(context_.out / "scene.toml", sceneText_);
+      }
     }
     if (resume) {
-      for (auto& r : recorders_) r->reopen();
+      if (writes_) {
+        for (auto& r : recorders_) r->reopen();
+      }
     } else {
       // The first instant of a new run (a resumed run has it already).
-      for (auto& r : recorders_) r->create();
-      for (auto& r : recorders_) r->record(world, now());
+      updateView();
+      if (writes_) {
+        for (auto& r : recorders_) r->create();
+        for (auto& r : recorders_) r->record(*sw_.world, now());
+      }
       advanceSchedules();
     }
 
@@ -81,19 +97,30 @@ class Runner {
     std::uint64_t stepsAtReport = world.steps();
     bool stopped = false;
     while (!end_.finished(world.time(), world.steps())) {
-      if (options_.stop && options_.stop->load()) {
+      bool stop = options_.stop && options_.stop->load();
+      if (engine_) stop = engine_->anyStop(stop);
+      if (stop) {
         stopped = true;
         break;
       }
-      world.step();
-      const Instant t = now();
-      for (auto& r : recorders_) {
-        if (r->schedule().due(t)) r->record(world, t);
+      if (engine_) {
+        engine_->step();
+      } else {
+        world.step();
       }
+      const Instant t = now();
       const bool checkpoint = checkpoints_.due(t);
+      bool due = checkpoint;
+      for (auto& r : recorders_) due = due || r->schedule().due(t);
+      if (due) updateView();
+      if (writes_) {
+        for (auto& r : recorders_) {
+          if (r->schedule().due(t)) r->record(*sw_.world, t);
+        }
+      }
       advanceSchedules();
       if (checkpoint) writeCheckpoint();
-      if (options_.progress && secondsSince(lastReport) >= scene_.output.progressSeconds) {
+      if (writes_ && options_.progress && secondsSince(lastReport) >= scene_.output.progressSeconds) {
         report(double(world.steps() - stepsAtReport) / secondsSince(lastReport), false);
         lastReport = Clock::now();
         stepsAtReport = world.steps();
@@ -103,23 +130,29 @@ class Runner {
     // The end (or an early stop): the checkpoint first, so that a resumed run
     // drops what follows (it is not on any schedule), then every recorder's last
     // record; the summary is the last of them.
+    updateView();
     writeCheckpoint();
     context_.stopped = stopped;
-    for (auto& r : recorders_) r->finish(world, now());
+    if (writes_) {
+      for (auto& r : recorders_) r->finish(*sw_.world, now());
+    }
     const double wall = context_.wallSeconds();
-    if (options_.progress) report(double(world.steps()) / std::max(wall, 1e-9), true);
+    if (writes_ && options_.progress) report(double(world.steps()) / std::max(wall, 1e-9), true);
 
+    // (A process of a distributed run that does not write the outputs
+    // reports its own part.)
+    const World& view = *sw_.world;
     RunResult r;
     r.outDir = context_.out.string();
     r.dimension = D;
-    r.steps = world.steps();
-    r.time = world.time();
+    r.steps = view.steps();
+    r.time = view.time();
     r.wallSeconds = wall;
     r.stopped = stopped;
-    r.particles = world.particles().size();
+    r.particles = view.particles().size();
     r.breakages = sw_.breakage ? sw_.breakage->breakages() : 0;
     r.massIn = context_.massIn();
-    r.massOut = world.particleMass() + world.removedMass();
+    r.massOut = view.particleMass() + view.removedMass();
     r.massBalanceError = r.massIn > 0.0 ? (r.massOut - r.massIn) / r.massIn : 0.0;
     return r;
   }
@@ -129,7 +162,33 @@ class Runner {
 
   static double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
   fs::path checkpointFile() const { return context_.out / outputs::kCheckpoint; }
-  Instant now() const { return end_.now(sw_.world->time(), sw_.world->steps()); }
+  // The world this process steps.
+  SceneWorld<D>& stepped() { return part_.world ? part_ : sw_; }
+  const SceneWorld<D>& stepped() const { return part_.world ? part_ : sw_; }
+  Instant now() const { return end_.now(stepped().world->time(), stepped().world->steps()); }
+  // The scene of a distributed run's view: its energy budget is not summed
+  // over the processes yet, so the view keeps none (its terms would read 0).
+  SceneDef<D> viewScene() const {
+    SceneDef<D> s = scene_;
+    s.world.energyLedger = false;
+    s.world.checkFinite = false;
+    return s;
+  }
+  std::unique_ptr<RunEngine<D>> makeEngine(const RunEngineFactory& factory) {
+    const auto& make = [&]() -> const auto& {
+      if constexpr (D == 2) {
+        return factory.make2;
+      } else {
+        return factory.make3;
+      }
+    }();
+    if (!make) throw std::logic_error("a distributed run's engine for " + std::to_string(D) + "D is missing");
+    return make(stepped());
+  }
+  // A distributed run: the view of the whole run brought up to now (collective).
+  void updateView() {
+    if (engine_) engine_->updateView(sw_);
+  }
   void advanceSchedules() {
     const Instant t = now();
     for (auto& r : recorders_) r->schedule().advance(t);
@@ -151,6 +210,7 @@ class Runner {
   // The run's state: its basis, the checkpoints' schedule, and one section
   // per recorder (by name), each as the recorder saved it.
   void writeCheckpoint() {
+    if (!writes_) return;
     dynamics::StateWriter s;
     s.putTag("run");
     s.put(context_.basis.initialMass);
@@ -188,13 +248,19 @@ class Runner {
                                " output, which this scene writes (a forced resume with other [output] keys)");
         }
         dynamics::StateReader section(it->second.data(), it->second.size());
-        r->load(section);
+        if (writes_) {
+          r->load(section);
+        } else {
+          r->loadSchedule(section);
+        }
       }
     });
   }
 
+  // A distributed run's particles, contacts and breakages are those of the
+  // view at the last instant an output was due.
   void report(double rate, bool done) const {
-    const World& w = *sw_.world;
+    const World& w = *stepped().world;
     RunProgress p;
     p.steps = w.steps();
     p.time = w.time();
@@ -207,8 +273,8 @@ class Runner {
     // part of it) and when the step falls as grains break.
     const double stepsLeft = end_.stepsLeft(w.time(), w.steps(), w.dt());
     p.etaSeconds = rate > 0.0 && std::isfinite(stepsLeft) ? stepsLeft / rate : 0.0;
-    p.particles = w.particles().size();
-    p.contacts = w.contacts().pairContacts().size();
+    p.particles = sw_.world->particles().size();
+    p.contacts = sw_.world->contacts().pairContacts().size();
     p.breakages = sw_.breakage ? sw_.breakage->breakages() : 0;
     p.done = done;
     options_.progress(p);
@@ -218,7 +284,10 @@ class Runner {
   std::string sceneText_;  // the scene file's text as the run read it: its identity in checkpoints
   RunOptions options_;
   std::unique_ptr<OutputLock> lock_;  // held while the run writes into its folder
-  SceneWorld<D> sw_;
+  SceneWorld<D> sw_;      // the world the outputs read (and, but in a distributed run's writing process, the one stepped)
+  SceneWorld<D> part_;    // a distributed run's writing process: the world it steps (its part of the run)
+  bool writes_ = true;    // this process writes the outputs
+  std::unique_ptr<RunEngine<D>> engine_;  // a distributed run's; null: steps here
   RunContext<D> context_;
   RunEnd end_;
   Schedule checkpoints_;
@@ -231,7 +300,8 @@ RunResult runOf(SceneDef<D> scene, std::string sceneText, const RunOptions& opti
       !options.resumeDir.empty() ? options.resumeDir : (!options.outDir.empty() ? options.outDir : scene.output.dir);
   // A folder that exists is claimed before the world is built: another run
   // in it is refused at once.
-  if (!lock && fs::is_directory(out)) {
+  const bool writes = !options.engine || options.engine->writesOutputs;
+  if (writes && !lock && fs::is_directory(out)) {
     lock = std::make_unique<OutputLock>(out);
     checkOutputFolder(out, options.overwrite);
   }
@@ -249,7 +319,8 @@ RunResult runScene(const RunOptions& options) {
   // A resumed run holds its folder from the start: no other run may write
   // its checkpoint while it is read.
   std::unique_ptr<OutputLock> lock;
-  if (!options.resumeDir.empty() && fs::is_directory(options.resumeDir)) {
+  const bool writes = !options.engine || options.engine->writesOutputs;
+  if (writes && !options.resumeDir.empty() && fs::is_directory(options.resumeDir)) {
     lock = std::make_unique<OutputLock>(options.resumeDir);
   }
   const std::string scenePath = options.resumeDir.empty() ? options.scene : resumeScene(options);

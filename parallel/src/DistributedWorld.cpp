@@ -5,10 +5,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <variant>
 
 namespace lsdem::parallel {
@@ -78,6 +80,61 @@ void getRaw(StateReader& in, std::vector<T>& v) {
   for (T& x : v) x = in.get<T>();
 }
 
+// One particle's record in a message: what a mirror or a view needs to
+// hold it as its owner does (the shape travels apart, by hash).
+template <int D>
+void putParticle(StateWriter& w, const dynamics::Particles<D>& p, std::size_t i, std::uint64_t shapeHash) {
+  w.put(p.id[i]);
+  w.put(shapeHash);
+  w.put(p.mass[i]);
+  w.put(p.inertia[i]);
+  w.put(p.material[i]);
+  w.put(p.strength[i]);
+  w.put(p.parentId[i]);
+  w.put(p.generation[i]);
+  w.put(p.birthTime[i]);
+  w.put(p.position[i]);
+  w.put(p.orientation[i]);
+  w.put(p.velocity[i]);
+  w.put(p.angularVelocity[i]);
+}
+// Reads putParticle's record into a definition without its shape; the shape's hash into `shapeHash`.
+template <int D>
+dynamics::ParticleDef<D> getParticle(StateReader& r, std::uint64_t& shapeHash) {
+  dynamics::ParticleDef<D> def;
+  def.id = r.get<ParticleId>();
+  shapeHash = r.get<std::uint64_t>();
+  def.mass = r.get<double>();
+  def.inertia = r.get<dynamics::Spin<D>>();
+  def.material = r.get<int>();
+  def.strength = r.get<double>();
+  def.parent = r.get<ParticleId>();
+  def.generation = r.get<int>();
+  def.birthTime = r.get<double>();
+  def.position = r.get<Vec<D>>();
+  def.orientation = r.get<dynamics::Orientation<D>>();
+  def.velocity = r.get<Vec<D>>();
+  def.angularVelocity = r.get<dynamics::Spin<D>>();
+  return def;
+}
+
+template <int D>
+void putHistory(StateWriter& w, const typename dynamics::ContactSolver<D>::ParticleHistory& history) {
+  putRaw(w, history.pairs);
+  putRaw(w, history.nodes);
+  putRaw(w, history.shear);
+  putRaw(w, history.preload);
+}
+template <int D>
+typename dynamics::ContactSolver<D>::ParticleHistory getHistory(StateReader& r) {
+  typename dynamics::ContactSolver<D>::ParticleHistory history;
+  getRaw(r, history.pairs);
+  getRaw(r, history.nodes);
+  getRaw(r, history.shear);
+  getRaw(r, history.preload);
+  return history;
+}
+
 }  // namespace
 
 template <int D>
@@ -105,7 +162,6 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
                                   "' yet (docs/parallel.md)");
     }
   }
-  if (world_.steps() != 0) throw std::invalid_argument("a distributed run starts from a world that has not stepped");
 
   const dynamics::Particles<D>& p = world_.particles();
   double spacing = 0.0;  // the coarsest grid
@@ -127,6 +183,9 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
 
   // The decomposition of the whole set (the same on every rank), then each
   // rank keeps its own particles and their ghosts.
+  // A world restored from a checkpoint holds the forces the run evaluated
+  // last: each part opens its first step with them, as the run would have.
+  const bool resumed = world_.steps() > 0 && world_.contactsCurrent();
   std::vector<Vec<D>> points(p.position.begin(), p.position.end());
   std::vector<double> weights(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) weights[i] = weight(i);
@@ -140,6 +199,7 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
     }
   }
   if (coordinated_) world_.setCoordinator(this);
+  if (resumed) world_.keepForces();
 }
 
 template <int D>
@@ -177,6 +237,46 @@ std::uint64_t DistributedWorld<D>::shapeHash(const std::shared_ptr<const geometr
 }
 
 template <int D>
+void DistributedWorld<D>::putShapes(StateWriter& w, int q, std::span<const std::size_t> list) {
+  const dynamics::Particles<D>& p = world_.particles();
+  std::vector<std::uint64_t> newShapes;
+  for (std::size_t i : list) {
+    const std::uint64_t h = shapeHash(p.shape[i]);
+    if (shapesAt_[std::size_t(q)].insert(h).second) newShapes.push_back(h);
+  }
+  w.put(std::uint64_t(newShapes.size()));
+  for (std::uint64_t h : newShapes) {
+    w.put(h);
+    w.putString(grainBytes(*shapes_.at(h)));
+  }
+  stats_.shapesSent += newShapes.size();
+}
+
+template <int D>
+void DistributedWorld<D>::getShapes(StateReader& r, int q) {
+  for (std::uint64_t k = 0, count = r.get<std::uint64_t>(); k < count; ++k) {
+    const std::uint64_t h = r.get<std::uint64_t>();
+    const std::string grain = r.getString();
+    std::istringstream s(grain, std::ios::binary);
+    auto shape = io::readGrain<D>(s, "rank " + std::to_string(q));
+    shapes_.emplace(h, shape);
+    hashOf_[shape.get()] = {h, shape};    // this copy lives on only when it was new here
+    shapesAt_[std::size_t(q)].insert(h);  // the sender holds it
+  }
+}
+
+template <int D>
+std::shared_ptr<const geometry::Shape<D>> DistributedWorld<D>::receivedShape(std::uint64_t hash, ParticleId id,
+                                                                            int from) const {
+  const auto shape = shapes_.find(hash);
+  if (shape == shapes_.end()) {
+    throw std::runtime_error("rank " + std::to_string(rank_) + ": particle " + std::to_string(id) + " from rank " +
+                             std::to_string(from) + " has a shape this rank never received");
+  }
+  return shape->second;
+}
+
+template <int D>
 double DistributedWorld<D>::weight(std::size_t index) const {
   return double(std::max<std::size_t>(1, world_.particles().shape[index]->nodes().size()));
 }
@@ -210,6 +310,11 @@ template <int D>
 void DistributedWorld<D>::step() {
   world_.beginStep();
   exchange();
+  // The velocities the step evaluates its forces with (half-step ones), for
+  // a view (updateView); a step that splits grains evaluates again at its end.
+  const dynamics::Particles<D>& p = world_.particles();
+  forceVelocity_.assign(p.velocity.begin(), p.velocity.end());
+  forceSpin_.assign(p.angularVelocity.begin(), p.angularVelocity.end());
   world_.finishStep();
   ++stats_.steps;
   if (def_.rebalanceImbalance > 0.0 && def_.rebalanceEvery > 0 && stats_.steps % def_.rebalanceEvery == 0) rebalance();
@@ -254,39 +359,13 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
     const std::vector<std::size_t>& list = sent[std::size_t(q)];
     if (list.empty()) continue;
     // Shapes first, each once per rank.
-    std::vector<std::uint64_t> newShapes;
-    for (std::size_t i : list) {
-      const std::uint64_t h = shapeHash(p.shape[i]);
-      if (shapesAt_[std::size_t(q)].insert(h).second) newShapes.push_back(h);
-    }
-    w.put(std::uint64_t(newShapes.size()));
-    for (std::uint64_t h : newShapes) {
-      w.put(h);
-      w.putString(grainBytes(*shapes_.at(h)));
-    }
-    stats_.shapesSent += newShapes.size();
+    putShapes(w, q, list);
     w.put(std::uint64_t(list.size()));
     for (std::size_t i : list) {
       w.put(std::int32_t(newOwner[i]));
-      w.put(p.id[i]);
-      w.put(shapeHash(p.shape[i]));
-      w.put(p.mass[i]);
-      w.put(p.inertia[i]);
-      w.put(p.material[i]);
-      w.put(p.strength[i]);
-      w.put(p.parentId[i]);
-      w.put(p.generation[i]);
-      w.put(p.birthTime[i]);
-      w.put(p.position[i]);
-      w.put(p.orientation[i]);
-      w.put(p.velocity[i]);
-      w.put(p.angularVelocity[i]);
+      putParticle(w, p, i, shapeHash(p.shape[i]));
       if (newOwner[i] == q) {
-        const auto history = world_.contacts().particleHistory(p.id[i]);
-        putRaw(w, history.pairs);
-        putRaw(w, history.nodes);
-        putRaw(w, history.shear);
-        putRaw(w, history.preload);
+        putHistory<D>(w, world_.contacts().particleHistory(p.id[i]));
         ++stats_.migrations;
       }
     }
@@ -342,39 +421,12 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
     const std::vector<char>& bytes = in[std::size_t(q)];
     if (bytes.empty()) continue;
     StateReader r(bytes.data(), bytes.size());
-    for (std::uint64_t k = 0, count = r.get<std::uint64_t>(); k < count; ++k) {
-      const std::uint64_t h = r.get<std::uint64_t>();
-      const std::string grain = r.getString();
-      std::istringstream s(grain, std::ios::binary);
-      auto shape = io::readGrain<D>(s, "rank " + std::to_string(q));
-      shapes_.emplace(h, shape);
-      hashOf_[shape.get()] = {h, shape};  // this copy lives on only when it was new here
-      shapesAt_[std::size_t(q)].insert(h);  // the sender holds it
-    }
+    getShapes(r, q);
     for (std::uint64_t k = 0, count = r.get<std::uint64_t>(); k < count; ++k) {
       const int owner = r.get<std::int32_t>();
-      dynamics::ParticleDef<D> def;
-      def.id = r.get<ParticleId>();
-      const std::uint64_t h = r.get<std::uint64_t>();
-      def.mass = r.get<double>();
-      def.inertia = r.get<dynamics::Spin<D>>();
-      def.material = r.get<int>();
-      def.strength = r.get<double>();
-      def.parent = r.get<ParticleId>();
-      def.generation = r.get<int>();
-      def.birthTime = r.get<double>();
-      def.position = r.get<Vec<D>>();
-      def.orientation = r.get<dynamics::Orientation<D>>();
-      def.velocity = r.get<Vec<D>>();
-      def.angularVelocity = r.get<dynamics::Spin<D>>();
-      if (owner == rank_) {
-        Adopted a{def.id, {}};
-        getRaw(r, a.history.pairs);
-        getRaw(r, a.history.nodes);
-        getRaw(r, a.history.shear);
-        getRaw(r, a.history.preload);
-        adopted.push_back(std::move(a));
-      }
+      std::uint64_t h = 0;
+      dynamics::ParticleDef<D> def = getParticle<D>(r, h);
+      if (owner == rank_) adopted.push_back({def.id, getHistory<D>(r)});
       const auto it = local.find(def.id);
       if (it != local.end()) {
         world_.setMotion(it->second, def.position, def.orientation, def.velocity, def.angularVelocity);
@@ -382,12 +434,7 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
         keep[it->second] = 1;
         world_.setGhost(it->second, owner != rank_);
       } else {
-        const auto shape = shapes_.find(h);
-        if (shape == shapes_.end()) {
-          throw std::runtime_error("rank " + std::to_string(rank_) + ": particle " + std::to_string(def.id) +
-                                   " from rank " + std::to_string(q) + " has a shape this rank never received");
-        }
-        def.shape = shape->second;
+        def.shape = receivedShape(h, def.id, q);
         world_.setGhost(world_.addParticle(def), owner != rank_);
         keep.push_back(1);
       }
@@ -604,7 +651,7 @@ std::uint64_t DistributedWorld<D>::allocateIds(std::span<const dynamics::SplitRe
 }
 
 template <int D>
-double DistributedWorld<D>::agreeTimeStep(double dt) {
+double DistributedWorld<D>::agreeTimeStep(double dt, dynamics::TimeStepLimit& limit) {
   // The smallest step, and the largest radius: a fragment can reach farther
   // from its own centroid than its parent did, and r_max bounds every radius.
   const dynamics::Particles<D>& p = world_.particles();
@@ -615,11 +662,22 @@ double DistributedWorld<D>::agreeTimeStep(double dt) {
   double v[2] = {dt, -largest};
   check(MPI_Allreduce(MPI_IN_PLACE, v, 2, MPI_DOUBLE, MPI_MIN, comm_), "Allreduce");
   largestRadius_ = std::max(largestRadius_, -v[1]);
+  // What sets the run's step: the limit with the smallest critical step (the
+  // lowest rank of equals), as every rank sees it.
+  struct {
+    double criticalDt;
+    int rank;
+  } mine{limit.criticalDt > 0.0 ? limit.criticalDt : std::numeric_limits<double>::infinity(), rank_}, run{};
+  check(MPI_Allreduce(&mine, &run, 1, MPI_DOUBLE_INT, MPI_MINLOC, comm_), "Allreduce");
+  static_assert(std::is_trivially_copyable_v<dynamics::TimeStepLimit>);
+  check(MPI_Bcast(&limit, int(sizeof limit), MPI_BYTE, run.rank, comm_), "Bcast");
   return v[0];
 }
 
 template <int D>
 void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornParticle> born) {
+  forceVelocity_.clear();  // the contacts are evaluated again now, at the velocities then
+  forceSpin_.clear();
   exchange(born);
 }
 
@@ -646,9 +704,11 @@ std::vector<std::vector<char>> DistributedWorld<D>::gatherBytes(const std::vecto
 }
 
 template <int D>
-std::vector<dynamics::RemovedParticle> DistributedWorld<D>::gatherRemoved(int root) const {
+std::vector<dynamics::RemovedParticle> DistributedWorld<D>::gatherRemoved(int root, std::size_t from) const {
   StateWriter w;
-  for (const dynamics::RemovedParticle& r : world_.removed()) {
+  const auto& mine = world_.removed();
+  for (std::size_t k = std::min(from, mine.size()); k < mine.size(); ++k) {
+    const dynamics::RemovedParticle& r = mine[k];
     w.put(r.id);
     w.put(r.time);
     w.put(r.mass);
@@ -689,21 +749,127 @@ double DistributedWorld<D>::particleMass() const {
 template <int D>
 std::vector<breakage::BreakageEvent<D>> DistributedWorld<D>::gatherBreakageEvents(const breakage::Breakage<D>& effect,
                                                                                   int root) const {
+  breakage::Breakage<D> run(effect.def());
+  gatherBreakage(effect, breakage::Breakage<D>(effect.def()), run, root);
+  return rank_ == root ? run.events() : std::vector<breakage::BreakageEvent<D>>();
+}
+
+template <int D>
+void DistributedWorld<D>::gatherBreakage(const breakage::Breakage<D>& effect, const breakage::Breakage<D>& base,
+                                         breakage::Breakage<D>& into, int root) const {
   // Each rank's log through the effect's own state (saveState / loadState).
   StateWriter w;
   effect.saveState(w);
-  std::vector<breakage::BreakageEvent<D>> events;
+  std::vector<std::unique_ptr<breakage::Breakage<D>>> parts;
   for (const std::vector<char>& bytes : gatherBytes(w.bytes(), root)) {
-    breakage::Breakage<D> part(effect.def());
+    parts.push_back(std::make_unique<breakage::Breakage<D>>(effect.def()));
     StateReader r(bytes.data(), bytes.size());
-    part.loadState(r);
-    events.insert(events.end(), part.events().begin(), part.events().end());
+    parts.back()->loadState(r);
   }
-  // One world applies a step's splits in ascending parent id.
-  std::stable_sort(events.begin(), events.end(), [](const auto& a, const auto& b) {
-    return a.time < b.time || (a.time == b.time && a.parent < b.parent);
-  });
-  return events;
+  if (rank_ != root) return;
+  std::vector<const breakage::Breakage<D>*> views;
+  for (const auto& part : parts) views.push_back(part.get());
+  into.mergeLogs(base, views);
+}
+
+template <int D>
+void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
+  // After a split on another rank, this rank evaluates its contacts at its
+  // next step; one world did at once (Breakage's energy check). Done now, on
+  // the same state, it changes nothing that follows, and the view gets the
+  // run's contacts of now: the fragments' springs with their rest overlaps.
+  if (!world_.contactsCurrent()) {
+    world_.refreshContacts();
+    forceVelocity_.clear();
+    forceSpin_.clear();
+  }
+  // Every rank's own particles with their contact history, and the shapes
+  // the root has not got yet.
+  const dynamics::Particles<D>& p = world_.particles();
+  std::vector<std::size_t> own;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!world_.isGhost(i)) own.push_back(i);
+  }
+  StateWriter w;
+  if (rank_ != root) {
+    putShapes(w, root, own);
+  } else {
+    w.put(std::uint64_t(0));
+  }
+  // The velocities the run's last force evaluation saw: the step's half-step
+  // ones, or those now when the particles changed since (or never stepped).
+  const bool halfStep = forceVelocity_.size() == p.size();
+  w.put(std::uint64_t(own.size()));
+  for (std::size_t i : own) {
+    putParticle(w, p, i, shapeHash(p.shape[i]));
+    putHistory<D>(w, world_.contacts().particleHistory(p.id[i]));
+    w.put(halfStep ? forceVelocity_[i] : p.velocity[i]);
+    w.put(halfStep ? forceSpin_[i] : p.angularVelocity[i]);
+    w.put(p.force[i]);
+    w.put(p.torque[i]);
+  }
+  const std::vector<std::vector<char>> parts = gatherBytes(w.bytes(), root);
+  if (rank_ != root) return;
+
+  struct Entry {
+    dynamics::ParticleDef<D> def;
+    std::uint64_t hash = 0;
+    int from = 0;
+    typename dynamics::ContactSolver<D>::ParticleHistory history;
+    Vec<D> forceVelocity;
+    dynamics::Spin<D> forceSpin;
+    Vec<D> force;
+    dynamics::Spin<D> torque;
+  };
+  std::vector<Entry> run;
+  for (int q = 0; q < ranks_; ++q) {
+    const std::vector<char>& bytes = parts[std::size_t(q)];
+    StateReader r(bytes.data(), bytes.size());
+    getShapes(r, q);
+    for (std::uint64_t k = 0, count = r.get<std::uint64_t>(); k < count; ++k) {
+      Entry e;
+      e.def = getParticle<D>(r, e.hash);
+      e.from = q;
+      e.history = getHistory<D>(r);
+      e.forceVelocity = r.get<Vec<D>>();
+      e.forceSpin = r.get<dynamics::Spin<D>>();
+      e.force = r.get<Vec<D>>();
+      e.torque = r.get<dynamics::Spin<D>>();
+      run.push_back(std::move(e));
+    }
+    if (!r.atEnd()) throw std::runtime_error("MPI view: message from rank " + std::to_string(q) + " is malformed");
+  }
+  std::sort(run.begin(), run.end(), [](const Entry& a, const Entry& b) { return a.def.id < b.def.id; });
+
+  // The view's particles that left the run go (highest index first), those
+  // that remain take the run's state, the new ones enter in ascending id.
+  const dynamics::Particles<D>& v = view.particles();
+  const auto byId = [&](ParticleId id) {
+    const auto it = std::lower_bound(run.begin(), run.end(), id, [](const Entry& e, ParticleId x) { return e.def.id < x; });
+    return it != run.end() && it->def.id == id ? it : run.end();
+  };
+  for (std::size_t i = v.size(); i-- > 0;) {
+    if (byId(v.id[i]) == run.end()) view.detachParticle(i);
+  }
+  std::unordered_map<ParticleId, std::size_t> index;
+  for (std::size_t i = 0; i < v.size(); ++i) index.emplace(v.id[i], i);
+  for (Entry& e : run) {
+    const auto it = index.find(e.def.id);
+    if (it != index.end()) {
+      view.setMotion(it->second, e.def.position, e.def.orientation, e.def.velocity, e.def.angularVelocity);
+      view.setStrength(it->second, e.def.strength);
+    } else {
+      e.def.shape = receivedShape(e.hash, e.def.id, e.from);
+      view.addParticle(e.def);
+    }
+  }
+  for (const Entry& e : run) view.adoptHistory(e.def.id, e.history);
+  std::vector<typename dynamics::World<D>::ShownParticle> shown(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const auto e = byId(v.id[i]);
+    shown[i] = {e->forceVelocity, e->forceSpin, e->force, e->torque, &e->history};
+  }
+  view.showRunOf(world_, shown);
 }
 
 template class DistributedWorld<2>;

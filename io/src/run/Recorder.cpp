@@ -36,6 +36,11 @@ void Recorder<D>::create() {
 }
 
 template <int D>
+void Recorder<D>::loadSchedule(dynamics::StateReader& in) {
+  schedule_.load(in);
+}
+
+template <int D>
 void Recorder<D>::load(dynamics::StateReader& in) {
   schedule_.load(in);
   lastClock_ = in.get<double>();

@@ -73,6 +73,9 @@ class Recorder {
   /// the files it continues (InputError when one is missing or damaged);
   /// changes no file.
   void load(dynamics::StateReader& in);
+  /// A resumed run in a process that does not write the outputs (a
+  /// distributed run's other ranks): its schedule only, touching no file.
+  void loadSchedule(dynamics::StateReader& in);
   /// A resumed run, second step: cuts its files back to the checkpoint and
   /// continues them.
   void reopen();

@@ -98,6 +98,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -284,6 +285,17 @@ class Breakage final : public dynamics::Effect<D> {
   /// does not cut it at its grid resolution, or the split failed (the
   /// reason names the error). The run goes on without them.
   const std::vector<ManualBreakNotApplied>& manualNotApplied() const { return manualNotApplied_; }
+  /// @brief Makes this effect's log and totals those of a distributed run
+  /// (docs/parallel.md): `parts` are the ranks' effects, each of which
+  /// started from `base` (the log at the start, or at the checkpoint the run
+  /// resumed from) and logged its own particles' breakages since. The log is
+  /// base's events, then every part's new ones, in the order one world
+  /// applies them (time, then parent id); counts and volumes are base's plus
+  /// every part's increase, the largest energy gain the largest, and a manual
+  /// break is done when one part did it.
+  /// @note Throws std::invalid_argument when a part holds fewer events than
+  /// `base` or other manual breaks.
+  void mergeLogs(const Breakage& base, std::span<const Breakage* const> parts);
 
  private:
   struct Pending {

@@ -442,6 +442,14 @@ class ContactSolver {
   /// compute(). The records of the last compute() are stale afterwards
   /// (compute() again before reading them).
   void adoptHistory(std::uint64_t id, const ParticleHistory& history);
+  /// @brief Writes `history` (particleHistory() of particle `id` in a solver
+  /// of the same law) over this solver's own history of `id`'s pairs, where
+  /// its last compute() found the same pairs with the same node contacts (a
+  /// re-evaluation of the state the history was taken from): the node
+  /// records, shear springs and rest overlaps become those of `history` bit
+  /// for bit, and the records stay current. Returns false, changing nothing,
+  /// when the pairs or node contacts differ.
+  bool overwriteHistory(std::uint64_t id, const ParticleHistory& history);
 
   /// @brief Writes the output of the last compute() (records, shear history,
   /// totals, loads): what the next compute() and the readers of this step need.

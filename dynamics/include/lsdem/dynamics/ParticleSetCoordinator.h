@@ -21,6 +21,8 @@
 
 namespace lsdem::dynamics {
 
+struct TimeStepLimit;
+
 /// One split of a world's batch, as World::replace announces it.
 struct SplitRequest {
   std::uint64_t parent = 0;    ///< global id of the particle that leaves
@@ -70,8 +72,9 @@ class ParticleSetCoordinator {
   /// particle set did not change, and nothing else is called this step).
   virtual std::uint64_t allocateIds(std::span<const SplitRequest> batch, std::vector<SplitIds>& ids) = 0;
   /// @brief Collective, after a step whose run batch was not empty: the run's
-  /// time step, the smallest of the worlds' `dt` (s).
-  virtual double agreeTimeStep(double dt) = 0;
+  /// time step, the smallest of the worlds' `dt` (s), and in `limit` what
+  /// sets it (each world passes its own: what sets its critical step).
+  virtual double agreeTimeStep(double dt, TimeStepLimit& limit) = 0;
   /// @brief Collective, after agreeTimeStep: brings every world's mirrors up
   /// to the new set (particles that left leave, `born` and their births
   /// reach the worlds that need them). May reorder this world's particles.

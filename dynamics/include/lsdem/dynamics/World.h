@@ -313,6 +313,42 @@ class World {
   void refreshContacts();
   /// @brief Advances n steps.
   void run(std::uint64_t n);
+  /// @brief The next step opens with the particles' forces and torques as
+  /// they are, though particles left or became ghosts since they were
+  /// evaluated (detachParticle, setGhost): a distributed run spread from a
+  /// checkpoint, whose parts step on with the forces the whole run evaluated,
+  /// as the run would have. Call it after those changes, before the step.
+  /// The contact records stay stale (contactsCurrent() false) until the step
+  /// evaluates them.
+  void keepForces() { keepForces_ = true; }
+  /// One particle of a run that a world shows (showRunOf), as the run's last
+  /// force evaluation left it.
+  struct ShownParticle {
+    Vec<D> forceVelocity = Vec<D>::Zero();  ///< the velocity the evaluation saw (a step's half-step one)
+    Spin<D> forceSpin = Rotation<D>::zeroSpin();
+    Vec<D> force = Vec<D>::Zero();          ///< the force and torque it gave
+    Spin<D> torque = Rotation<D>::zeroSpin();
+    const typename ContactSolver<D>::ParticleHistory* history = nullptr;  ///< its contact history then
+  };
+  /// @brief Makes this world show the run of `run` at its current instant,
+  /// for outputs: a distributed run's view on the rank that writes them,
+  /// which nothing steps. Its particles must have been brought up to the
+  /// run's beforehand (addParticle, detachParticle, setMotion, setStrength,
+  /// adoptHistory). Works out its critical step over its particles, takes
+  /// `run`'s clock, time step and its changes, tool poses and planes, and
+  /// evaluates the contacts as the run last evaluated them (between steps:
+  /// the shear springs keep their length), with the velocities that
+  /// evaluation saw (`shown`, aligned with this world's particles: a step
+  /// evaluates its forces with half-step velocities, which its closing half
+  /// kick then changes). The evaluation gives the run's forces and springs
+  /// to round-off only (a sliding spring is capped, then read back), so each
+  /// particle then takes the run's own forces and contact history (its
+  /// records stay current): this world's state, and a checkpoint of it, are
+  /// the run's bit for bit. Last, `run`'s stage and effect timings.
+  /// @note Throws std::invalid_argument when `run` has other tools, planes or
+  /// effects, or `shown` does not match the particles; std::logic_error when
+  /// a particle's history does not fit the contacts found here.
+  void showRunOf(const World& run, std::span<const ShownParticle> shown);
 
   // ---- checkpoints ----
   /// @brief Writes the state between steps: particles (each shape as the number
@@ -479,6 +515,7 @@ class World {
   double time_ = 0.0;
   std::uint64_t steps_ = 0;
   bool forcesValid_ = false;
+  bool keepForces_ = false;  // keepForces(): the next beginStep does not evaluate the forces
   mutable EnergyLedger energy_;      // its kinetic and elastic energy: a cache refreshed when read
   mutable bool energyCurrent_ = false;  // that cache is of the state now
   // The ledger's damping, dashpot and boundary work follow the trapezoid rule in

@@ -9,10 +9,48 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
+namespace lsdem::dynamics {
+template <int D>
+class World;
+}
+
 namespace lsdem::io {
+
+template <int D>
+struct SceneWorld;
+
+/// @brief How a run steps its world. Without one (RunOptions::engine null)
+/// the run steps its world in this process. A distributed run
+/// (lsdem::parallel, `mpirun -np N lsdem run`) runs runScene in every
+/// process alike: each builds the world from the scene (or restores it from
+/// the checkpoint) and hands it to its engine, which steps its part of the
+/// run; one process writes the outputs, from a view of the whole run that
+/// the engine brings up to date at the instants the outputs are due
+/// (docs/parallel.md "lsdem run on N ranks").
+template <int D>
+class RunEngine {
+ public:
+  virtual ~RunEngine() = default;
+  /// @brief One step of the run (collective: every process calls it).
+  virtual void step() = 0;
+  /// @brief Brings `view` (on the process that writes the outputs: a world
+  /// built from the same scene, which nothing steps) up to the whole run now.
+  /// Collective; the other processes pass their own world, untouched.
+  virtual void updateView(SceneWorld<D>& view) = 0;
+  /// @brief Whether any process was asked to stop (collective).
+  virtual bool anyStop(bool stop) = 0;
+};
+
+/// @brief Makes a run's engine for the world each process built alike.
+struct RunEngineFactory {
+  bool writesOutputs = true;  ///< this process writes the outputs (one process of a run does)
+  std::function<std::unique_ptr<RunEngine<2>>(SceneWorld<2>&)> make2;
+  std::function<std::unique_ptr<RunEngine<3>>(SceneWorld<3>&)> make3;
+};
 
 /// Where a run stands (for progress lines).
 struct RunProgress {
@@ -53,6 +91,8 @@ struct RunOptions {
   const std::atomic<bool>* stop = nullptr;  ///< set (e.g. by Ctrl-C) to stop after the current step
   std::function<void(const RunProgress&)> progress;  ///< called every [output] progress_seconds and at the end
   std::function<void(const std::string&)> note;      ///< called with each line of the scene's notes before the run starts
+  /// Null: the run steps its world in this process; else a distributed run's engine (RunEngine).
+  std::shared_ptr<const RunEngineFactory> engine;
 };
 
 struct RunResult {

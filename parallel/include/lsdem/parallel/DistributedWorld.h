@@ -104,8 +104,9 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
 
   /// @brief Spreads `world` over the ranks of `comm`. Every rank passes a
   /// world built alike from the same scene (same particles, planes, tools,
-  /// effects); each keeps its own particles and their ghosts and drops the
-  /// rest. The world must outlive this object and be stepped only through it.
+  /// effects), or restored alike from the same checkpoint (a resumed run:
+  /// any rank count can resume any run's checkpoint); each keeps its own
+  /// particles and their ghosts and drops the rest. The world must outlive this object and be stepped only through it.
   /// @note Throws std::invalid_argument when the worlds differ between ranks
   /// or the scene uses what is not distributed yet (see the file comment).
   DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, const DistributedDef& def = {});
@@ -137,8 +138,9 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   std::vector<ParticleState> gather(int root) const;
   /// @brief Every removal record of the run (breakage fines), sorted by
   /// (time, id) as one world records them, on rank `root` (empty on the
-  /// others; collective).
-  std::vector<dynamics::RemovedParticle> gatherRemoved(int root) const;
+  /// others; collective). `from`: leave out the first `from` records of each
+  /// rank (those every rank held at the start of a resumed run).
+  std::vector<dynamics::RemovedParticle> gatherRemoved(int root, std::size_t from = 0) const;
   /// @brief The true mass of the run's particles, kg, summed over the ranks
   /// (collective; to round-off the serial World::particleMass, another order).
   double particleMass() const;
@@ -146,6 +148,20 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   /// rank's world's Breakage), sorted by (time, parent id) as one world
   /// applies them, on rank `root` (empty on the others; collective).
   std::vector<breakage::BreakageEvent<D>> gatherBreakageEvents(const breakage::Breakage<D>& effect, int root) const;
+  /// @brief The run's breakage log and totals into `into` on rank `root`
+  /// (Breakage::mergeLogs of every rank's `effect`, each started from `base`;
+  /// collective).
+  void gatherBreakage(const breakage::Breakage<D>& effect, const breakage::Breakage<D>& base,
+                      breakage::Breakage<D>& into, int root) const;
+  /// @brief Brings `view` up to the whole run now, on rank `root`: a world
+  /// built from the same scene that nothing steps, which a run's outputs read
+  /// (docs/parallel.md "lsdem run on N ranks"). Every rank sends its own
+  /// particles with their contact history (their shapes once, by hash); the
+  /// view's particles no longer in the run leave it, the others take the
+  /// run's state, new ones enter in ascending id; then World::showRunOf
+  /// evaluates its contacts as the ranks did. Collective; `view` is touched
+  /// on `root` only.
+  void updateView(dynamics::World<D>& view, int root);
 
  private:
   // Sends every owned particle to the ranks in reach (and to its new owner);
@@ -154,9 +170,15 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   // dynamics::ParticleSetCoordinator (breakage runs only).
   std::uint64_t allocateIds(std::span<const dynamics::SplitRequest> batch,
                             std::vector<dynamics::SplitIds>& ids) override;
-  double agreeTimeStep(double dt) override;
+  double agreeTimeStep(double dt, dynamics::TimeStepLimit& limit) override;
   void particlesReplaced(std::span<const dynamics::BornParticle> born) override;
   void rebalance();
+  // The shapes of particles `list` that rank `q` lacks, into `w` (then q holds them).
+  void putShapes(dynamics::StateWriter& w, int q, std::span<const std::size_t> list);
+  // Reads putShapes' shapes, sent by rank `q`.
+  void getShapes(dynamics::StateReader& r, int q);
+  // The shape of hash `hash` (particle `id` from rank `from`), received or built here.
+  std::shared_ptr<const geometry::Shape<D>> receivedShape(std::uint64_t hash, ParticleId id, int from) const;
   void checkSameWorldEverywhere() const;
   std::uint64_t shapeHash(const std::shared_ptr<const geometry::Shape<D>>& shape);
   double reach(std::size_t index) const;
@@ -188,6 +210,10 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   // The shapes each rank is known to hold (built from the scene, or sent).
   std::vector<std::unordered_set<std::uint64_t>> shapesAt_;
   ExchangeStats stats_;
+  // The velocities of the local particles the last step evaluated its forces
+  // with; empty when the particles changed since (a split evaluates again).
+  std::vector<Vec<D>> forceVelocity_;
+  std::vector<dynamics::Spin<D>> forceSpin_;
 };
 
 extern template class DistributedWorld<2>;

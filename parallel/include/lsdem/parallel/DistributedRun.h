@@ -1,0 +1,33 @@
+#pragma once
+/// @file DistributedRun.h
+/// @brief `mpirun -np N lsdem run SCENE.toml`: the engine of a run spread
+/// over MPI ranks (io::RunEngine; docs/parallel.md "lsdem run on N ranks").
+///
+/// Every rank reads the scene and builds the world alike (or restores it from
+/// the checkpoint alike), and a DistributedWorld spreads it: each rank steps
+/// its own particles and their ghosts. Rank 0 writes every output, from a
+/// view of the whole run: a second world built from the scene, which nothing
+/// steps, brought up to the run (DistributedWorld::updateView, the breakage
+/// log and the removal records gathered) at the instants an output or a
+/// checkpoint is due. The checkpoint is the whole run's, in the one-process
+/// format: a run resumes from it on any number of ranks, one included.
+///
+/// A scene needs no change, within what DistributedWorld distributes (its
+/// constructor refuses the rest, naming it). The energy budget's terms are
+/// not summed over the ranks yet: history.csv leaves them empty and
+/// summary.json gives the energy now only, as without `energy_ledger`.
+
+#include "lsdem/io/Run.h"
+#include "lsdem/parallel/DistributedWorld.h"
+
+#include <mpi.h>
+
+#include <memory>
+
+namespace lsdem::parallel {
+
+/// @brief The engine for io::RunOptions::engine on the ranks of `comm`
+/// (rank 0 writes the outputs).
+std::shared_ptr<const io::RunEngineFactory> distributedRun(MPI_Comm comm, const DistributedDef& def = {});
+
+}  // namespace lsdem::parallel

@@ -1,0 +1,78 @@
+#include "lsdem/parallel/DistributedRun.h"
+
+#include "lsdem/io/Scene.h"
+
+#include <stdexcept>
+#include <string>
+
+namespace lsdem::parallel {
+namespace {
+
+constexpr int kRoot = 0;
+
+template <int D>
+class DistributedEngine final : public io::RunEngine<D> {
+ public:
+  DistributedEngine(MPI_Comm comm, io::SceneWorld<D>& part, const DistributedDef& def)
+      : part_(part), world_(comm, *part.world, def), comm_(comm) {
+    if (!part.feeds.empty()) throw std::invalid_argument("a distributed run does not support feeds yet (docs/parallel.md)");
+    // What every rank held at the start (a resumed run: the checkpoint's
+    // log and removals): the view has it already; the ranks send what follows.
+    removedFrom_ = part.world->removed().size();
+    if (part.breakage) {
+      base_ = std::make_unique<breakage::Breakage<D>>(part.breakage->def());
+      dynamics::StateWriter w;
+      part.breakage->saveState(w);
+      dynamics::StateReader r(w.bytes().data(), w.bytes().size());
+      base_->loadState(r);
+    }
+  }
+
+  void step() override { world_.step(); }
+
+  void updateView(io::SceneWorld<D>& view) override {
+    world_.updateView(*view.world, kRoot);
+    if (part_.breakage) {
+      world_.gatherBreakage(*part_.breakage, *base_, world_.rank() == kRoot ? *view.breakage : *part_.breakage, kRoot);
+    }
+    const std::vector<dynamics::RemovedParticle> removed = world_.gatherRemoved(kRoot, removedFrom_);
+    if (world_.rank() != kRoot) return;
+    // The view holds the records it was given before (and the checkpoint's); these are in (time, id) order.
+    for (std::size_t k = viewRemoved_; k < removed.size(); ++k) view.world->recordRemoval(removed[k], 0.0);
+    viewRemoved_ = removed.size();
+  }
+
+  bool anyStop(bool stop) override {
+    int flag = stop ? 1 : 0;
+    if (MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MAX, comm_) != MPI_SUCCESS) {
+      throw std::runtime_error("MPI: Allreduce failed");
+    }
+    return flag != 0;
+  }
+
+ private:
+  io::SceneWorld<D>& part_;
+  DistributedWorld<D> world_;
+  MPI_Comm comm_;
+  std::size_t removedFrom_ = 0;  // removal records every rank held at the start
+  std::size_t viewRemoved_ = 0;  // records since then the view holds
+  std::unique_ptr<breakage::Breakage<D>> base_;  // the breakage log at the start
+};
+
+}  // namespace
+
+std::shared_ptr<const io::RunEngineFactory> distributedRun(MPI_Comm comm, const DistributedDef& def) {
+  int rank = 0;
+  if (MPI_Comm_rank(comm, &rank) != MPI_SUCCESS) throw std::runtime_error("MPI: Comm_rank failed");
+  auto factory = std::make_shared<io::RunEngineFactory>();
+  factory->writesOutputs = rank == kRoot;
+  factory->make2 = [comm, def](io::SceneWorld<2>& part) -> std::unique_ptr<io::RunEngine<2>> {
+    return std::make_unique<DistributedEngine<2>>(comm, part, def);
+  };
+  factory->make3 = [comm, def](io::SceneWorld<3>& part) -> std::unique_ptr<io::RunEngine<3>> {
+    return std::make_unique<DistributedEngine<3>>(comm, part, def);
+  };
+  return factory;
+}
+
+}  // namespace lsdem::parallel
