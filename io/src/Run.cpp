@@ -48,8 +48,17 @@ class Runner {
     // others step sw_.
     const RunEngineFactory* engine = options_.engine.get();
     writes_ = !engine || engine->writesOutputs;
-    sw_ = buildWorld(engine && writes_ ? viewScene() : scene_);
-    if (engine && writes_) part_ = buildWorld(scene_);
+    if (engine && writes_) {
+      part_ = buildWorld(scene_);
+      // The view takes the part's particles as they are (placing them can be
+      // a scene's slow part: grains remeshed one by one).
+      sw_ = buildWorld(viewScene());
+      const dynamics::Particles<D>& p = part_.world->particles();
+      for (std::size_t i = 0; i < p.size(); ++i) sw_.world->addParticle(p.definition(i));
+      sw_.initialMass = part_.initialMass;
+    } else {
+      sw_ = buildWorld(scene_);
+    }
     if (options_.check && stepped().breakage) stepped().breakage->setSplitEnergyLimit(options_.splitEnergyLimit);
     World& world = *stepped().world;
     // Everything is read and checked before any output changes.
@@ -166,10 +175,12 @@ class Runner {
   SceneWorld<D>& stepped() { return part_.world ? part_ : sw_; }
   const SceneWorld<D>& stepped() const { return part_.world ? part_ : sw_; }
   Instant now() const { return end_.now(stepped().world->time(), stepped().world->steps()); }
-  // The scene of a distributed run's view: its energy budget is not summed
-  // over the processes yet, so the view keeps none (its terms would read 0).
+  // The scene of a distributed run's view, without its particles (the view
+  // takes the part's). Its energy budget is not summed over the processes
+  // yet, so the view keeps none (its terms would read 0).
   SceneDef<D> viewScene() const {
     SceneDef<D> s = scene_;
+    s.groups.clear();
     s.world.energyLedger = false;
     s.world.checkFinite = false;
     return s;
@@ -183,7 +194,7 @@ class Runner {
       }
     }();
     if (!make) throw std::logic_error("a distributed run's engine for " + std::to_string(D) + "D is missing");
-    return make(stepped());
+    return make(stepped(), scene_.parallel);
   }
   // A distributed run: the view of the whole run brought up to now (collective).
   void updateView() {

@@ -137,6 +137,7 @@ class SceneReader {
     readEffects(top);
     readGroups(top);
     readOutput(top);
+    readParallel(top);
     top.finish();
     return std::move(scene_);
   }
@@ -784,6 +785,21 @@ class SceneReader {
       r.fail(key, "shape '" + scene_.shapeNames[s] + "' is " + std::to_string(bodies) +
                       " separate bodies; a particle must be one (give each body its own mesh or grain file)");
     }
+  }
+
+  void readParallel(TomlReader& top) {
+    const toml::table* t = top.optionalTable("parallel");
+    if (!t) return;
+    TomlReader r(*t, file_, "parallel");
+    ParallelDef& p = scene_.parallel;
+    p.rebalanceImbalance = r.number("rebalance_imbalance", p.rebalanceImbalance);
+    if (!(p.rebalanceImbalance == 0.0 || p.rebalanceImbalance >= 1.0) || !std::isfinite(p.rebalanceImbalance)) {
+      r.fail("rebalance_imbalance", "must be >= 1 (or 0: never rebalance), got " + std::to_string(p.rebalanceImbalance));
+    }
+    const std::int64_t every = r.integer("rebalance_every", std::int64_t(p.rebalanceEvery));
+    if (every < 1) r.fail("rebalance_every", "must be >= 1 step, got " + std::to_string(every));
+    p.rebalanceEvery = std::uint64_t(every);
+    r.finish();
   }
 
   void readOutput(TomlReader& top) {

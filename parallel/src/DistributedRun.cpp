@@ -10,6 +10,13 @@ namespace {
 
 constexpr int kRoot = 0;
 
+DistributedDef distributedDef(const io::ParallelDef& p) {
+  DistributedDef def;
+  def.rebalanceImbalance = p.rebalanceImbalance;
+  def.rebalanceEvery = p.rebalanceEvery;
+  return def;
+}
+
 template <int D>
 class DistributedEngine final : public io::RunEngine<D> {
  public:
@@ -61,16 +68,16 @@ class DistributedEngine final : public io::RunEngine<D> {
 
 }  // namespace
 
-std::shared_ptr<const io::RunEngineFactory> distributedRun(MPI_Comm comm, const DistributedDef& def) {
+std::shared_ptr<const io::RunEngineFactory> distributedRun(MPI_Comm comm) {
   int rank = 0;
   if (MPI_Comm_rank(comm, &rank) != MPI_SUCCESS) throw std::runtime_error("MPI: Comm_rank failed");
   auto factory = std::make_shared<io::RunEngineFactory>();
   factory->writesOutputs = rank == kRoot;
-  factory->make2 = [comm, def](io::SceneWorld<2>& part) -> std::unique_ptr<io::RunEngine<2>> {
-    return std::make_unique<DistributedEngine<2>>(comm, part, def);
+  factory->make2 = [comm](io::SceneWorld<2>& part, const io::ParallelDef& p) -> std::unique_ptr<io::RunEngine<2>> {
+    return std::make_unique<DistributedEngine<2>>(comm, part, distributedDef(p));
   };
-  factory->make3 = [comm, def](io::SceneWorld<3>& part) -> std::unique_ptr<io::RunEngine<3>> {
-    return std::make_unique<DistributedEngine<3>>(comm, part, def);
+  factory->make3 = [comm](io::SceneWorld<3>& part, const io::ParallelDef& p) -> std::unique_ptr<io::RunEngine<3>> {
+    return std::make_unique<DistributedEngine<3>>(comm, part, distributedDef(p));
   };
   return factory;
 }

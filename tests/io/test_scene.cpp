@@ -90,6 +90,17 @@ TEST(Scene, ReadsTheBaseScene) {
   EXPECT_NEAR(w.initialMass, 2.0 * 2000.0 * std::acos(-1.0) * 1e-4, 2e-3 * w.initialMass);
 }
 
+TEST(Scene, ParallelSettings) {
+  const auto base = as<2>(io::readScene(writeScene("parallel_default", kBase).string()));
+  EXPECT_EQ(base.parallel.rebalanceImbalance, 1.25);
+  EXPECT_EQ(base.parallel.rebalanceEvery, 200u);
+  const auto set = as<2>(io::readScene(
+      writeScene("parallel_set", std::string(kBase) + "[parallel]\nrebalance_imbalance = 0\nrebalance_every = 50\n")
+          .string()));
+  EXPECT_EQ(set.parallel.rebalanceImbalance, 0.0);
+  EXPECT_EQ(set.parallel.rebalanceEvery, 50u);
+}
+
 TEST(Scene, FrictionFromAStartTime) {
   const std::string scene = edit("kn = 1e5", "kn = 1e5\nfriction = 0.3\nfriction_from = 0.25");
   const auto any = io::readScene(writeScene("friction_from", scene).string());
@@ -128,6 +139,11 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "effects.breakage.regrid_cells", "must be in [0, 1000]"},
       {"big_surface_shift", std::string(kBase) + "[effects.breakage]\nmax_surface_shift = 1.5\n", 22,
        "effects.breakage.max_surface_shift", "must be in [0, 1]"},
+      {"small_imbalance", std::string(kBase) + "[parallel]\nrebalance_imbalance = 0.5\n", 22,
+       "parallel.rebalance_imbalance", "must be >= 1 (or 0"},
+      {"zero_rebalance_every", std::string(kBase) + "[parallel]\nrebalance_every = 0\n", 22,
+       "parallel.rebalance_every", "must be >= 1 step"},
+      {"unknown_parallel_key", std::string(kBase) + "[parallel]\nranks = 4\n", 22, "parallel.ranks", "unknown key"},
       {"text_surface_match", std::string(kBase) + "[effects.breakage]\nmatch_enclosed_volume = \"yes\"\n", 22,
        "effects.breakage.match_enclosed_volume", "expected true or false"},
       {"zero_regrid_factor", std::string(kBase) + "[effects.breakage]\nregrid_max_factor = 0\n", 22,

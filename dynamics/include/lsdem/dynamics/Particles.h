@@ -95,6 +95,25 @@ class Particles {
   std::size_t add(const ParticleDef<D>& def);
   /// @brief Removes particle `index` by moving the last particle into its slot.
   void remove(std::size_t index);
+  /// @brief The definition that adds particle i to another set as it is
+  /// here: its id, shape, mass properties, state, strength and lineage.
+  ParticleDef<D> definition(std::size_t i) const {
+    ParticleDef<D> def;
+    def.shape = shape[i];
+    def.id = id[i];
+    def.mass = mass[i];
+    def.inertia = inertia[i];
+    def.position = position[i];
+    def.orientation = orientation[i];
+    def.velocity = velocity[i];
+    def.angularVelocity = angularVelocity[i];
+    def.material = material[i];
+    def.strength = strength[i];
+    def.parent = parentId[i];
+    def.generation = generation[i];
+    def.birthTime = birthTime[i];
+    return def;
+  }
   /// @brief The next global id that add() will hand out.
   ParticleId nextId() const { return nextId_; }
   /// @brief Sets the id counter (restoring a checkpoint); never lowers it.

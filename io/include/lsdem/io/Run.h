@@ -22,6 +22,7 @@ namespace lsdem::io {
 
 template <int D>
 struct SceneWorld;
+struct ParallelDef;
 
 /// @brief How a run steps its world. Without one (RunOptions::engine null)
 /// the run steps its world in this process. A distributed run
@@ -45,11 +46,12 @@ class RunEngine {
   virtual bool anyStop(bool stop) = 0;
 };
 
-/// @brief Makes a run's engine for the world each process built alike.
+/// @brief Makes a run's engine for the world each process built alike,
+/// with the scene's `[parallel]` settings.
 struct RunEngineFactory {
   bool writesOutputs = true;  ///< this process writes the outputs (one process of a run does)
-  std::function<std::unique_ptr<RunEngine<2>>(SceneWorld<2>&)> make2;
-  std::function<std::unique_ptr<RunEngine<3>>(SceneWorld<3>&)> make3;
+  std::function<std::unique_ptr<RunEngine<2>>(SceneWorld<2>&, const ParallelDef&)> make2;
+  std::function<std::unique_ptr<RunEngine<3>>(SceneWorld<3>&, const ParallelDef&)> make3;
 };
 
 /// Where a run stands (for progress lines).

@@ -84,6 +84,15 @@ struct SpecimenDef {
   double width = 0.0;    ///< 2D: specimen width, m; 3D: cross-section area, m^2
 };
 
+/// How a run spread over MPI ranks keeps its work balanced (`[parallel]`,
+/// docs/scenes.md; docs/parallel.md). A one-process run ignores it.
+struct ParallelDef {
+  /// Rebuild the decomposition when the most loaded rank's surface nodes
+  /// exceed this times the mean; 0: never.
+  double rebalanceImbalance = 1.25;
+  std::uint64_t rebalanceEvery = 200;  ///< steps between two checks of the imbalance
+};
+
 /// A whole scene of dimension D.
 template <int D>
 struct SceneDef {
@@ -101,6 +110,7 @@ struct SceneDef {
   std::vector<dynamics::ToolDef<D>> tools;
   std::optional<breakage::BreakageDef<D>> breakage;
   OutputDef output;
+  ParallelDef parallel;
   std::optional<SpecimenDef> specimen;
   /// The region drawn for planes in ParaView and used for the default output
   /// extent, m (from `[simulation] domain`, or the particles' and tools' box).

@@ -27,7 +27,8 @@
 namespace lsdem::parallel {
 
 /// @brief The engine for io::RunOptions::engine on the ranks of `comm`
-/// (rank 0 writes the outputs).
-std::shared_ptr<const io::RunEngineFactory> distributedRun(MPI_Comm comm, const DistributedDef& def = {});
+/// (rank 0 writes the outputs); the scene's `[parallel]` settings give the
+/// rebalancing (DistributedDef).
+std::shared_ptr<const io::RunEngineFactory> distributedRun(MPI_Comm comm);
 
 }  // namespace lsdem::parallel

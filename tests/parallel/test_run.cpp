@@ -1,0 +1,218 @@
+// `lsdem run` on several ranks (parallel/DistributedRun.h): the outputs rank 0
+// writes equal those of the same scene run in one process, and a run stopped
+// on the ranks resumes from its checkpoint on another number of ranks to the
+// outputs of the uninterrupted run. The scene is the shipped three-grains 2D
+// scene with the platen started against the stack (tests/parallel/
+// test_breakage.cpp), so grains break within the short run.
+#include "lsdem/parallel/DistributedRun.h"
+
+#include "lsdem/io/Run.h"
+#include "support/Files.h"
+#include "support/Mpi.h"
+
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace lsdem {
+namespace {
+
+namespace fs = std::filesystem;
+using test::rankOf;
+
+constexpr std::uint64_t kSteps = 5000;
+
+// A folder every rank names alike (rank 0's scratch folder).
+fs::path sharedPath(const std::string& name) {
+  std::string path = rankOf(MPI_COMM_WORLD) == 0 ? test::tempPath(name).string() : std::string();
+  int size = int(path.size());
+  MPI_Bcast(&size, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  path.resize(std::size_t(size));
+  MPI_Bcast(path.data(), size, MPI_CHAR, 0, MPI_COMM_WORLD);
+  return path;
+}
+
+// The scene file (written by rank 0): kSteps steps, the platen against the
+// stack and fast, a progress call every step (to stop the run where wanted),
+// `extra` lines added to [effects].
+fs::path writeScene(const fs::path& dir, const std::string& extra = "") {
+  if (rankOf(MPI_COMM_WORLD) == 0) {
+    std::string text =
+        test::readFile(std::string(LSDEM_SOURCE_DIR) + "/apps/scenes/three_grains/three_grains_2d.toml");
+    const auto replace = [&](const std::string& from, const std::string& to) {
+      const std::size_t at = text.find(from);
+      if (at == std::string::npos) throw std::runtime_error("test scene: '" + from + "' not in three_grains_2d.toml");
+      text.replace(at, from.size(), to);
+    };
+    replace("duration = 0.08", "steps = " + std::to_string(kSteps));
+    replace("point = [0.0, 0.0035]", "point = [0.0, 0.00335]");
+    replace("velocity = [0.0, -0.02]", "velocity = [0.0, -0.2]");
+    replace("[output]\n", "[output]\nprogress_seconds = 1e-9\n");
+    if (!extra.empty()) replace("[effects]\n", "[effects]\n" + extra);
+    fs::create_directories(dir);
+    std::ofstream(dir / "scene.toml") << text;
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  return dir / "scene.toml";
+}
+
+std::vector<std::map<std::string, std::string>> readCsv(const fs::path& file) {
+  std::istringstream in(test::readFile(file));
+  std::string line;
+  std::vector<std::string> header;
+  std::vector<std::map<std::string, std::string>> rows;
+  const auto split = [](const std::string& s) {
+    std::vector<std::string> cells;
+    std::stringstream ss(s);
+    for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+    if (!s.empty() && s.back() == ',') cells.push_back("");
+    return cells;
+  };
+  if (std::getline(in, line)) header = split(line);
+  while (std::getline(in, line)) {
+    const std::vector<std::string> cells = split(line);
+    std::map<std::string, std::string> row;
+    for (std::size_t k = 0; k < header.size(); ++k) row[header[k]] = k < cells.size() ? cells[k] : "";
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+// `b`'s CSV file equals `a`'s: every row and column but `skip`, numbers to
+// `relative` (0: as text), so sums taken in another order pass.
+void expectSameCsv(const fs::path& a, const fs::path& b, const std::set<std::string>& skip, double relative) {
+  const auto x = readCsv(a), y = readCsv(b);
+  ASSERT_EQ(x.size(), y.size()) << b;
+  ASSERT_GT(x.size(), 1u) << a;
+  for (std::size_t r = 0; r < x.size(); ++r) {
+    for (const auto& [column, text] : x[r]) {
+      if (skip.count(column)) continue;
+      const std::string& other = y[r].at(column);
+      if (text == other) continue;
+      char* end = nullptr;
+      const double u = std::strtod(text.c_str(), &end), v = std::strtod(other.c_str(), nullptr);
+      EXPECT_TRUE(relative > 0.0 && *end == '\0' && std::abs(u - v) <= relative * std::max(std::abs(u), std::abs(v)))
+          << b << " row " << r << " column " << column << ": " << text << " against " << other;
+    }
+  }
+}
+
+// The budget's terms: a distributed run keeps none (DistributedRun.h).
+const std::set<std::string> kLedgerColumns = {"gravity_work_J", "boundary_work_J", "damping_loss_J",
+                                              "contact_loss_J",  "split_release_J", "energy_error_J"};
+// A split's fragments' energy counts the springs the splitting rank sees
+// (docs/parallel.md "lsdem run on N ranks").
+const std::set<std::string> kFragmentEnergyColumns = {"fragment_energy_J", "energy_gain_J"};
+
+void expectSameOutputs(const fs::path& serial, const fs::path& distributed) {
+  expectSameCsv(serial / "history.csv", distributed / "history.csv", kLedgerColumns, 1e-12);
+  expectSameCsv(serial / "breakage_log.csv", distributed / "breakage_log.csv", kFragmentEnergyColumns, 0.0);
+  expectSameCsv(serial / "removed.csv", distributed / "removed.csv", {}, 0.0);
+  expectSameCsv(serial / "psd.csv", distributed / "psd.csv", {}, 1e-12);
+  expectSameCsv(serial / "shape_stats.csv", distributed / "shape_stats.csv", {}, 1e-12);
+}
+
+io::RunResult runOn(MPI_Comm comm, const fs::path& scene, const fs::path& out, std::atomic<bool>* stop = nullptr,
+                    double stopAt = 0.0) {
+  io::RunOptions o;
+  o.scene = scene.string();
+  o.outDir = out.string();
+  o.threads = 1;
+  o.engine = parallel::distributedRun(comm);
+  if (stop) {
+    o.stop = stop;
+    o.progress = [stop, stopAt](const io::RunProgress& p) {
+      if (p.time > stopAt) *stop = true;
+    };
+  }
+  return io::runScene(o);
+}
+
+// The same scene in this process alone (rank 0; the others wait).
+io::RunResult runSerial(const fs::path& scene, const fs::path& out) {
+  io::RunResult r;
+  if (rankOf(MPI_COMM_WORLD) == 0) {
+    io::RunOptions o;
+    o.scene = scene.string();
+    o.outDir = out.string();
+    o.threads = 1;
+    r = io::runScene(o);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  return r;
+}
+
+TEST(DistributedRun, OutputsEqualThoseOfOneProcess) {
+  const fs::path dir = sharedPath("run_outputs");
+  const fs::path scene = writeScene(dir);
+  const io::RunResult serial = runSerial(scene, dir / "serial");
+  const io::RunResult spread = runOn(MPI_COMM_WORLD, scene, dir / "spread");
+  EXPECT_EQ(spread.steps, kSteps);
+  if (rankOf(MPI_COMM_WORLD) != 0) return;
+  EXPECT_EQ(spread.particles, serial.particles);
+  EXPECT_EQ(spread.breakages, serial.breakages);
+  EXPECT_GE(serial.breakages, 10u) << "the scene must break grains for this test to mean anything";
+  EXPECT_LT(std::abs(spread.massBalanceError), 1e-14);
+  expectSameOutputs(dir / "serial", dir / "spread");
+}
+
+// Stopped on every rank after its first breakages, resumed on half of the
+// ranks (one when there are one or two): the outputs are those of the run
+// that was not stopped.
+TEST(DistributedRun, ResumesOnAnotherNumberOfRanks) {
+  const fs::path dir = sharedPath("run_resume");
+  const fs::path scene = writeScene(dir);
+  const io::RunResult serial = runSerial(scene, dir / "serial");
+  std::atomic<bool> stop{false};
+  const io::RunResult first = runOn(MPI_COMM_WORLD, scene, dir / "resumed", &stop, 0.0052);
+  EXPECT_TRUE(first.stopped);
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  const int rank = rankOf(MPI_COMM_WORLD);
+  const int resumers = std::max(1, ranks / 2);
+  MPI_Comm half = MPI_COMM_NULL;
+  MPI_Comm_split(MPI_COMM_WORLD, rank < resumers ? 0 : MPI_UNDEFINED, rank, &half);
+  if (half != MPI_COMM_NULL) {
+    io::RunOptions o;
+    o.resumeDir = (dir / "resumed").string();
+    o.threads = 1;
+    o.engine = parallel::distributedRun(half);
+    const io::RunResult second = io::runScene(o);
+    EXPECT_FALSE(second.stopped);
+    if (rank == 0) {
+      EXPECT_EQ(second.steps, serial.steps);
+      EXPECT_EQ(second.particles, serial.particles);
+      EXPECT_EQ(second.breakages, serial.breakages);
+      EXPECT_GT(second.breakages, first.breakages) << "the run must break grains after the stop";
+    }
+    MPI_Comm_free(&half);
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  if (rank == 0) expectSameOutputs(dir / "serial", dir / "resumed");
+}
+
+// What is not distributed yet is refused on every rank with the reason.
+TEST(DistributedRun, RefusesWhatIsNotDistributedYet) {
+  const fs::path dir = sharedPath("run_refused");
+  const fs::path scene = writeScene(dir, "outflow = { min = [-1.0, -1.0], max = [1.0, 1.0] }\n");
+  try {
+    runOn(MPI_COMM_WORLD, scene, dir / "out");
+    ADD_FAILURE() << "an outflow must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("'outflow'"), std::string::npos) << e.what();
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+}
+
+}  // namespace
+}  // namespace lsdem
