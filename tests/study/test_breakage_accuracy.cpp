@@ -148,6 +148,7 @@ BreakageRun syntheticRun(const std::string& name, const std::string& knob, doubl
   r.d50 = 1e-4 * f;
   r.fragments = 10;
   r.peakStress = 1e4 * (1 + shift);
+  r.splitStress = 0.5e4 * (1 + shift);
   r.cpuSeconds = cpu;
   r.maxRssMiB = 20;
   return r;
@@ -205,6 +206,40 @@ TEST(BreakageAccuracy, SummaryMeasuresSeedMeansAgainstTheFinestGrid) {
   EXPECT_NE(breakageMarkdown(report).find("| publication | 0.0707 | cells 20, nodes 1, per_node, regrid 0"),
             std::string::npos)
       << breakageMarkdown(report);
+}
+
+// The orders of d50 and of the stress at the first split are measured
+// against the reference row wherever the runs list it: here the finest grid
+// comes first, so sorting the rows moves it.
+TEST(BreakageAccuracy, OrdersAreAgainstTheReferenceWhateverTheRunOrder) {
+  BreakageReport report;
+  for (std::uint64_t seed : {1u, 2u}) {
+    report.runs.push_back(syntheticRun("a", "cells", 40, seed, 0.0, 16.0));
+    report.runs.push_back(syntheticRun("a", "nodes", 20, seed, 0.1, 2.0));
+    report.runs.push_back(syntheticRun("a", "cells", 10, seed, 0.2, 1.0));
+    report.runs.push_back(syntheticRun("a", "cells", 20, seed, 0.05, 4.0));
+  }
+  summariseBreakage(report);
+  // d50 of a shift s: 10^s times the reference's; the split stress (1 + s) times.
+  const double d50Order = std::log((std::pow(10.0, 0.2) - 1) / (std::pow(10.0, 0.05) - 1)) / std::log(2.0);
+  int checked = 0;
+  for (const ConvergenceOrder& o : report.orders) {
+    if (o.metric == "d50") {
+      EXPECT_EQ(o.points, 2);
+      EXPECT_NEAR(o.order, d50Order, 1e-9);
+      ++checked;
+    }
+    if (o.metric == "split_stress" || o.metric == "peak_stress") {
+      EXPECT_EQ(o.points, 2) << o.metric;
+      EXPECT_NEAR(o.order, 2.0, 1e-9) << o.metric;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 3);
+  for (const BreakageRow& w : report.rows) {
+    const double shift = w.reference ? 0.0 : w.knob == "nodes" ? 0.1 : w.setting.cellsAcross == 10 ? 0.2 : 0.05;
+    EXPECT_NEAR(w.splitStress.mean, 0.5e4 * (1 + shift), 1e-9);
+  }
 }
 
 TEST(BreakageAccuracy, MeanDistributionAveragesThePassingFractions) {

@@ -98,8 +98,8 @@ std::string runsCsv(const BreakageReport& report) {
     csv << r.caseName << ',' << r.knob << ',' << num(r.knobValue) << ',' << settingColumns(r.setting) << ',' << r.seed
         << ',' << (r.ok ? 1 : 0) << ',' << num(r.psdError) << ',' << num(r.d10) << ',' << num(r.d50) << ','
         << num(r.d90) << ',' << num(r.fragments) << ',' << num(r.breakages) << ',' << num(r.finesPercent) << ','
-        << num(r.meanCircularity) << ',' << num(r.meanAspectRatio) << ',' << num(r.peakStress) << ',' << num(r.splitStress)
-        << ',' << num(r.steps)
+        << num(r.meanCircularity) << ',' << num(r.meanAspectRatio) << ',' << num(r.peakStress) << ','
+        << num(r.splitStress) << ',' << num(r.steps)
         << ',' << num(r.cpuSeconds) << ',' << num(r.wallSeconds) << ',' << num(r.maxRssMiB) << ',' << error << '\n';
   }
   return csv.str();

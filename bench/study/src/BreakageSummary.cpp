@@ -178,8 +178,10 @@ void summariseBreakage(BreakageReport& report) {
 
     // The observed orders over the grid ladder (the reference left out).
     std::vector<double> cells, psd, d50, peak, split, frag;
-    const double refD50 = refRow != rows.end() ? refRow->d50.mean : 0.0;
-    const double refSplit = refRow != rows.end() ? refRow->splitStress.mean : 0.0;
+    // The reference row again: the sort above moved the rows under refRow.
+    const auto refSorted = std::find_if(rows.begin(), rows.end(), [](const BreakageRow& w) { return w.reference; });
+    const double refD50 = refSorted != rows.end() ? refSorted->d50.mean : 0.0;
+    const double refSplit = refSorted != rows.end() ? refSorted->splitStress.mean : 0.0;
     for (const BreakageRow& w : rows) {
       if (w.knob != "cells" || w.reference || w.seeds == 0) continue;
       cells.push_back(w.setting.cellsAcross);
@@ -269,7 +271,8 @@ void summariseBreakage(BreakageReport& report) {
             "by cells_shipped / cells, and / node_density under the per-node law).",
       "Budgets: the cheapest setting whose PSD error" + std::string(one ? "" : ", averaged over " + scenes + ",") +
           " is at most 3x (fast), 2x (balanced) and 1x (publication) the " + (one ? "" : "mean ") +
-          "noise floor; cost = " + (one ? "the scene's mean CPU seconds" : "the sum of " + scenes + "' mean CPU seconds") +
+          "noise floor; cost = " +
+          (one ? "the scene's mean CPU seconds" : "the sum of " + scenes + "' mean CPU seconds") +
           " of one run on one thread.",
   };
 }
