@@ -73,9 +73,10 @@ Ladder ladder(int dimension, bool quick) {
   if (dimension == 3) {
     // The 3D single grain. One run's CPU (one seed, measured before the
     // study): 0.5 s at 10 cells, 1.1 at 14, 4.9 at 20, 7.5 at 28, 31 at 40,
-    // 126 at 56 (177 MiB); 80 cells would take several minutes a run. Six
-    // seeds of this ladder and of the three knobs at 20 cells are about 20
-    // minutes of CPU. The quick ladder is CI's smoke test of the 3D case.
+    // 126 at 56 (177 MB); 80 cells would take several minutes a run. Six
+    // seeds of this ladder and of the three knobs at 20 cells took 1968 s of
+    // CPU on a loaded machine (docs/accuracy.md), under the 40 minutes it
+    // was sized for. The quick ladder is CI's smoke test of the 3D case.
     l.cells = quick ? std::vector<double>{10, 14} : std::vector<double>{10, 14, 20, 28, 40, 56};
     l.nodes = quick ? std::vector<double>{} : std::vector<double>{2};
     l.regrid = quick ? std::vector<double>{} : std::vector<double>{10};
