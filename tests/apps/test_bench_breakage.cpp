@@ -132,14 +132,77 @@ TEST(BenchBreakage, QuickStudyWritesItsTableReportAndPlots) {
   }
 }
 
+// `--breakage --dim 3 --quick`: the 3D single grain on the quick ladder (10
+// and 14 cells, two seeds: four runs of about a second each). Every run
+// splits the grain, keeps its mass (pieces + fines = the grain), and the
+// table compares the 10-cell grid with the 14-cell reference.
+TEST(BenchBreakage, Quick3DLadderCrushesTheGrainAndKeepsItsMass) {
+  const fs::path out = lsdem::test::tempPath("bench_breakage_3d");
+  fs::remove_all(out);
+  const Result r = run("bench accuracy --breakage --dim 3 --quick --jobs 1 --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("3D, quick ladder"), std::string::npos) << r.output;
+
+  const auto runs = readCsv(out / "breakage_runs.csv");
+  ASSERT_EQ(runs.size(), 4u);
+  for (const auto& x : runs) {
+    EXPECT_EQ(x.at("case"), "single_grain_3d");
+    EXPECT_EQ(x.at("ok"), "1") << x.at("error");
+    EXPECT_GE(num(x, "breakages"), 1.0) << x.at("cells_across") << " seed " << x.at("seed");
+    EXPECT_GT(num(x, "fragments"), 2.0);
+    // Loaded to the grain's strength (35 MPa at 2 mm, about 44 MPa at 1.6 mm; Weibull m = 3).
+    EXPECT_GT(num(x, "split_stress_Pa"), 5e6);
+    EXPECT_LT(num(x, "split_stress_Pa"), 2e8);
+    EXPECT_GE(num(x, "peak_stress_Pa"), num(x, "split_stress_Pa"));
+    EXPECT_GT(num(x, "mean_circularity"), 0.3);  // Wadell sphericity of the pieces
+    EXPECT_LE(num(x, "mean_circularity"), 1.05);
+    EXPECT_LT(num(x, "d50_m"), 1.6e-3);
+    EXPECT_GT(num(x, "cpu_seconds"), 0.0);
+
+    // Mass balance of the run: pieces + fines = the grain, to round-off.
+    char name[96];
+    std::snprintf(name, sizeof name, "single_grain_3d_c%s_n1_pn_r0_s%s", x.at("cells_across").c_str(),
+                  x.at("seed").c_str());
+    const std::string summary = lsdem::test::readFile(out / "runs" / name / "summary.json");
+    const std::size_t block = summary.find("\"mass_balance\":");
+    ASSERT_NE(block, std::string::npos) << name;
+    const auto value = [&](const std::string& key) {
+      const std::size_t at = summary.find("\"" + key + "\":", block);
+      EXPECT_NE(at, std::string::npos) << key;
+      return at == std::string::npos ? std::nan("") : std::strtod(summary.c_str() + at + key.size() + 3, nullptr);
+    };
+    const double initial = value("initial"), pieces = value("particles"), removed = value("removed");
+    EXPECT_NEAR(initial, 5.25e-6, 0.05e-6) << name;  // 2450 kg/m^3 x 2.14e-9 m^3
+    EXPECT_NEAR(pieces + removed, initial, 1e-12 * initial) << name;
+    EXPECT_LT(std::abs(value("relative_error")), 1e-12) << name;
+    EXPECT_GT(pieces, 0.5 * initial) << name;  // most of the grain stays as pieces
+    EXPECT_NEAR(100.0 * removed / initial, num(x, "fines_percent"), 1e-4) << name;
+  }
+
+  // One row per grid; the coarse grid differs from the reference.
+  const auto rows = readCsv(out / "breakage_accuracy.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  for (const auto& w : rows) {
+    EXPECT_EQ(num(w, "seeds"), 2.0);
+    EXPECT_EQ(w.at("reference") == "1", num(w, "cells_across") == 14.0);
+    if (num(w, "cells_across") == 10.0) {
+      EXPECT_GT(num(w, "psd_error"), 0.0);
+    }
+  }
+  const std::string md = lsdem::test::readFile(out / "breakage_accuracy.md");
+  EXPECT_NE(md.find("(3D, quick ladder, 2 seeds)"), std::string::npos) << md.substr(0, 200);
+  EXPECT_NE(md.find("| single_grain_3d | psd_l1 |"), std::string::npos);
+}
+
 TEST(BenchBreakage, OptionErrorsAreOneLine) {
-  for (const char* args : {"bench accuracy --breakage --dim 3", "bench accuracy --seeds 3 --quick",
-                           "bench accuracy --resume --quick", "bench accuracy --breakage --jobs 0"}) {
+  for (const char* args : {"bench accuracy --breakage --dim 4", "bench accuracy --seeds 3 --quick",
+                           "bench accuracy --resume --quick", "bench accuracy --breakage --jobs 0",
+                           "bench accuracy --breakage --dim 3 --seeds 0"}) {
     const Result r = run(args);
     EXPECT_NE(r.code, 0) << args;
     EXPECT_FALSE(r.output.empty()) << args;
   }
-  const Result r = run("bench accuracy --breakage --dim 3");
-  EXPECT_NE(r.output.find("2D scenes only"), std::string::npos) << r.output;
+  const Result r = run("bench accuracy --seeds 3 --quick");
+  EXPECT_NE(r.output.find("only with --breakage"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find('\n'), r.output.size() - 1) << r.output;
 }

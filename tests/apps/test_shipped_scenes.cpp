@@ -56,7 +56,8 @@ TEST(ShippedScenes, AreThere) {
   const std::vector<fs::path> scenes = shippedScenes();
   EXPECT_GE(scenes.size(), 10u);
   for (const char* name : {"three_grains_2d.toml", "three_grains_3d.toml", "jaw_crusher_css80.toml",
-                           "oedometer_2d.toml", "oedometer_3d.toml", "demolition.toml", "ct_grains.toml"}) {
+                           "oedometer_2d.toml", "oedometer_3d.toml", "demolition.toml", "ct_grains.toml",
+                           "single_grain_3d.toml"}) {
     EXPECT_TRUE(std::any_of(scenes.begin(), scenes.end(), [&](const fs::path& p) { return p.filename() == name; }))
         << name;
   }

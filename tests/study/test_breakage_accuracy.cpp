@@ -87,6 +87,49 @@ TEST(BreakageAccuracy, SceneTextOfASettingIsAValidSceneWithTheStiffnessScaled) {
   }
 }
 
+// The 3D case: the shipped single grain between platens, its contact
+// stiffness per unit area held on every grid (kn x (20 / cells)^2, and
+// / node_density^2 per node), its breakage sizes (fines below 5e-12 m^3,
+// unbreakable below 5e-11 m^3) the same physical sizes at every grid.
+TEST(BreakageAccuracy, TheThreeDimensionalCaseIsTheSingleGrainWithItsStiffnessPerAreaHeld) {
+  ASSERT_EQ(breakageCases(3).size(), 1u);
+  const BreakageCase& c = breakageCases(3).front();
+  EXPECT_EQ(c.name, "single_grain_3d");
+  EXPECT_EQ(c.dimension, 3);
+  EXPECT_EQ(c.text, lsdem::test::readFile(std::string(LSDEM_SOURCE_DIR) + "/apps/scenes/" + c.scene));
+  EXPECT_NE(c.text.find("cells_across = 20"), std::string::npos);
+  EXPECT_NE(c.text.find("kn = 3.2e3"), std::string::npos);
+  EXPECT_THROW(breakageCases(4), std::invalid_argument);
+
+  BreakageSetting s;
+  s.cellsAcross = 10;
+  s.nodeDensity = 2.0;
+  const auto path = lsdem::test::tempPath("single_grain_3d.toml");
+  std::ofstream(path) << breakageSceneText(c, s, 55);
+  const lsdem::io::AnySceneDef any = lsdem::io::readScene(path.string());
+  ASSERT_TRUE(std::holds_alternative<lsdem::io::SceneDef<3>>(any));
+  const auto& scene = std::get<lsdem::io::SceneDef<3>>(any);
+  // Per node: 3.2e3 x (20 / 10)^2 / 2^2.
+  EXPECT_DOUBLE_EQ(scene.world.contact.kn, 3.2e3);
+  EXPECT_EQ(scene.threads, 1);
+  EXPECT_DOUBLE_EQ(scene.output.shapeMinCells, 2.5);
+  ASSERT_EQ(scene.shapes.size(), 1u);
+  ASSERT_EQ(scene.groups.size(), 1u);
+  EXPECT_EQ(scene.groups[0].positions.size(), 1u);  // one grain
+  ASSERT_TRUE(scene.breakage.has_value());
+  EXPECT_EQ(scene.breakage->seed, 55u);
+  EXPECT_DOUBLE_EQ(scene.breakage->minVolume, 5e-12);
+  EXPECT_DOUBLE_EQ(scene.breakage->minBreakableVolume, 5e-11);
+  // The grain (1.6 mm, 2.1e-9 m^3) is breakable and 400 times the fines size.
+  EXPECT_GT(scene.shapes[0]->volume(), 2e-9);
+  EXPECT_LT(scene.shapes[0]->volume(), 2.3e-9);
+
+  s.formulation = lsdem::dynamics::ForceFormulation::AreaWeighted;
+  std::ofstream(path) << breakageSceneText(c, s, 55);
+  const lsdem::io::AnySceneDef anyAw = lsdem::io::readScene(path.string());
+  EXPECT_DOUBLE_EQ(std::get<lsdem::io::SceneDef<3>>(anyAw).world.contact.kn, 1.28e4);  // node density does not count
+}
+
 namespace {
 
 BreakageRun syntheticRun(const std::string& name, const std::string& knob, double cells, std::uint64_t seed,
@@ -105,6 +148,7 @@ BreakageRun syntheticRun(const std::string& name, const std::string& knob, doubl
   r.d50 = 1e-4 * f;
   r.fragments = 10;
   r.peakStress = 1e4 * (1 + shift);
+  r.splitStress = 0.5e4 * (1 + shift);
   r.cpuSeconds = cpu;
   r.maxRssMiB = 20;
   return r;
@@ -162,6 +206,40 @@ TEST(BreakageAccuracy, SummaryMeasuresSeedMeansAgainstTheFinestGrid) {
   EXPECT_NE(breakageMarkdown(report).find("| publication | 0.0707 | cells 20, nodes 1, per_node, regrid 0"),
             std::string::npos)
       << breakageMarkdown(report);
+}
+
+// The orders of d50 and of the stress at the first split are measured
+// against the reference row wherever the runs list it: here the finest grid
+// comes first, so sorting the rows moves it.
+TEST(BreakageAccuracy, OrdersAreAgainstTheReferenceWhateverTheRunOrder) {
+  BreakageReport report;
+  for (std::uint64_t seed : {1u, 2u}) {
+    report.runs.push_back(syntheticRun("a", "cells", 40, seed, 0.0, 16.0));
+    report.runs.push_back(syntheticRun("a", "nodes", 20, seed, 0.1, 2.0));
+    report.runs.push_back(syntheticRun("a", "cells", 10, seed, 0.2, 1.0));
+    report.runs.push_back(syntheticRun("a", "cells", 20, seed, 0.05, 4.0));
+  }
+  summariseBreakage(report);
+  // d50 of a shift s: 10^s times the reference's; the split stress (1 + s) times.
+  const double d50Order = std::log((std::pow(10.0, 0.2) - 1) / (std::pow(10.0, 0.05) - 1)) / std::log(2.0);
+  int checked = 0;
+  for (const ConvergenceOrder& o : report.orders) {
+    if (o.metric == "d50") {
+      EXPECT_EQ(o.points, 2);
+      EXPECT_NEAR(o.order, d50Order, 1e-9);
+      ++checked;
+    }
+    if (o.metric == "split_stress" || o.metric == "peak_stress") {
+      EXPECT_EQ(o.points, 2) << o.metric;
+      EXPECT_NEAR(o.order, 2.0, 1e-9) << o.metric;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 3);
+  for (const BreakageRow& w : report.rows) {
+    const double shift = w.reference ? 0.0 : w.knob == "nodes" ? 0.1 : w.setting.cellsAcross == 10 ? 0.2 : 0.05;
+    EXPECT_NEAR(w.splitStress.mean, 0.5e4 * (1 + shift), 1e-9);
+  }
 }
 
 TEST(BreakageAccuracy, MeanDistributionAveragesThePassingFractions) {

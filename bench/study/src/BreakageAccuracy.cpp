@@ -68,8 +68,21 @@ struct Ladder {
   bool areaWeighted = true;
 };
 
-Ladder ladder(bool quick) {
+Ladder ladder(int dimension, bool quick) {
   Ladder l;
+  if (dimension == 3) {
+    // The 3D single grain. One run's CPU (one seed, measured before the
+    // study): 0.5 s at 10 cells, 1.1 at 14, 4.9 at 20, 7.5 at 28, 31 at 40,
+    // 126 at 56 (177 MB); 80 cells would take several minutes a run. Six
+    // seeds of this ladder and of the three knobs at 20 cells took 1968 s of
+    // CPU on a loaded machine (docs/accuracy.md), under the 40 minutes it
+    // was sized for. The quick ladder is CI's smoke test of the 3D case.
+    l.cells = quick ? std::vector<double>{10, 14} : std::vector<double>{10, 14, 20, 28, 40, 56};
+    l.nodes = quick ? std::vector<double>{} : std::vector<double>{2};
+    l.regrid = quick ? std::vector<double>{} : std::vector<double>{10};
+    l.areaWeighted = !quick;
+    return l;
+  }
   l.cells = quick ? std::vector<double>{10, 20, 40} : std::vector<double>{10, 14, 20, 28, 40, 56, 80, 112};
   l.nodes = quick ? std::vector<double>{2} : std::vector<double>{0.5, 2, 3};
   l.regrid = quick ? std::vector<double>{10} : std::vector<double>{10, 20};
@@ -158,10 +171,15 @@ void readOutputs(const fs::path& out, BreakageRun& run) {
 
   // The peak specimen stress over the run, and the counts at its end.
   const Csv history = readCsv(out / "history.csv");
-  const std::size_t cstress = history.column("stress_Pa", out / "history.csv");
+  const std::size_t cstress = history.column("stress_Pa", out / "history.csv"),
+                    cbreak = history.column("breakages", out / "history.csv");
+  run.splitStress = std::nan("");
   for (const auto& row : history.rows) {
     const double s = field(row, cstress);
     if (std::isfinite(s)) run.peakStress = std::max(run.peakStress, s);
+    // The first row with a split: the stress the specimen carried as it broke
+    // (the row's, so within one history interval of the split).
+    if (std::isnan(run.splitStress) && field(row, cbreak) > 0.0 && std::isfinite(s)) run.splitStress = s;
   }
   const std::string summary = readText(out / "summary.json");
   run.steps = jsonNumber(summary, "steps", out / "summary.json");
@@ -250,24 +268,33 @@ std::string settingLabel(const BreakageSetting& s) {
   return buf;
 }
 
-const std::vector<BreakageCase>& breakageCases() {
-  static const std::vector<BreakageCase> cases = {
+const std::vector<BreakageCase>& breakageCases(int dimension) {
+  static const std::vector<BreakageCase> cases2 = {
       {"single_grain", "chipping/single_grain_2d_no_chipping.toml",
-       embeddedScene("chipping/single_grain_2d_no_chipping.toml"), 40.0, 10.0},
+       embeddedScene("chipping/single_grain_2d_no_chipping.toml"), 40.0, 10.0, 2, 1e5},
       {"three_grains", "three_grains/three_grains_2d.toml", embeddedScene("three_grains/three_grains_2d.toml"), 40.0,
-       5.0},
+       5.0, 2, 1e5},
       {"oedometer", "chipping/oedometer_small_2d_no_chipping.toml",
-       embeddedScene("chipping/oedometer_small_2d_no_chipping.toml"), 24.0, 6.0},
+       embeddedScene("chipping/oedometer_small_2d_no_chipping.toml"), 24.0, 6.0, 2, 1e5},
   };
-  return cases;
+  static const std::vector<BreakageCase> cases3 = {
+      {"single_grain_3d", "single_grain/single_grain_3d.toml", embeddedScene("single_grain/single_grain_3d.toml"),
+       20.0, 5.0, 3, 3.2e3},
+  };
+  if (dimension == 2) return cases2;
+  if (dimension == 3) return cases3;
+  throw std::invalid_argument("the breakage study has 2D and 3D scenes, not " + std::to_string(dimension) + "D");
 }
 
 std::string breakageSceneText(const BreakageCase& c, const BreakageSetting& s, std::uint64_t seed) {
-  // The shipped stiffness per unit contact length: kn per node at one node
-  // per cell of the shipped grid (2D), carried to this grid and node density.
-  constexpr double kShippedKn = 1e5;  // every case's [contact] kn, N/m per node
+  // The shipped stiffness per unit contact length (2D) or area (3D): kn per
+  // node at one node per cell of the shipped grid, carried to this grid and
+  // node density (node spacing ~ 1 / (cells x node_density); a node stands
+  // for spacing^(D-1) of surface).
   const bool perNode = s.formulation == dynamics::ForceFormulation::PerNode;
-  const double kn = kShippedKn * (c.shippedCells / s.cellsAcross) / (perNode ? s.nodeDensity : 1.0);
+  const double faces = double(c.dimension - 1);
+  const double kn = c.shippedKn * std::pow(c.shippedCells / s.cellsAcross, faces) /
+                    (perNode ? std::pow(s.nodeDensity, faces) : 1.0);
   const std::vector<io::SceneSetting> settings = {
       {"simulation.threads", "1"},
       {"shapes.*.cells_across", number(s.cellsAcross)},
@@ -343,13 +370,15 @@ BreakageReport runBreakageStudy(const BreakageOptions& options) {
   if (options.executable.empty()) throw std::invalid_argument("the breakage study needs the lsdem executable");
   if (options.seeds < 0) throw std::invalid_argument("seeds must be >= 0");
   if (options.jobs < 1) throw std::invalid_argument("jobs must be >= 1");
+  const std::vector<BreakageCase>& cases = breakageCases(options.dimension);
   const auto start = std::chrono::steady_clock::now();
   BreakageReport report;
+  report.dimension = options.dimension;
   report.quick = options.quick;
   report.seeds = options.seeds > 0 ? options.seeds : (options.quick ? 2 : 6);
 
   // The runs: the grid ladder, then the other knobs about the baseline.
-  const Ladder l = ladder(options.quick);
+  const Ladder l = ladder(options.dimension, options.quick);
   std::vector<std::pair<std::string, std::pair<double, BreakageSetting>>> settings;
   for (double c : l.cells) {
     BreakageSetting s;
@@ -361,7 +390,7 @@ BreakageReport runBreakageStudy(const BreakageOptions& options) {
     s.nodeDensity = n;
     settings.push_back({"nodes", {n, s}});
   }
-  {
+  if (l.areaWeighted) {
     BreakageSetting s;
     s.formulation = dynamics::ForceFormulation::AreaWeighted;
     settings.push_back({"law", {1.0, s}});
@@ -372,7 +401,7 @@ BreakageReport runBreakageStudy(const BreakageOptions& options) {
     settings.push_back({"regrid", {r, s}});
   }
   std::vector<BreakageRun> runs;
-  for (const BreakageCase& c : breakageCases()) {
+  for (const BreakageCase& c : cases) {
     for (const auto& [knob, value] : settings) {
       for (int k = 0; k < report.seeds; ++k) {
         BreakageRun r;
@@ -403,7 +432,7 @@ BreakageReport runBreakageStudy(const BreakageOptions& options) {
     for (std::size_t i = next++; i < runs.size(); i = next++) {
       BreakageRun& r = runs[i];
       const BreakageCase* c = nullptr;
-      for (const BreakageCase& bc : breakageCases()) {
+      for (const BreakageCase& bc : cases) {
         if (bc.name == r.caseName) c = &bc;
       }
       const std::string name = runName(r);

@@ -48,6 +48,14 @@ std::string fmt(const char* format, double v) {
   return buf;
 }
 
+// "3 scenes" or "1 scene": the cases the report holds, for headers and plot labels.
+std::string scenesLabel(const BreakageReport& report) {
+  const std::size_t n = report.seedNoise.size();
+  return std::to_string(n) + (n == 1 ? " scene" : " scenes");
+}
+
+std::string dimensionLabel(const BreakageReport& report) { return std::to_string(report.dimension) + "D"; }
+
 const char* lawName(const BreakageSetting& s) {
   return s.formulation == dynamics::ForceFormulation::PerNode ? "per_node" : "area_weighted";
 }
@@ -63,7 +71,7 @@ std::string rowsCsv(const BreakageReport& report) {
          "psd_error,psd_error_paired,psd_error_paired_spread,d10_m,d50_m,d50_spread_m,d90_m,fragments,fragments_spread,"
          "fines_percent,"
          "fines_spread,mean_circularity,mean_aspect_ratio,peak_stress_Pa,peak_stress_spread_Pa,peak_stress_error,"
-         "fragments_error,cpu_seconds,cpu_spread,max_rss_MiB,curve\n";
+         "fragments_error,split_stress_Pa,split_stress_spread_Pa,cpu_seconds,cpu_spread,max_rss_MiB,curve\n";
   for (const BreakageRow& w : report.rows) {
     csv << w.caseName << ',' << w.knob << ',' << num(w.knobValue) << ',' << settingColumns(w.setting) << ','
         << (w.reference ? 1 : 0) << ',' << w.seeds << ',' << num(w.psdError) << ',' << num(w.pairedPsdError.mean) << ','
@@ -71,7 +79,8 @@ std::string rowsCsv(const BreakageReport& report) {
         << ',' << num(w.d90.mean) << ',' << num(w.fragments.mean) << ',' << num(w.fragments.spread) << ','
         << num(w.finesPercent.mean) << ',' << num(w.finesPercent.spread) << ',' << num(w.circularity.mean) << ','
         << num(w.aspectRatio.mean) << ',' << num(w.peakStress.mean) << ',' << num(w.peakStress.spread) << ','
-        << num(w.peakStressError) << ',' << num(w.fragmentsError) << ',' << num(w.cpuSeconds.mean) << ','
+        << num(w.peakStressError) << ',' << num(w.fragmentsError) << ',' << num(w.splitStress.mean) << ','
+        << num(w.splitStress.spread) << ',' << num(w.cpuSeconds.mean) << ','
         << num(w.cpuSeconds.spread) << ',' << num(w.maxRssMiB) << ',' << w.caseName << '/' << w.knob << '\n';
   }
   return csv.str();
@@ -81,15 +90,16 @@ std::string rowsCsv(const BreakageReport& report) {
 std::string runsCsv(const BreakageReport& report) {
   std::ostringstream csv;
   csv << "case,knob,knob_value,cells_across,node_density,formulation,regrid_cells,seed,ok,psd_error_paired,d10_m,d50_m,"
-         "d90_m,fragments,breakages,fines_percent,mean_circularity,mean_aspect_ratio,peak_stress_Pa,steps,"
-         "cpu_seconds,wall_seconds,max_rss_MiB,error\n";
+         "d90_m,fragments,breakages,fines_percent,mean_circularity,mean_aspect_ratio,peak_stress_Pa,split_stress_Pa,"
+         "steps,cpu_seconds,wall_seconds,max_rss_MiB,error\n";
   for (const BreakageRun& r : report.runs) {
     std::string error = r.error;
     std::replace(error.begin(), error.end(), ',', ';');
     csv << r.caseName << ',' << r.knob << ',' << num(r.knobValue) << ',' << settingColumns(r.setting) << ',' << r.seed
         << ',' << (r.ok ? 1 : 0) << ',' << num(r.psdError) << ',' << num(r.d10) << ',' << num(r.d50) << ','
         << num(r.d90) << ',' << num(r.fragments) << ',' << num(r.breakages) << ',' << num(r.finesPercent) << ','
-        << num(r.meanCircularity) << ',' << num(r.meanAspectRatio) << ',' << num(r.peakStress) << ',' << num(r.steps)
+        << num(r.meanCircularity) << ',' << num(r.meanAspectRatio) << ',' << num(r.peakStress) << ','
+        << num(r.splitStress) << ',' << num(r.steps)
         << ',' << num(r.cpuSeconds) << ',' << num(r.wallSeconds) << ',' << num(r.maxRssMiB) << ',' << error << '\n';
   }
   return csv.str();
@@ -157,18 +167,19 @@ std::string ms(const MeanSpread& m, const char* format, double scale = 1.0) {
 
 std::string breakageMarkdown(const BreakageReport& report) {
   std::ostringstream md;
-  md << "# Breakage accuracy against cost (" << (report.quick ? "quick" : "full") << " ladder, " << report.seeds
-     << " seeds)\n\n";
+  md << "# Breakage accuracy against cost (" << dimensionLabel(report) << ", " << (report.quick ? "quick" : "full")
+     << " ladder, " << report.seeds << " seeds)\n\n";
   md << "| case | knob | setting | seeds | PSD error (decades) | paired | d10 / d50 / d90 (mm) | fragments | fines % "
-        "| circularity | aspect ratio | peak stress (kPa) | CPU s | max MiB |\n"
-     << "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+        "| circularity | aspect ratio | peak stress (kPa) | stress at first split (kPa) | CPU s | max MiB |\n"
+     << "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
   for (const BreakageRow& w : report.rows) {
     md << "| " << w.caseName << " | " << w.knob << " | " << settingLabel(w.setting) << (w.reference ? " (ref)" : "")
        << " | " << w.seeds << " | " << fmt("%.4f", w.psdError) << " | " << ms(w.pairedPsdError, "%.3f") << " | "
        << fmt("%.3f", 1e3 * w.d10.mean) << " / " << fmt("%.3f", 1e3 * w.d50.mean) << " / "
        << fmt("%.3f", 1e3 * w.d90.mean) << " | " << ms(w.fragments, "%.1f") << " | " << ms(w.finesPercent, "%.1f")
        << " | " << fmt("%.3f", w.circularity.mean) << " | " << fmt("%.3f", w.aspectRatio.mean) << " | "
-       << ms(w.peakStress, "%.1f", 1e-3) << " | " << ms(w.cpuSeconds, "%.2f") << " | " << fmt("%.0f", w.maxRssMiB)
+       << ms(w.peakStress, "%.1f", 1e-3) << " | " << ms(w.splitStress, "%.1f", 1e-3) << " | "
+       << ms(w.cpuSeconds, "%.2f") << " | " << fmt("%.0f", w.maxRssMiB)
        << " |\n";
   }
   md << "\n## Seed noise\n\n| case | L1 between two seeds at the reference (decades) | noise floor of the means |\n"
@@ -183,8 +194,8 @@ std::string breakageMarkdown(const BreakageReport& report) {
     md << "| " << o.caseName << " | " << o.metric << " | " << (o.points >= 2 ? fmt("%.2f", o.order) : "-") << " | "
        << o.points << " |\n";
   }
-  md << "\n## Budgets\n\n| budget | PSD error bound (decades) | setting | PSD error | CPU s (3 scenes) | per scene | "
-        "max MiB |\n| --- | --- | --- | --- | --- | --- | --- |\n";
+  md << "\n## Budgets\n\n| budget | PSD error bound (decades) | setting | PSD error | CPU s (" << scenesLabel(report)
+     << ") | per scene | max MiB |\n| --- | --- | --- | --- | --- | --- | --- |\n";
   for (const BreakageBudget& b : report.budgets) {
     md << "| " << b.name << " | " << fmt("%.4f", b.target) << " | ";
     if (!b.reached) {
@@ -255,14 +266,15 @@ BreakageFiles writeBreakageFiles(const BreakageReport& report, const std::string
   // the scenes) and the front, and each scene's grid ladder.
   io::PlotSpec pareto;
   pareto.output = (dir / "psd_error_vs_time.png").string();
-  pareto.title = "PSD error against cost (2D, mean over seeds)";
-  pareto.xLabel = "CPU s on one thread (3 scenes: sum)";
+  const std::string scenes = scenesLabel(report);
+  pareto.title = "PSD error against cost (" + dimensionLabel(report) + ", mean over seeds)";
+  pareto.xLabel = "CPU s on one thread (" + scenes + (report.seedNoise.size() == 1 ? ")" : ": sum)");
   pareto.yLabel = "PSD L1 error vs finest grid, decades";
   pareto.logX = pareto.logY = true;
   using Style = io::PlotSeries::Style;
-  pareto.series.push_back({front, "cpu_seconds", "psd_error", "every setting (3 scenes)", "", "", Style::Points});
+  pareto.series.push_back({front, "cpu_seconds", "psd_error", "every setting (" + scenes + ")", "", "", Style::Points});
   pareto.series.push_back(
-      {front, "cpu_seconds", "psd_error", "Pareto front (3 scenes)", "on_front", "1", Style::LinesPoints});
+      {front, "cpu_seconds", "psd_error", "Pareto front (" + scenes + ")", "on_front", "1", Style::LinesPoints});
   pareto.series.push_back({floorCsv, "cpu_seconds", "psd_error", "noise floor", "", "", Style::Spec});
   for (const std::string& c : cases) {
     pareto.series.push_back(
@@ -273,7 +285,7 @@ BreakageFiles writeBreakageFiles(const BreakageReport& report, const std::string
   // The errors against the grid, per scene.
   io::PlotSpec cells;
   cells.output = (dir / "psd_error_vs_cells.png").string();
-  cells.title = "PSD error against grid resolution (2D)";
+  cells.title = "PSD error against grid resolution (" + dimensionLabel(report) + ")";
   cells.xLabel = "grid cells across a grain";
   cells.yLabel = "PSD L1 error vs finest grid, decades";
   cells.logX = cells.logY = true;

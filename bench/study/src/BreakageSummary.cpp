@@ -117,7 +117,7 @@ void summariseBreakage(BreakageReport& report) {
       }
     }
     for (BreakageRow& w : rows) {
-      std::vector<double> err, d10, d50, d90, frag, fines, circ, aspect, peak, cpu;
+      std::vector<double> err, d10, d50, d90, frag, fines, circ, aspect, peak, split, cpu;
       std::vector<SizeDistribution> curves;
       for (const BreakageRun& r : report.runs) {
         if (r.caseName != name || r.knob != w.knob || r.knobValue != w.knobValue || !r.ok) continue;
@@ -132,6 +132,7 @@ void summariseBreakage(BreakageReport& report) {
         circ.push_back(r.meanCircularity);
         aspect.push_back(r.meanAspectRatio);
         peak.push_back(r.peakStress);
+        if (std::isfinite(r.splitStress)) split.push_back(r.splitStress);
         cpu.push_back(r.cpuSeconds);
         w.maxRssMiB = std::max(w.maxRssMiB, r.maxRssMiB);
       }
@@ -145,6 +146,7 @@ void summariseBreakage(BreakageReport& report) {
       w.circularity = meanSpread(circ);
       w.aspectRatio = meanSpread(aspect);
       w.peakStress = meanSpread(peak);
+      w.splitStress = meanSpread(split);
       w.cpuSeconds = meanSpread(cpu);
     }
     const auto refRow = std::find_if(rows.begin(), rows.end(), [](const BreakageRow& w) { return w.reference; });
@@ -175,18 +177,22 @@ void summariseBreakage(BreakageReport& report) {
     report.noiseFloor.push_back({name, refs.empty() ? 0.0 : noise.mean / std::sqrt(double(refs.size()))});
 
     // The observed orders over the grid ladder (the reference left out).
-    std::vector<double> cells, psd, d50, peak, frag;
-    const double refD50 = refRow != rows.end() ? refRow->d50.mean : 0.0;
+    std::vector<double> cells, psd, d50, peak, split, frag;
+    // The reference row again: the sort above moved the rows under refRow.
+    const auto refSorted = std::find_if(rows.begin(), rows.end(), [](const BreakageRow& w) { return w.reference; });
+    const double refD50 = refSorted != rows.end() ? refSorted->d50.mean : 0.0;
+    const double refSplit = refSorted != rows.end() ? refSorted->splitStress.mean : 0.0;
     for (const BreakageRow& w : rows) {
       if (w.knob != "cells" || w.reference || w.seeds == 0) continue;
       cells.push_back(w.setting.cellsAcross);
       psd.push_back(w.psdError);
       d50.push_back(relative(w.d50.mean, refD50));
       peak.push_back(w.peakStressError);
+      split.push_back(relative(w.splitStress.mean, refSplit));
       frag.push_back(w.fragmentsError);
     }
     for (const auto& [metric, errors] : std::vector<std::pair<std::string, std::vector<double>>>{
-             {"psd_l1", psd}, {"d50", d50}, {"peak_stress", peak}, {"fragments", frag}}) {
+             {"psd_l1", psd}, {"d50", d50}, {"peak_stress", peak}, {"split_stress", split}, {"fragments", frag}}) {
       ConvergenceOrder o = fitOrder(cells, errors);
       o.caseName = name;
       o.metric = metric;
@@ -248,6 +254,8 @@ void summariseBreakage(BreakageReport& report) {
   }
 
   // Notes for the table.
+  const bool one = caseOrder.size() == 1;
+  const std::string scenes = one ? "the scene" : "the " + std::to_string(caseOrder.size()) + " scenes";
   report.notes = {
       "PSD error: L1 distance over log10(sieve size), in decades, between the setting's mean cumulative mass "
       "curve over its seeds and the reference's (finest grid, same seeds); sieve sizes below 10 um count as "
@@ -256,11 +264,16 @@ void summariseBreakage(BreakageReport& report) {
       "Seed noise: the distance between single reference runs of two seeds (every pair): what another draw of "
       "Weibull strengths changes. Noise floor: that over sqrt(seeds), the expected distance between two means of "
       "as many independent runs; PSD errors near it are not resolved by this many seeds.",
-      "The contact stiffness per unit contact length is held at the shipped scene's on every grid (kn scaled "
-      "by cells_shipped / cells, and / node_density under the per-node law).",
-      "Budgets: the cheapest setting whose PSD error, averaged over the three scenes, is at most 3x (fast), "
-      "2x (balanced) and 1x (publication) the mean noise floor; cost = the sum of the three scenes' mean CPU "
-      "seconds of one run on one thread.",
+      report.dimension == 3
+          ? "The contact stiffness per unit contact area is held at the shipped scene's on every grid (kn scaled "
+            "by (cells_shipped / cells)^2, and / node_density^2 under the per-node law)."
+          : "The contact stiffness per unit contact length is held at the shipped scene's on every grid (kn scaled "
+            "by cells_shipped / cells, and / node_density under the per-node law).",
+      "Budgets: the cheapest setting whose PSD error" + std::string(one ? "" : ", averaged over " + scenes + ",") +
+          " is at most 3x (fast), 2x (balanced) and 1x (publication) the " + (one ? "" : "mean ") +
+          "noise floor; cost = " +
+          (one ? "the scene's mean CPU seconds" : "the sum of " + scenes + "' mean CPU seconds") +
+          " of one run on one thread.",
   };
 }
 

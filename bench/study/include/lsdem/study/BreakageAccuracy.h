@@ -6,21 +6,24 @@
 /// size distribution, fragment count, fines, shape, peak stress) and what
 /// each setting costs (CPU time, memory).
 ///
-/// Three shipped 2D scenes (embedded in the study when it is built, so it
-/// needs no source tree): the single grain crushed between platens
+/// Shipped scenes, embedded in the study when it is built, so it needs no
+/// source tree. 2D (the default): the single grain crushed between platens
 /// (apps/scenes/chipping/single_grain_2d_no_chipping.toml), the three grains
 /// (apps/scenes/three_grains/three_grains_2d.toml) and the small oedometer
-/// (apps/scenes/chipping/oedometer_small_2d_no_chipping.toml). Each run is
+/// (apps/scenes/chipping/oedometer_small_2d_no_chipping.toml). 3D: the single
+/// grain crushed between platens with the 3D oedometer's material and
+/// breakage settings (apps/scenes/single_grain/single_grain_3d.toml), on a
+/// grid ladder of its own (BreakageOptions::dimension). Each run is
 /// the scene with some keys replaced (io::overrideScene), written to a file
 /// and run by `lsdem run FILE --threads 1` in a child process: what is
 /// measured is what users run, and the child's CPU time (wait4) and peak
 /// memory (its VmHWM) are the kernel's figures for that run alone.
 ///
 /// Settings. The grid knob sets `cells_across` of every shape; the contact
-/// stiffness is scaled with it so the stiffness per unit contact length stays
-/// the shipped scene's (kn x cells_shipped / cells, and / node_density under
-/// the per-node law): refining the grid then refines the same physics instead
-/// of stiffening the grains. `shape_min_cells` is scaled likewise, so the
+/// stiffness is scaled with it so the stiffness per unit contact length (2D)
+/// or area (3D) stays the shipped scene's (kn x (cells_shipped / cells)^(D-1),
+/// and / node_density^(D-1) under the per-node law): refining the grid then
+/// refines the same physics instead of stiffening the grains. `shape_min_cells` is scaled likewise, so the
 /// shape statistics cover the same physical sizes at every resolution. Knobs
 /// other than the grid are swept one at a time about the baseline
 /// (BreakageSetting's defaults).
@@ -60,15 +63,19 @@ std::string settingLabel(const BreakageSetting& setting);
 
 /// A scene the study runs.
 struct BreakageCase {
-  std::string name;              ///< "single_grain", "three_grains", "oedometer"
+  std::string name;              ///< "single_grain", "three_grains", "oedometer", "single_grain_3d"
   std::string scene;             ///< the shipped scene it is, relative to apps/scenes
   std::string text;              ///< the scene file's text
   double shippedCells = 0.0;     ///< cells_across of the shipped scene
   double shippedMinCells = 5.0;  ///< [output] shape_min_cells of the shipped scene
+  int dimension = 2;             ///< the scene's [simulation] dimension
+  double shippedKn = 1e5;        ///< [contact] kn of the shipped scene, N/m per node
 };
 
-/// @brief The three scenes of the study, their text embedded at build time.
-const std::vector<BreakageCase>& breakageCases();
+/// @brief The scenes of the study in `dimension` (2: the three 2D scenes; 3:
+/// the 3D single grain), their text embedded at build time.
+/// @note Throws std::invalid_argument for a dimension other than 2 or 3.
+const std::vector<BreakageCase>& breakageCases(int dimension = 2);
 
 /// @brief The scene text of `c` run at `setting` with Weibull seed `seed`:
 /// grid, nodes, law, re-gridding and the stiffness and shape-statistics
@@ -125,6 +132,7 @@ struct BreakageRun {
   double meanCircularity = 0.0;            ///< at the end, pieces at least shape_min_cells across (2D: 4 pi A / P^2)
   double meanAspectRatio = 0.0;            ///< likewise, shortest / longest best-fit semi-axis
   double peakStress = 0.0;                 ///< largest specimen stress over the run, Pa (N/m per m in 2D)
+  double splitStress = 0.0;                ///< specimen stress at the first split (history row), Pa; NaN: no split
   double steps = 0.0;
   double cpuSeconds = 0.0;  ///< user + system CPU of the run's process (one OpenMP thread)
   double wallSeconds = 0.0;
@@ -152,6 +160,7 @@ struct BreakageRow {
   double psdError = 0.0;      ///< psdDistance(meanPsd, the reference row's meanPsd), decades
   MeanSpread pairedPsdError;  ///< the runs' paired errors (BreakageRun::psdError)
   MeanSpread d10, d50, d90, fragments, finesPercent, circularity, aspectRatio, peakStress, cpuSeconds;
+  MeanSpread splitStress;        ///< over the runs that split
   double peakStressError = 0.0;  ///< |mean peak stress / the reference's - 1|
   double fragmentsError = 0.0;   ///< |mean fragments / the reference's - 1|
   double maxRssMiB = 0.0;        ///< largest over the seeds
@@ -161,7 +170,7 @@ struct BreakageRow {
 /// squares in log-log over the grid ladder without its reference.
 struct ConvergenceOrder {
   std::string caseName;
-  std::string metric;  ///< "psd_l1", "d50", "peak_stress", "fragments"
+  std::string metric;  ///< "psd_l1", "d50", "peak_stress", "split_stress", "fragments"
   double order = 0.0;
   int points = 0;  ///< ladder points in the fit (errors > 0)
 };
@@ -190,6 +199,7 @@ struct BreakageBudget {
 
 /// What to run.
 struct BreakageOptions {
+  int dimension = 2;   ///< 2: the three 2D scenes; 3: the 3D single grain (its own grid ladder)
   bool quick = false;  ///< the short ladder (CI) instead of the full one
   int seeds = 0;       ///< Weibull seeds per setting (0: 2 quick, 6 full)
   int jobs = 2;        ///< runs at once (child processes)
@@ -205,6 +215,7 @@ struct BreakageOptions {
 
 /// The study's result.
 struct BreakageReport {
+  int dimension = 2;
   bool quick = false;
   int seeds = 0;
   double wallSeconds = 0.0;  ///< the whole study
