@@ -4,10 +4,12 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <unordered_set>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -1469,6 +1471,59 @@ typename ContactSolver<D>::ParticleHistory ContactSolver<D>::particleHistory(std
 template <int D>
 void ContactSolver<D>::adoptHistory(std::uint64_t id, const ParticleHistory& history) {
   std::erase_if(history_, [&](const HistoryPair& h) { return h.idA == id || h.other == id; });
+  appendHistory(history);
+}
+
+template <int D>
+typename ContactSolver<D>::ParticleHistory ContactSolver<D>::mergedHistory(
+    std::span<const ParticleHistory* const> histories) {
+  // One history of every pair, a pair two of them hold taken once.
+  ParticleHistory all;
+  bool withShear = false, withPreload = false;
+  for (const ParticleHistory* h : histories) {
+    withShear = withShear || !h->shear.empty();
+    withPreload = withPreload || !h->preload.empty();
+  }
+  std::set<std::pair<std::uint64_t, std::uint64_t>> taken;
+  for (const ParticleHistory* h : histories) {
+    for (HistoryPair p : h->pairs) {
+      if (!taken.emplace(p.idA, p.other).second) continue;
+      const std::uint32_t from = p.first;
+      p.first = std::uint32_t(all.nodes.size());
+      all.pairs.push_back(p);
+      all.nodes.insert(all.nodes.end(), h->nodes.begin() + from, h->nodes.begin() + from + p.count);
+      if (withShear) {
+        if (h->shear.empty()) {
+          all.shear.resize(all.nodes.size(), Vec<D>::Zero());
+        } else {
+          all.shear.insert(all.shear.end(), h->shear.begin() + from, h->shear.begin() + from + p.count);
+        }
+      }
+      if (withPreload) {
+        if (h->preload.empty()) {
+          all.preload.resize(all.nodes.size(), 0.0);
+        } else {
+          all.preload.insert(all.preload.end(), h->preload.begin() + from, h->preload.begin() + from + p.count);
+        }
+      }
+    }
+  }
+  return all;
+}
+
+template <int D>
+void ContactSolver<D>::adoptHistories(std::span<const std::uint64_t> ids,
+                                      std::span<const ParticleHistory* const> histories) {
+  if (ids.size() != histories.size()) {
+    throw std::invalid_argument("ContactSolver::adoptHistories: ids and histories differ in number");
+  }
+  const std::unordered_set<std::uint64_t> adopted(ids.begin(), ids.end());
+  std::erase_if(history_, [&](const HistoryPair& h) { return adopted.count(h.idA) || adopted.count(h.other); });
+  appendHistory(mergedHistory(histories));
+}
+
+template <int D>
+void ContactSolver<D>::appendHistory(const ParticleHistory& history) {
   if (history.pairs.empty()) return;
   // The arrays the history points into, aligned with nodes_ before appending
   // (kept when either side has them: a solver whose last compute() found no
@@ -1504,32 +1559,39 @@ void ContactSolver<D>::adoptHistory(std::uint64_t id, const ParticleHistory& his
 }
 
 template <int D>
-bool ContactSolver<D>::overwriteHistory(std::uint64_t id, const ParticleHistory& history) {
-  // Every pair of `id` here, in history_'s order, must be the history's, node for node.
-  std::vector<const HistoryPair*> mine;
-  for (const HistoryPair& h : history_) {
-    if (h.idA == id || h.other == id) mine.push_back(&h);
+bool ContactSolver<D>::overwriteHistories(std::span<const std::uint64_t> ids,
+                                          std::span<const ParticleHistory* const> histories) {
+  if (ids.size() != histories.size()) {
+    throw std::invalid_argument("ContactSolver::overwriteHistories: ids and histories differ in number");
   }
-  if (mine.size() != history.pairs.size()) return false;
-  if (shear_.empty() != history.shear.empty() && !history.nodes.empty()) return false;
-  if (!history.preload.empty() && preload_.empty()) return false;
-  for (std::size_t k = 0; k < mine.size(); ++k) {
-    const HistoryPair& here = *mine[k];
-    const HistoryPair& there = history.pairs[k];
-    if (here.idA != there.idA || here.other != there.other || here.count != there.count) return false;
-    for (std::uint32_t j = 0; j < here.count; ++j) {
-      if (nodeKey(nodes_[here.first + j]) != nodeKey(history.nodes[there.first + j])) return false;
+  const ParticleHistory all = mergedHistory(histories);
+  // The same pairs here (history_ is sorted by key), node for node.
+  const std::unordered_set<std::uint64_t> given(ids.begin(), ids.end());
+  std::size_t mine = 0;
+  for (const HistoryPair& h : history_) mine += given.count(h.idA) || given.count(h.other);
+  if (mine != all.pairs.size()) return false;
+  if (!all.nodes.empty() && (shear_.empty() != all.shear.empty() || (!all.preload.empty() && preload_.empty()))) {
+    return false;
+  }
+  std::vector<const HistoryPair*> here(all.pairs.size());
+  for (std::size_t k = 0; k < all.pairs.size(); ++k) {
+    const HistoryPair& there = all.pairs[k];
+    const auto it = std::lower_bound(history_.begin(), history_.end(), there, [](const HistoryPair& x, const HistoryPair& y) {
+      return keyLess(x, y.idA, y.other);
+    });
+    if (it == history_.end() || it->idA != there.idA || it->other != there.other || it->count != there.count) return false;
+    for (std::uint32_t j = 0; j < there.count; ++j) {
+      if (nodeKey(nodes_[it->first + j]) != nodeKey(all.nodes[there.first + j])) return false;
     }
+    here[k] = &*it;
   }
-  for (std::size_t k = 0; k < mine.size(); ++k) {
-    const HistoryPair& here = *mine[k];
-    const HistoryPair& there = history.pairs[k];
-    for (std::uint32_t j = 0; j < here.count; ++j) {
-      nodes_[here.first + j] = history.nodes[there.first + j];
-      if (!shear_.empty()) shear_[here.first + j] = history.shear[there.first + j];
-      if (!preload_.empty()) {
-        preload_[here.first + j] = history.preload.empty() ? 0.0 : history.preload[there.first + j];
-      }
+  for (std::size_t k = 0; k < all.pairs.size(); ++k) {
+    const HistoryPair& there = all.pairs[k];
+    for (std::uint32_t j = 0; j < there.count; ++j) {
+      const std::size_t q = here[k]->first + j, r = there.first + j;
+      nodes_[q] = all.nodes[r];
+      if (!shear_.empty()) shear_[q] = all.shear[r];
+      if (!preload_.empty()) preload_[q] = all.preload.empty() ? 0.0 : all.preload[r];
     }
   }
   return true;

@@ -783,13 +783,18 @@ void World<D>::showRunOf(const World& run, std::span<const ShownParticle> shown)
   refreshContacts();
   particles_.velocity.swap(velocity);
   particles_.angularVelocity.swap(spin);
+  std::vector<std::uint64_t> ids;
+  std::vector<const typename ContactSolver<D>::ParticleHistory*> histories;
   for (std::size_t i = 0; i < shown.size(); ++i) {
     particles_.force[i] = shown[i].force;
     particles_.torque[i] = shown[i].torque;
-    if (shown[i].history && !contacts_.overwriteHistory(particles_.id[i], *shown[i].history)) {
-      throw std::logic_error("World::showRunOf: the contact history of particle " + std::to_string(particles_.id[i]) +
-                             " does not fit the contacts found for it");
+    if (shown[i].history) {
+      ids.push_back(particles_.id[i]);
+      histories.push_back(shown[i].history);
     }
+  }
+  if (!contacts_.overwriteHistories(ids, histories)) {
+    throw std::logic_error("World::showRunOf: the run's contact histories do not fit the contacts found here");
   }
   energyCurrent_ = false;
   stageSeconds_ = run.stageSeconds_;

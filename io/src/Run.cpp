@@ -90,7 +90,9 @@ class Runner {
         for (auto& r : recorders_) r->reopen();
       }
     } else {
-      // The first instant of a new run (a resumed run has it already).
+      // The first instant of a new run (a resumed run has it already), with
+      // its contacts: the first step would evaluate them first anyway.
+      world.refreshContacts();
       updateView();
       if (writes_) {
         for (auto& r : recorders_) r->create();

@@ -863,7 +863,13 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
       view.addParticle(e.def);
     }
   }
-  for (const Entry& e : run) view.adoptHistory(e.def.id, e.history);
+  std::vector<ParticleId> ids;
+  std::vector<const typename dynamics::ContactSolver<D>::ParticleHistory*> histories;
+  for (const Entry& e : run) {
+    ids.push_back(e.def.id);
+    histories.push_back(&e.history);
+  }
+  view.adoptHistories(ids, histories);
   std::vector<typename dynamics::World<D>::ShownParticle> shown(v.size());
   for (std::size_t i = 0; i < v.size(); ++i) {
     const auto e = byId(v.id[i]);

@@ -316,6 +316,8 @@ struct ContactReader final : Effect<2> {
     }
   }
 };
+
+
 }  // namespace
 
 TEST(World, AnEffectThatReadsContactsGetsThemForTheParticlesAsTheyAre) {
@@ -545,4 +547,72 @@ TEST(World, PairsOfTwoGhostsAreNotComputed) {
   EXPECT_EQ(w.particles().mass[i], 1.25);
   EXPECT_EQ(w.particles().inertia[i], 0.5);
   EXPECT_FALSE(w.isGhost(i));
+}
+
+// A world that shows another's run (World::showRunOf: a distributed run's
+// view): given the run's particles, the velocities its last force evaluation
+// saw, its forces and contact histories, it steps on exactly as the run does,
+// which is what its checkpoint must do; histories that do not fit are
+// refused. (Where a re-evaluation changes a spring in its last bits, as after
+// splits, the owners' histories are what keeps it exact:
+// tests/parallel/test_run.cpp fails without them.)
+TEST(World, ShowRunOfStepsOnAsTheRunDoes) {
+  WorldDef<2> def;
+  def.gravity = Vec<2>(0.0, -9.81);
+  def.contact.kn = 1e5;
+  def.contact.ks = 0.8e5;
+  def.contact.friction = 0.05;  // low: many node contacts slide, whose springs a re-evaluation caps again
+  World<2> run(def), view(def);
+  addBox(run, 0.3);
+  addBox(view, 0.3);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int k = 0; k < 10; ++k) {
+    ParticleDef<2> p;
+    p.shape = grain<2>(std::uint64_t(k % 3 + 1), 0.08);
+    p.position = Vec<2>(0.06 + 0.18 * u(rng), 0.05 + 0.08 * k);
+    p.velocity = 4.0 * Vec<2>(u(rng) - 0.5, -u(rng));
+    run.addParticle(p);
+  }
+  for (int s = 0; s < 1500; ++s) run.step();
+  // The last step by halves, keeping the velocities its forces are evaluated with.
+  run.beginStep();
+  const Particles<2>& p = run.particles();
+  const std::vector<Vec<2>> halfVelocity = p.velocity;
+  const std::vector<Spin<2>> halfSpin = p.angularVelocity;
+  run.finishStep();
+  ASSERT_GT(run.contacts().nodeContacts().size(), 0u);
+
+  std::vector<ContactSolver<2>::ParticleHistory> histories;
+  std::vector<std::uint64_t> ids;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    view.addParticle(p.definition(i));
+    histories.push_back(run.contacts().particleHistory(p.id[i]));
+    ids.push_back(p.id[i]);
+  }
+  std::vector<const ContactSolver<2>::ParticleHistory*> pointers;
+  for (const auto& h : histories) pointers.push_back(&h);
+  view.adoptHistories(ids, pointers);
+  std::vector<World<2>::ShownParticle> shown(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    shown[i] = {halfVelocity[i], halfSpin[i], p.force[i], p.torque[i], &histories[i]};
+  }
+  view.showRunOf(run, shown);
+  EXPECT_TRUE(view.contactsCurrent());
+  EXPECT_EQ(view.time(), run.time());
+  EXPECT_EQ(view.steps(), run.steps());
+  EXPECT_EQ(view.contacts().nodeContacts().size(), run.contacts().nodeContacts().size());
+  EXPECT_EQ(stateHash(view.particles()), stateHash(run.particles()));
+  for (int s = 0; s < 200; ++s) {
+    run.step();
+    view.step();
+  }
+  EXPECT_EQ(stateHash(view.particles()), stateHash(run.particles()));
+
+  // Histories of another state do not fit: refused, with the reason.
+  shown[0].history = &histories[1];
+  histories[1].pairs.push_back({999, 998, 0, 0});
+  EXPECT_THROW(view.showRunOf(run, shown), std::logic_error);
+  shown.pop_back();
+  EXPECT_THROW(view.showRunOf(run, shown), std::invalid_argument);
 }

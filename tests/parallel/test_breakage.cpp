@@ -186,5 +186,16 @@ TEST(DistributedBreakage, ThreeGrains3DEqualsSerialBitForBit) {
   EXPECT_GT(c.fines, 0u);
 }
 
+// A packing of 500 grains in 3D (tests/parallel/packing_500_3d.toml) crushed
+// by a platen from the top layer, 2000 steps: grains break on more than one
+// rank, and the run equals the one-process run bit for bit.
+TEST(DistributedBreakage, PackingOf500Grains3DEqualsSerialBitForBit) {
+  const std::string file = std::string(LSDEM_SOURCE_DIR) + "/tests/parallel/packing_500_3d.toml";
+  const auto scene = std::get<io::SceneDef<3>>(io::readScene(file));
+  const Counts c = expectEqualToSerial(scene, 2000, 2);
+  EXPECT_GE(c.breakages, 10u);
+  EXPECT_GE(c.particles, 510u);
+}
+
 }  // namespace
 }  // namespace lsdem

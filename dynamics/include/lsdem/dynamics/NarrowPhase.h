@@ -442,14 +442,19 @@ class ContactSolver {
   /// compute(). The records of the last compute() are stale afterwards
   /// (compute() again before reading them).
   void adoptHistory(std::uint64_t id, const ParticleHistory& history);
-  /// @brief Writes `history` (particleHistory() of particle `id` in a solver
-  /// of the same law) over this solver's own history of `id`'s pairs, where
-  /// its last compute() found the same pairs with the same node contacts (a
-  /// re-evaluation of the state the history was taken from): the node
-  /// records, shear springs and rest overlaps become those of `history` bit
-  /// for bit, and the records stay current. Returns false, changing nothing,
-  /// when the pairs or node contacts differ.
-  bool overwriteHistory(std::uint64_t id, const ParticleHistory& history);
+  /// @brief adoptHistory for several particles at once (`ids[k]` takes
+  /// `histories[k]`), in time linear in the histories: a pair whose two
+  /// particles are both adopted is taken once, from the first that holds it.
+  /// @note Throws std::invalid_argument when the spans differ in length.
+  void adoptHistories(std::span<const std::uint64_t> ids, std::span<const ParticleHistory* const> histories);
+  /// @brief Writes `histories` (particleHistory() of particles `ids` in
+  /// solvers of the same law) over this solver's own history of their pairs,
+  /// where its last compute() found the same pairs with the same node
+  /// contacts (a re-evaluation of the state the histories were taken from):
+  /// the node records, shear springs and rest overlaps become theirs bit for
+  /// bit, and the records stay current. Linear in the histories. Returns
+  /// false, changing nothing, when the pairs or node contacts differ.
+  bool overwriteHistories(std::span<const std::uint64_t> ids, std::span<const ParticleHistory* const> histories);
 
   /// @brief Writes the output of the last compute() (records, shear history,
   /// totals, loads): what the next compute() and the readers of this step need.
@@ -484,6 +489,10 @@ class ContactSolver {
   // (filled as gather() copies the records; rebuilt from them on loadState()).
   detail::Records<std::uint32_t> historyKeys_;
   void buildHistoryKeys();
+  // Appends `history`'s pairs to the history (none of them held already) and sorts it.
+  void appendHistory(const ParticleHistory& history);
+  // The pairs of `histories` in one history, a pair two of them hold once.
+  static ParticleHistory mergedHistory(std::span<const ParticleHistory* const> histories);
   void buildHistoryKeysFor(std::size_t count);  // historyKeys_ of the first `count` records of nodes_
   // Separation certificates: a cache, not saved with the state (a restored
   // run makes them afresh, with the same contacts). Two slots per candidate

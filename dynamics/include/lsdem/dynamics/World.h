@@ -233,6 +233,13 @@ class World {
     contacts_.adoptHistory(id, history);
     forcesValid_ = false;
   }
+  /// @brief adoptHistory for several particles at once
+  /// (ContactSolver::adoptHistories: linear in the histories).
+  void adoptHistories(std::span<const std::uint64_t> ids,
+                      std::span<const typename ContactSolver<D>::ParticleHistory* const> histories) {
+    contacts_.adoptHistories(ids, histories);
+    forcesValid_ = false;
+  }
   /// @brief Marks particle `index` as a ghost (or not): a mirror of a
   /// particle another rank of a distributed run owns and moves. Pairs of two
   /// ghosts are not computed (no force they give acts on a particle this
