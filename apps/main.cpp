@@ -18,6 +18,7 @@
 #include <thread>
 #endif
 
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
@@ -71,7 +72,10 @@ struct Mpi {
     if (sameOnEveryRank && rank != 0) std::this_thread::sleep_for(std::chrono::seconds(5));
     std::string line = message;
     if (line.rfind("lsdem: ", 0) == 0) line = line.substr(7);
-    std::cerr << "lsdem: rank " << rank << " of " << ranks << ": " << line << std::endl;
+    // One write, so that mpirun's own lines cannot split it.
+    line = "lsdem: rank " + std::to_string(rank) + " of " + std::to_string(ranks) + ": " + line + "\n";
+    std::fwrite(line.data(), 1, line.size(), stderr);
+    std::fflush(stderr);
     MPI_Abort(MPI_COMM_WORLD, code);
 #endif
     return code;

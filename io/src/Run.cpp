@@ -30,6 +30,10 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
+// Whether this process writes the run's outputs: a one-process run does; a
+// distributed run's engine says which process does.
+bool writesOutputs(const RunOptions& options) { return !options.engine || options.engine->writesOutputs; }
+
 template <int D>
 class Runner {
  public:
@@ -47,7 +51,7 @@ class Runner {
     // its own (part_) and records from sw_, the view of the whole run; the
     // others step sw_.
     const RunEngineFactory* engine = options_.engine.get();
-    writes_ = !engine || engine->writesOutputs;
+    writes_ = writesOutputs(options_);
     if (engine && writes_) {
       part_ = buildWorld(scene_);
       // The view takes the part's particles as they are (placing them can be
@@ -313,8 +317,7 @@ RunResult runOf(SceneDef<D> scene, std::string sceneText, const RunOptions& opti
       !options.resumeDir.empty() ? options.resumeDir : (!options.outDir.empty() ? options.outDir : scene.output.dir);
   // A folder that exists is claimed before the world is built: another run
   // in it is refused at once.
-  const bool writes = !options.engine || options.engine->writesOutputs;
-  if (writes && !lock && fs::is_directory(out)) {
+  if (writesOutputs(options) && !lock && fs::is_directory(out)) {
     lock = std::make_unique<OutputLock>(out);
     checkOutputFolder(out, options.overwrite);
   }
@@ -332,8 +335,7 @@ RunResult runScene(const RunOptions& options) {
   // A resumed run holds its folder from the start: no other run may write
   // its checkpoint while it is read.
   std::unique_ptr<OutputLock> lock;
-  const bool writes = !options.engine || options.engine->writesOutputs;
-  if (writes && !options.resumeDir.empty() && fs::is_directory(options.resumeDir)) {
+  if (writesOutputs(options) && !options.resumeDir.empty() && fs::is_directory(options.resumeDir)) {
     lock = std::make_unique<OutputLock>(options.resumeDir);
   }
   const std::string scenePath = options.resumeDir.empty() ? options.scene : resumeScene(options);
