@@ -426,6 +426,17 @@ void World<D>::setMotion(std::size_t index, const Vec<D>& position, const Orient
 }
 
 template <int D>
+void World<D>::setBoundaryLoads(const BoundaryLoads<D>& loads) {
+  if (loads.planeForce.size() != planes_.size() || loads.planeTorque.size() != planes_.size() ||
+      loads.toolForce.size() != tools_.size() || loads.toolTorque.size() != tools_.size()) {
+    throw std::invalid_argument("World::setBoundaryLoads: loads for " + std::to_string(loads.planeForce.size()) +
+                                " planes and " + std::to_string(loads.toolForce.size()) + " tools, the world has " +
+                                std::to_string(planes_.size()) + " and " + std::to_string(tools_.size()));
+  }
+  loads_ = loads;
+}
+
+template <int D>
 void World<D>::recordRemoval(const RemovedParticle& r, double kineticEnergy) {
   removed_.push_back(r);
   energy_.removedEnergy += kineticEnergy;
@@ -769,6 +780,10 @@ void World<D>::showRunOf(const World& run, std::span<const ShownParticle> shown)
   dt_ = run.dt_;
   dtChanges_ = run.dtChanges_;
   toolPoses_ = run.toolPoses_;
+  // A servo platen's state (its travel and speed) is the run's.
+  for (std::size_t k = 0; k < tools_.size(); ++k) {
+    if (std::holds_alternative<ServoPlaten<D>>(run.tools_[k].motion)) tools_[k].motion = run.tools_[k].motion;
+  }
   planes_ = run.planes_;
   forcesValid_ = false;
   energyCurrent_ = false;

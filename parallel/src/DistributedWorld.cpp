@@ -157,10 +157,7 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
     throw std::invalid_argument("a distributed run does not support density scaling yet (docs/parallel.md)");
   }
   for (const auto& tool : world_.tools()) {
-    if (std::holds_alternative<dynamics::ServoPlaten<D>>(tool.motion)) {
-      throw std::invalid_argument("a distributed run does not support the servo platen '" + tool.name +
-                                  "' yet (docs/parallel.md)");
-    }
+    servo_ = servo_ || std::holds_alternative<dynamics::ServoPlaten<D>>(tool.motion);
   }
 
   const dynamics::Particles<D>& p = world_.particles();
@@ -200,6 +197,8 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   }
   if (coordinated_) world_.setCoordinator(this);
   if (resumed) world_.keepForces();
+  // A checkpoint's loads are the run's; a new run's are summed at its first step.
+  loadsReduced_ = resumed;
 }
 
 template <int D>
@@ -308,6 +307,9 @@ std::uint64_t DistributedWorld<D>::globalCount() const {
 
 template <int D>
 void DistributedWorld<D>::step() {
+  // A servo platen moves by the load of the whole run (boundaryLoads), read
+  // at the opening of the step from the contacts of its state.
+  if (servo_ && !loadsReduced_) reduceLoads();
   world_.beginStep();
   exchange();
   // The velocities the step evaluates its forces with (half-step ones), for
@@ -316,6 +318,7 @@ void DistributedWorld<D>::step() {
   forceVelocity_.assign(p.velocity.begin(), p.velocity.end());
   forceSpin_.assign(p.angularVelocity.begin(), p.angularVelocity.end());
   world_.finishStep();
+  if (servo_) reduceLoads();
   ++stats_.steps;
   if (def_.rebalanceImbalance > 0.0 && def_.rebalanceEvery > 0 && stats_.steps % def_.rebalanceEvery == 0) rebalance();
 }
@@ -510,64 +513,69 @@ void DistributedWorld<D>::rebalance() {
 
 template <int D>
 dynamics::BoundaryLoads<D> DistributedWorld<D>::boundaryLoads() const {
-  dynamics::BoundaryLoads<D> loads = world_.boundaryLoads();
-  // Each rank's part (its own particles' contacts only), summed in rank order on every rank.
-  // The world's loads count ghosts too: recount from the records of owned particles.
-  dynamics::BoundaryLoads<D> own;
-  own.planeForce.assign(loads.planeForce.size(), Vec<D>::Zero());
-  own.planeTorque.assign(loads.planeTorque.size(), dynamics::Rotation<D>::zeroSpin());
-  own.toolForce.assign(loads.toolForce.size(), Vec<D>::Zero());
-  own.toolTorque.assign(loads.toolTorque.size(), dynamics::Rotation<D>::zeroSpin());
+  // The records of every rank's own particles on planes and tools (a ghost's
+  // are its owner's), summed as one world sums them (ContactSolver::
+  // accumulate): each boundary's records in the order of their particles,
+  // here ascending ids (one world's order while it holds its particles in id
+  // order: no splits or removals yet; else the sum differs at round-off).
+  struct LoadRecord {
+    ParticleId id = 0;
+    std::uint32_t boundary = 0;  // a plane's index, or the planes' count + a tool's
+    Vec<D> force = Vec<D>::Zero();
+    dynamics::Spin<D> torque = dynamics::Rotation<D>::zeroSpin();
+  };
+  const dynamics::Particles<D>& p = world_.particles();
+  const std::size_t planes = world_.planes().size();
+  const std::size_t tools = world_.tools().size();
   const auto records = world_.contacts().pairContacts();
   const std::size_t particlePairs = world_.contacts().particleContacts().size();
-  std::size_t k = particlePairs;
-  for (; k < records.size(); ++k) {
+  const std::size_t planePairs = world_.contacts().planeContacts().size();
+  std::vector<LoadRecord> mine;
+  for (std::size_t k = particlePairs; k < records.size(); ++k) {
     const auto& rec = records[k];
     if (world_.isGhost(rec.a)) continue;
-    if (k < particlePairs + world_.contacts().planeContacts().size()) {
-      own.planeForce[rec.b] -= rec.force;
-      own.planeTorque[rec.b] += rec.torqueB;
+    const std::size_t boundary = k < particlePairs + planePairs ? rec.b : planes + rec.b;
+    mine.push_back({p.id[rec.a], std::uint32_t(boundary), rec.force, rec.torqueB});
+  }
+  StateWriter w;
+  putRaw(w, mine);
+  std::vector<LoadRecord> all;
+  for (const std::vector<char>& bytes : gatherBytes(w.bytes(), kAllRanks)) {
+    StateReader r(bytes.data(), bytes.size());
+    std::vector<LoadRecord> part;
+    getRaw(r, part);
+    all.insert(all.end(), part.begin(), part.end());
+  }
+  // (A particle's records come from one rank, in its order.)
+  std::stable_sort(all.begin(), all.end(), [](const LoadRecord& a, const LoadRecord& b) { return a.id < b.id; });
+  dynamics::BoundaryLoads<D> loads;
+  loads.planeForce.assign(planes, Vec<D>::Zero());
+  loads.planeTorque.assign(planes, dynamics::Rotation<D>::zeroSpin());
+  loads.toolForce.assign(tools, Vec<D>::Zero());
+  loads.toolTorque.assign(tools, dynamics::Rotation<D>::zeroSpin());
+  for (const LoadRecord& rec : all) {
+    if (rec.boundary < planes) {
+      loads.planeForce[rec.boundary] -= rec.force;
+      loads.planeTorque[rec.boundary] += rec.torque;
     } else {
-      own.toolForce[rec.b] -= rec.force;
-      own.toolTorque[rec.b] += rec.torqueB;
+      loads.toolForce[rec.boundary - planes] -= rec.force;
+      loads.toolTorque[rec.boundary - planes] += rec.torque;
     }
   }
-  std::vector<double> flat;
-  const auto put = [&](const auto& v) {
-    for (const auto& x : v) {
-      if constexpr (std::is_arithmetic_v<std::decay_t<decltype(x)>>) {
-        flat.push_back(x);
-      } else {
-        for (int a = 0; a < int(x.size()); ++a) flat.push_back(x[a]);
-      }
-    }
-  };
-  put(own.planeForce);
-  put(own.planeTorque);
-  put(own.toolForce);
-  put(own.toolTorque);
-  std::vector<double> all(flat.size() * std::size_t(ranks_));
-  check(MPI_Allgather(flat.data(), int(flat.size()), MPI_DOUBLE, all.data(), int(flat.size()), MPI_DOUBLE, comm_),
-        "Allgather");
-  std::vector<double> sum(flat.size(), 0.0);
-  for (int q = 0; q < ranks_; ++q) {
-    for (std::size_t k2 = 0; k2 < flat.size(); ++k2) sum[k2] += all[std::size_t(q) * flat.size() + k2];
+  return loads;
+}
+
+template <int D>
+void DistributedWorld<D>::reduceLoads() {
+  // After a split on another rank, this rank's contacts wait for its next
+  // evaluation (updateView); the loads are those of the contacts now.
+  if (!world_.contactsCurrent()) {
+    world_.refreshContacts();
+    forceVelocity_.clear();
+    forceSpin_.clear();
   }
-  std::size_t at = 0;
-  const auto get = [&](auto& v) {
-    for (auto& x : v) {
-      if constexpr (std::is_arithmetic_v<std::decay_t<decltype(x)>>) {
-        x = sum[at++];
-      } else {
-        for (int a = 0; a < int(x.size()); ++a) x[a] = sum[at++];
-      }
-    }
-  };
-  get(own.planeForce);
-  get(own.planeTorque);
-  get(own.toolForce);
-  get(own.toolTorque);
-  return own;
+  world_.setBoundaryLoads(boundaryLoads());
+  loadsReduced_ = true;
 }
 
 template <int D>
@@ -683,19 +691,30 @@ void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornPartic
 
 template <int D>
 std::vector<std::vector<char>> DistributedWorld<D>::gatherBytes(const std::vector<char>& bytes, int root) const {
+  const bool everyRank = root == kAllRanks;
   int count = int(bytes.size());
   std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
-  check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, comm_), "Gather");
+  if (everyRank) {
+    check(MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_), "Allgather");
+  } else {
+    check(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, root, comm_), "Gather");
+  }
   int total = 0;
   for (int q = 0; q < ranks_; ++q) {
     offsets[std::size_t(q)] = total;
     total += counts[std::size_t(q)];
   }
-  std::vector<char> all(rank_ == root ? std::size_t(total) : 0);
-  check(MPI_Gatherv(bytes.data(), count, MPI_CHAR, all.data(), counts.data(), offsets.data(), MPI_CHAR, root, comm_),
-        "Gatherv");
+  std::vector<char> all(everyRank || rank_ == root ? std::size_t(total) : 0);
+  if (everyRank) {
+    check(MPI_Allgatherv(bytes.data(), count, MPI_CHAR, all.data(), counts.data(), offsets.data(), MPI_CHAR, comm_),
+          "Allgatherv");
+  } else {
+    check(MPI_Gatherv(bytes.data(), count, MPI_CHAR, all.data(), counts.data(), offsets.data(), MPI_CHAR, root,
+                      comm_),
+          "Gatherv");
+  }
   std::vector<std::vector<char>> parts;
-  if (rank_ != root) return parts;
+  if (!everyRank && rank_ != root) return parts;
   for (int q = 0; q < ranks_; ++q) {
     const auto at = all.begin() + offsets[std::size_t(q)];
     parts.emplace_back(at, at + counts[std::size_t(q)]);

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <random>
 #include <string>
+#include <variant>
 #include <vector>
 
 namespace lsdem {
@@ -57,8 +58,10 @@ std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes(double d) {
 // A box of planes (floor at height 0, walls at 0 and `width` across every
 // other axis) and a lattice of grains above the floor with random offsets,
 // orientations and velocities (the same on every rank: a fixed seed).
+// `servo`: a plate above the bed, as wide as the box, pressed down by a servo
+// to a force it reaches within the run.
 template <int D>
-void build(World<D>& w, int perSide, int layers) {
+void build(World<D>& w, int perSide, int layers, bool servo = false) {
   const double d = 0.01;
   const double pitch = 1.1 * d;
   const double width = perSide * pitch;
@@ -75,6 +78,24 @@ void build(World<D>& w, int perSide, int layers) {
     hi.plane.normal = -Vec<D>::Unit(a);
     w.addPlane(lo);
     w.addPlane(hi);
+  }
+  if (servo) {
+    geometry::ShapeDef<D> plate;
+    plate.kind = geometry::ShapeKind::Box;
+    plate.halfExtents = Vec<D>::Constant(0.5 * width);
+    plate.halfExtents[up] = 0.5 * d;
+    plate.spacing = 0.25 * d;
+    dynamics::ServoPlatenDef<D> s;
+    s.position = Vec<D>::Constant(0.5 * width);
+    s.position[up] = (layers + 0.2) * pitch + d;  // just above the top layer
+    s.targetForce = D == 2 ? 300.0 : 3.0;
+    s.gain = 0.002;
+    s.maxSpeed = 1.0;
+    dynamics::ToolDef<D> tool;
+    tool.name = "servo";
+    tool.shape = geometry::buildShape(plate);
+    tool.motion = dynamics::ServoPlaten<D>(s);
+    w.addTool(tool);
   }
   const auto pool = shapes<D>(d);
   std::mt19937_64 rng(12345);
@@ -120,12 +141,12 @@ WorldDef<D> worldDef() {
 // Runs `steps` steps serially and distributed; every rank checks that the
 // gathered state equals the serial one bit for bit.
 template <int D>
-void expectEqualToSerial(int perSide, int layers, std::uint64_t steps) {
+void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, bool servo = false) {
   MPI_Comm comm = MPI_COMM_WORLD;
   World<D> serial(worldDef<D>());
-  build(serial, perSide, layers);
+  build(serial, perSide, layers, servo);
   World<D> local(worldDef<D>());
-  build(local, perSide, layers);
+  build(local, perSide, layers, servo);
   parallel::DistributedDef def;
   def.rebalanceEvery = 100;
   def.rebalanceImbalance = 1.05;
@@ -178,18 +199,39 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps) {
     EXPECT_GT(rebalances, 0u);
   }
 
-  // The boundary loads, summed over the ranks, are the serial ones (to round-off: another order of the sum).
+  // The boundary loads of the whole run, on every rank, are the serial ones
+  // bit for bit (summed in the serial order: its particles are in id order),
+  // and so is what the servo made of them.
   const auto loads = dist.boundaryLoads();
   const auto& ref = serial.boundaryLoads();
   ASSERT_EQ(loads.planeForce.size(), ref.planeForce.size());
   for (std::size_t j = 0; j < ref.planeForce.size(); ++j) {
-    EXPECT_LE((loads.planeForce[j] - ref.planeForce[j]).norm(), 1e-9 * (1.0 + ref.planeForce[j].norm())) << "plane " << j;
+    EXPECT_EQ(loads.planeForce[j], ref.planeForce[j]) << "plane " << j;
+    EXPECT_EQ(loads.planeTorque[j], ref.planeTorque[j]) << "plane " << j;
+  }
+  ASSERT_EQ(loads.toolForce.size(), ref.toolForce.size());
+  for (std::size_t j = 0; j < ref.toolForce.size(); ++j) {
+    EXPECT_EQ(loads.toolForce[j], ref.toolForce[j]) << "tool " << j;
+    EXPECT_EQ(loads.toolTorque[j], ref.toolTorque[j]) << "tool " << j;
+    EXPECT_EQ(local.boundaryLoads().toolForce[j], ref.toolForce[j]) << "tool " << j;
+  }
+  if (servo) {
+    const auto& platen = std::get<dynamics::ServoPlaten<D>>(serial.tools()[0].motion);
+    const auto& mine = std::get<dynamics::ServoPlaten<D>>(local.tools()[0].motion);
+    EXPECT_EQ(mine.displacement(), platen.displacement());
+    EXPECT_EQ(mine.speed(), platen.speed());
+    // The servo pressed on the bed and was slowed by it: its load counted.
+    EXPECT_GT(-ref.toolForce[0][1], 0.2 * platen.def().targetForce);
+    EXPECT_LT(std::abs(platen.speed()), 0.5 * platen.def().maxSpeed);
   }
 }
 
 TEST(DistributedWorld, TwoDimensionalPileEqualsSerialBitForBit) { expectEqualToSerial<2>(12, 8, 2000); }
 
 TEST(DistributedWorld, ThreeDimensionalPileEqualsSerialBitForBit) { expectEqualToSerial<3>(5, 4, 2000); }
+
+// A servo platen moves by the load of the whole run, the same on every rank.
+TEST(DistributedWorld, PileUnderServoPlatenEqualsSerialBitForBit) { expectEqualToSerial<2>(12, 8, 2000, true); }
 
 // The RCB cuts give every part its share of the weight and the owner of a
 // point is the part whose box holds it.

@@ -416,6 +416,11 @@ class World {
   const std::vector<std::string>& planeNames() const { return planeNames_; }
   /// @brief Loads of the particles on planes and tools from the last step.
   const BoundaryLoads<D>& boundaryLoads() const { return loads_; }
+  /// @brief Replaces the loads of the last step: a distributed run sets the
+  /// loads summed over its ranks (parallel/DistributedWorld.h), which a servo
+  /// platen reads at the next step. The sizes must be those of the planes
+  /// and tools.
+  void setBoundaryLoads(const BoundaryLoads<D>& loads);
   /// @brief The energy budget. Its kinetic and elastic energy are those of
   /// the state now, worked out at the first read after a change (a step, a
   /// change of the particles); the other terms are booked as the steps go.

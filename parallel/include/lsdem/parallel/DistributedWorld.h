@@ -46,10 +46,14 @@
 /// gatherBreakageEvents() (BreakageLog.h) give the run's fines, mass balance
 /// and breakage log.
 ///
+/// Servo platens move by the load of the whole run: after each step every
+/// rank sums the records of all ranks' own particles on the planes and tools
+/// in the order one world does (boundaryLoads) and gives the sum to its
+/// world (World::setBoundaryLoads), which the servo reads at the next step.
+///
 /// Not yet distributed (the constructor refuses them with the reason):
 /// effects that change the particle set other than breakage (outflow,
-/// feeds), density scaling, servo platens (a servo reads the boundary load,
-/// which is split over the ranks). Gravity and damping work. The energy
+/// feeds), density scaling. Gravity and damping work. The energy
 /// ledger of a rank's world counts its ghosts as well and is not a global
 /// budget; so do a breakage event's fragment springs (its energy check).
 
@@ -130,8 +134,10 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   std::uint64_t globalCount() const;
   const Decomposition<D>& decomposition() const { return decomposition_; }
   const ExchangeStats& stats() const { return stats_; }
-  /// @brief The loads of the particles on planes and tools, summed over the
-  /// ranks in rank order (collective): the same numbers on every rank.
+  /// @brief The loads of the particles on planes and tools of the whole run
+  /// (collective): the same numbers on every rank, summed in the order one
+  /// world sums them while its particles are in id order (bit for bit the
+  /// serial loads; at round-off after splits).
   dynamics::BoundaryLoads<D> boundaryLoads() const;
   /// @brief Every particle's state, sorted by id, on rank `root` (empty on
   /// the others; collective).
@@ -184,7 +190,12 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   double reach(std::size_t index) const;
   // Local particle `index`'s bounding radius (the tricubic one when larger).
   double radius(std::size_t index) const;
-  // Every rank's `bytes`, in rank order, on rank `root` (empty on the others; collective).
+  // The run's loads (boundaryLoads) into this rank's world, for its servo
+  // platens (collective).
+  void reduceLoads();
+  // Every rank's `bytes`, in rank order, on rank `root` (empty on the
+  // others), or on every rank for kAllRanks (collective).
+  static constexpr int kAllRanks = -1;
   std::vector<std::vector<char>> gatherBytes(const std::vector<char>& bytes, int root) const;
   // Local particle `index`'s cost in the decomposition: its surface nodes (at least 1).
   double weight(std::size_t index) const;
@@ -196,6 +207,8 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   Decomposition<D> decomposition_;
   double largestRadius_ = 0.0;       // r_max
   double skin_ = 0.0;
+  bool servo_ = false;               // a tool is a servo platen: its load is the run's (reduceLoads)
+  bool loadsReduced_ = false;        // the world's loads are the run's for its contacts now
   bool coordinated_ = false;         // the world changes its particle set (breakage): world_.setCoordinator(this)
   dynamics::ParticleId nextId_ = 0;  // the run's next free global id (coordinated runs)
   // Shapes by content hash, and the hash of each shape this rank holds.
