@@ -1,6 +1,7 @@
 #include "lsdem/dynamics/NarrowPhase.h"
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -1171,10 +1172,16 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       for (std::size_t j = 0; j < tools.size(); ++j) {
         const ToolPose<D>& tool = tools[j];
         const Shape<D>& ts = *tool.shape;
-        // Its certificate's slot: after the pairs', by particle, then tool.
+        // Its certificate's slot: after the pairs', by particle, then tool
+        // (made, and so cleared, for every walk, made or skipped).
         CertificateKey<D> key;
         if (certify) key = certificateKey(2 * pairTasks + std::size_t(i) * tools.size() + j, p.id[std::size_t(i)],
                                           kToolTag | std::uint64_t(j));
+        // (A view: only the tool contacts its run found; limitToolPairs.)
+        if (toolPairs_ && !std::binary_search(toolPairs_->begin(), toolPairs_->end(),
+                                              std::array<std::uint64_t, 2>{p.id[std::size_t(i)], j})) {
+          continue;
+        }
         // Bounding spheres apart: no node can touch.
         const double reach = s.boundingRadius() + lookupRadius(ts, law_.interpolation);
         if ((tool.position - x).squaredNorm() > reach * reach) continue;
@@ -1453,17 +1460,35 @@ std::size_t ContactSolver<D>::recordBytes() const {
 
 template <int D>
 typename ContactSolver<D>::ParticleHistory ContactSolver<D>::particleHistory(std::uint64_t id) const {
-  ParticleHistory out;
-  for (const HistoryPair& h : history_) {
-    if (h.idA != id && h.other != id) continue;
+  return std::move(particleHistories(std::span<const std::uint64_t>(&id, 1)).front());
+}
+
+template <int D>
+std::vector<typename ContactSolver<D>::ParticleHistory> ContactSolver<D>::particleHistories(
+    std::span<const std::uint64_t> ids) const {
+  if (std::adjacent_find(ids.begin(), ids.end(), std::greater_equal<>()) != ids.end()) {
+    throw std::invalid_argument("contact solver: particleHistories() needs ids in strictly ascending order");
+  }
+  std::vector<ParticleHistory> out(ids.size());
+  // Each pair of the history goes to both of its particles among `ids` (the
+  // other key of a plane or tool pair is no particle id), in history order,
+  // as particleHistory() takes them.
+  const auto add = [&](std::uint64_t id, const HistoryPair& h) {
+    const auto it = std::lower_bound(ids.begin(), ids.end(), id);
+    if (it == ids.end() || *it != id) return;
+    ParticleHistory& to = out[std::size_t(it - ids.begin())];
     HistoryPair copy = h;
-    copy.first = std::uint32_t(out.nodes.size());
-    out.pairs.push_back(copy);
-    out.nodes.insert(out.nodes.end(), nodes_.begin() + h.first, nodes_.begin() + h.first + h.count);
-    if (!shear_.empty()) out.shear.insert(out.shear.end(), shear_.begin() + h.first, shear_.begin() + h.first + h.count);
+    copy.first = std::uint32_t(to.nodes.size());
+    to.pairs.push_back(copy);
+    to.nodes.insert(to.nodes.end(), nodes_.begin() + h.first, nodes_.begin() + h.first + h.count);
+    if (!shear_.empty()) to.shear.insert(to.shear.end(), shear_.begin() + h.first, shear_.begin() + h.first + h.count);
     if (!preload_.empty()) {
-      out.preload.insert(out.preload.end(), preload_.begin() + h.first, preload_.begin() + h.first + h.count);
+      to.preload.insert(to.preload.end(), preload_.begin() + h.first, preload_.begin() + h.first + h.count);
     }
+  };
+  for (const HistoryPair& h : history_) {
+    add(h.idA, h);
+    if (h.other != h.idA) add(h.other, h);
   }
   return out;
 }

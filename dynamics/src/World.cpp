@@ -673,14 +673,20 @@ void World<D>::computeForces(double dtClosing) {
   t0 = Clock::now();
   const double forceTime = dtClosing > 0.0 ? time_ + dtClosing : time_;
   contacts_.setFrictionActive(forceTime >= def_.contact.frictionFrom);
-  // With ghosts (a distributed run), the pairs of two ghosts are left out.
+  // With ghosts (a distributed run), the pairs of two ghosts are left out;
+  // a view (showRunOf) evaluates only the pairs its run found touching.
   const std::vector<std::array<std::uint32_t, 2>>* pairs = &broad_.pairs();
-  if (!ghost_.empty()) {
-    pairsWithoutGhostPairs_.clear();
+  if (!ghost_.empty() || onlyPairs_) {
+    evaluatedPairs_.clear();
     for (const auto& pair : broad_.pairs()) {
-      if (!(ghost_[pair[0]] && ghost_[pair[1]])) pairsWithoutGhostPairs_.push_back(pair);
+      if (!ghost_.empty() && ghost_[pair[0]] && ghost_[pair[1]]) continue;
+      if (onlyPairs_) {
+        const ParticleId a = particles_.id[pair[0]], b = particles_.id[pair[1]];
+        if (!std::binary_search(onlyPairs_->begin(), onlyPairs_->end(), std::array<ParticleId, 2>{std::min(a, b), std::max(a, b)})) continue;
+      }
+      evaluatedPairs_.push_back(pair);
     }
-    pairs = &pairsWithoutGhostPairs_;
+    pairs = &evaluatedPairs_;
   }
   contacts_.compute(particles_, *pairs, planes_, toolPoses_, dtClosing > 0.0 ? dtClosing : dt_,
                     dtClosing > 0.0 || steps_ == 0);
@@ -764,7 +770,9 @@ void World<D>::refreshContacts() {
 }
 
 template <int D>
-void World<D>::showRunOf(const World& run, std::span<const ShownParticle> shown) {
+void World<D>::showRunOf(const World& run, std::span<const ShownParticle> shown,
+                         std::span<const std::array<ParticleId, 2>> touching,
+                         std::span<const std::array<ParticleId, 2>> touchingTools) {
   if (run.tools_.size() != tools_.size() || run.planes_.size() != planes_.size() ||
       run.effects_.size() != effects_.size()) {
     throw std::invalid_argument("World::showRunOf: the run has other tools, planes or effects than this world");
@@ -772,6 +780,9 @@ void World<D>::showRunOf(const World& run, std::span<const ShownParticle> shown)
   if (shown.size() != particles_.size()) {
     throw std::invalid_argument("World::showRunOf: " + std::to_string(shown.size()) + " particles shown, " +
                                 std::to_string(particles_.size()) + " held");
+  }
+  if (!std::is_sorted(touching.begin(), touching.end()) || !std::is_sorted(touchingTools.begin(), touchingTools.end())) {
+    throw std::invalid_argument("World::showRunOf: the touching pairs are not in ascending order");
   }
   // The critical step of the whole set (particles came and went), then the run's step.
   if (!particles_.empty()) updateTimeStep(false);
@@ -795,6 +806,20 @@ void World<D>::showRunOf(const World& run, std::span<const ShownParticle> shown)
   }
   particles_.velocity.swap(velocity);
   particles_.angularVelocity.swap(spin);
+  // Only the pairs the run found touching, for this evaluation.
+  struct Limit {
+    World& w;
+    Limit(World& world, std::span<const std::array<ParticleId, 2>> pairs,
+          std::span<const std::array<ParticleId, 2>> tools)
+        : w(world) {
+      w.onlyPairs_ = pairs;
+      w.contacts_.limitToolPairs(tools);
+    }
+    ~Limit() {
+      w.onlyPairs_.reset();
+      w.contacts_.limitToolPairs(std::nullopt);
+    }
+  } limit(*this, touching, touchingTools);
   refreshContacts();
   particles_.velocity.swap(velocity);
   particles_.angularVelocity.swap(spin);

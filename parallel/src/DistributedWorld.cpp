@@ -809,6 +809,11 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (!world_.isGhost(i)) own.push_back(i);
   }
+  // By id: their histories are read in one pass.
+  std::sort(own.begin(), own.end(), [&](std::size_t a, std::size_t b) { return p.id[a] < p.id[b]; });
+  std::vector<std::uint64_t> ownIds;
+  for (std::size_t i : own) ownIds.push_back(p.id[i]);
+  const auto ownHistories = world_.contacts().particleHistories(ownIds);
   StateWriter w;
   if (rank_ != root) {
     putShapes(w, root, own);
@@ -819,14 +824,24 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
   // ones, or those now when the particles changed since (or never stepped).
   const bool halfStep = forceVelocity_.size() == p.size();
   w.put(std::uint64_t(own.size()));
-  for (std::size_t i : own) {
+  for (std::size_t k = 0; k < own.size(); ++k) {
+    const std::size_t i = own[k];
     putParticle(w, p, i, shapeHash(p.shape[i]));
-    putHistory<D>(w, world_.contacts().particleHistory(p.id[i]));
+    putHistory<D>(w, ownHistories[k]);
     w.put(halfStep ? forceVelocity_[i] : p.velocity[i]);
     w.put(halfStep ? forceSpin_[i] : p.angularVelocity[i]);
     w.put(p.force[i]);
     w.put(p.torque[i]);
   }
+  // The particle pairs in contact: the view evaluates only those (a pair
+  // with a ghost is computed, and sent, by both ranks).
+  std::vector<std::array<ParticleId, 2>> touching, touchingTools;
+  for (const auto& c : world_.contacts().particleContacts()) {
+    touching.push_back({std::min(p.id[c.a], p.id[c.b]), std::max(p.id[c.a], p.id[c.b])});
+  }
+  for (const auto& c : world_.contacts().toolContacts()) touchingTools.push_back({p.id[c.a], c.b});
+  putRaw(w, touching);
+  putRaw(w, touchingTools);
   const std::vector<std::vector<char>> parts = gatherBytes(w.bytes(), root);
   if (rank_ != root) return;
 
@@ -841,6 +856,8 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
     dynamics::Spin<D> torque;
   };
   std::vector<Entry> run;
+  touching.clear();  // (root's own are in its part)
+  touchingTools.clear();
   for (int q = 0; q < ranks_; ++q) {
     const std::vector<char>& bytes = parts[std::size_t(q)];
     StateReader r(bytes.data(), bytes.size());
@@ -856,6 +873,11 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
       e.torque = r.get<dynamics::Spin<D>>();
       run.push_back(std::move(e));
     }
+    std::vector<std::array<ParticleId, 2>> part;
+    getRaw(r, part);
+    touching.insert(touching.end(), part.begin(), part.end());
+    getRaw(r, part);
+    touchingTools.insert(touchingTools.end(), part.begin(), part.end());
     if (!r.atEnd()) throw std::runtime_error("MPI view: message from rank " + std::to_string(q) + " is malformed");
   }
   std::sort(run.begin(), run.end(), [](const Entry& a, const Entry& b) { return a.def.id < b.def.id; });
@@ -894,7 +916,11 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
     const auto e = byId(v.id[i]);
     shown[i] = {e->forceVelocity, e->forceSpin, e->force, e->torque, &e->history};
   }
-  view.showRunOf(world_, shown);
+  for (auto* list : {&touching, &touchingTools}) {
+    std::sort(list->begin(), list->end());
+    list->erase(std::unique(list->begin(), list->end()), list->end());
+  }
+  view.showRunOf(world_, shown, touching, touchingTools);
 }
 
 template class DistributedWorld<2>;

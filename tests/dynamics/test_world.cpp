@@ -590,6 +590,23 @@ TEST(World, ShowRunOfStepsOnAsTheRunDoes) {
     histories.push_back(run.contacts().particleHistory(p.id[i]));
     ids.push_back(p.id[i]);
   }
+  // In one pass, the same histories.
+  const auto all = run.contacts().particleHistories(ids);
+  ASSERT_EQ(all.size(), histories.size());
+  std::size_t pairsHeld = 0;
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    ASSERT_EQ(all[k].pairs.size(), histories[k].pairs.size()) << "particle " << ids[k];
+    ASSERT_EQ(all[k].nodes.size(), histories[k].nodes.size()) << "particle " << ids[k];
+    EXPECT_EQ(all[k].shear, histories[k].shear) << "particle " << ids[k];
+    for (std::size_t q = 0; q < all[k].pairs.size(); ++q) {
+      EXPECT_EQ(all[k].pairs[q].idA, histories[k].pairs[q].idA);
+      EXPECT_EQ(all[k].pairs[q].other, histories[k].pairs[q].other);
+      EXPECT_EQ(all[k].pairs[q].first, histories[k].pairs[q].first);
+    }
+    pairsHeld += all[k].pairs.size();
+  }
+  EXPECT_GT(pairsHeld, 0u);
+  EXPECT_THROW(run.contacts().particleHistories(std::vector<std::uint64_t>{2, 1}), std::invalid_argument);
   std::vector<const ContactSolver<2>::ParticleHistory*> pointers;
   for (const auto& h : histories) pointers.push_back(&h);
   view.adoptHistories(ids, pointers);
@@ -597,22 +614,43 @@ TEST(World, ShowRunOfStepsOnAsTheRunDoes) {
   for (std::size_t i = 0; i < p.size(); ++i) {
     shown[i] = {halfVelocity[i], halfSpin[i], p.force[i], p.torque[i], &histories[i]};
   }
-  view.showRunOf(run, shown);
+  // The pairs in contact, as the ranks of a distributed run send them.
+  std::vector<std::array<ParticleId, 2>> touching;
+  for (const auto& c : run.contacts().particleContacts()) {
+    touching.push_back({std::min(p.id[c.a], p.id[c.b]), std::max(p.id[c.a], p.id[c.b])});
+  }
+  std::sort(touching.begin(), touching.end());
+  ASSERT_GT(touching.size(), 2u);
+  ASSERT_LT(touching.size(), run.broadPhase().pairs().size()) << "the view must be spared pairs that do not touch";
+  view.showRunOf(run, shown, touching, {});
   EXPECT_TRUE(view.contactsCurrent());
   EXPECT_EQ(view.time(), run.time());
   EXPECT_EQ(view.steps(), run.steps());
   EXPECT_EQ(view.contacts().nodeContacts().size(), run.contacts().nodeContacts().size());
   EXPECT_EQ(stateHash(view.particles()), stateHash(run.particles()));
+  // A pair left out is not evaluated: a view shown the same run without it
+  // finds its histories do not fit.
+  {
+    World<2> partial(def);
+    addBox(partial, 0.3);
+    for (std::size_t i = 0; i < p.size(); ++i) partial.addParticle(p.definition(i));
+    partial.adoptHistories(ids, pointers);
+    const std::vector<std::array<ParticleId, 2>> without(touching.begin() + 1, touching.end());
+    EXPECT_THROW(partial.showRunOf(run, shown, without, {}), std::logic_error);
+  }
   for (int s = 0; s < 200; ++s) {
     run.step();
     view.step();
   }
   EXPECT_EQ(stateHash(view.particles()), stateHash(run.particles()));
 
+  // Pairs out of order are refused.
+  std::vector<std::array<ParticleId, 2>> reversed(touching.rbegin(), touching.rend());
+  EXPECT_THROW(view.showRunOf(run, shown, reversed, {}), std::invalid_argument);
   // Histories of another state do not fit: refused, with the reason.
   shown[0].history = &histories[1];
   histories[1].pairs.push_back({999, 998, 0, 0});
-  EXPECT_THROW(view.showRunOf(run, shown), std::logic_error);
+  EXPECT_THROW(view.showRunOf(run, shown, touching, {}), std::logic_error);
   shown.pop_back();
-  EXPECT_THROW(view.showRunOf(run, shown), std::invalid_argument);
+  EXPECT_THROW(view.showRunOf(run, shown, touching, {}), std::invalid_argument);
 }

@@ -310,6 +310,12 @@ class ContactSolver {
       previousCertificates_.clear();
     }
   }
+  /// @brief Limits the particles' tool contacts the next compute()s look for
+  /// to `pairs` ({particle id, tool index}, ascending), or lifts the limit
+  /// (nullopt). A world that shows another's run (World::showRunOf) knows
+  /// which particles touch a tool and need not search the others; the span
+  /// must outlive the limit.
+  void limitToolPairs(std::optional<std::span<const std::array<std::uint64_t, 2>>> pairs) { toolPairs_ = pairs; }
   /// @brief Node walks (one per pair and direction) the certificates spared in the last compute().
   std::uint64_t certifiedWalks() const { return certifiedWalks_; }
   /// @brief Node walks that tested only the tree leaves a certificate kept
@@ -437,6 +443,10 @@ class ContactSolver {
   /// @brief The history of particle `id`'s pairs as of the last compute()
   /// (empty without friction and rest overlaps).
   ParticleHistory particleHistory(std::uint64_t id) const;
+  /// @brief particleHistory() of each of `ids` (ascending), in one pass over
+  /// the history: linear in the history and the ids.
+  /// @note Throws std::invalid_argument when `ids` is not strictly ascending.
+  std::vector<ParticleHistory> particleHistories(std::span<const std::uint64_t> ids) const;
   /// @brief Replaces the history of particle `id`'s pairs by `history`
   /// (from particleHistory() of a solver of the same law), for the next
   /// compute(). The records of the last compute() are stale afterwards
@@ -503,6 +513,7 @@ class ContactSolver {
   // other)). Walks against planes have none (a plane test is one dot
   // product per tree cell).
   bool certificatesOn_ = true;
+  std::optional<std::span<const std::array<std::uint64_t, 2>>> toolPairs_;  // limitToolPairs
   std::vector<detail::Certificate<D>> certificates_, previousCertificates_;
   std::vector<std::array<std::uint32_t, 2>> certificatePairs_;  // the pairs certificates_ was made for
   std::vector<std::uint32_t> certificateOrder_;

@@ -352,10 +352,19 @@ class World {
   /// particle then takes the run's own forces and contact history (its
   /// records stay current): this world's state, and a checkpoint of it, are
   /// the run's bit for bit. Last, `run`'s stage and effect timings.
+  /// `touching`: the particle pairs in contact at the run's last evaluation
+  /// (ids, the lower first), and `touchingTools` its particles touching a
+  /// tool ({id, tool index}), both ascending. Only they are evaluated: a
+  /// candidate pair the run found apart finds no contact here either, and a
+  /// view that nothing steps has no separation certificates to spare its
+  /// search.
   /// @note Throws std::invalid_argument when `run` has other tools, planes or
-  /// effects, or `shown` does not match the particles; std::logic_error when
-  /// a particle's history does not fit the contacts found here.
-  void showRunOf(const World& run, std::span<const ShownParticle> shown);
+  /// effects, `shown` does not match the particles or the pairs are not
+  /// ascending; std::logic_error when a particle's history does not fit the
+  /// contacts found here.
+  void showRunOf(const World& run, std::span<const ShownParticle> shown,
+                 std::span<const std::array<ParticleId, 2>> touching,
+                 std::span<const std::array<ParticleId, 2>> touchingTools);
 
   // ---- checkpoints ----
   /// @brief Writes the state between steps: particles (each shape as the number
@@ -511,8 +520,10 @@ class World {
   std::vector<double> radii_;
   // Ghost flags (setGhost), aligned with particles_; empty: no ghosts.
   std::vector<std::uint8_t> ghost_;
-  // The candidate pairs without those of two ghosts (only with ghosts).
-  std::vector<std::array<std::uint32_t, 2>> pairsWithoutGhostPairs_;
+  // The candidate pairs evaluated, when not all are: without those of two
+  // ghosts (with ghosts), and only those among `onlyPairs_` (showRunOf).
+  std::vector<std::array<std::uint32_t, 2>> evaluatedPairs_;
+  std::optional<std::span<const std::array<ParticleId, 2>>> onlyPairs_;
 
   // A distributed run (setCoordinator): null in a world of its own.
   ParticleSetCoordinator* coordinator_ = nullptr;

@@ -162,11 +162,11 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   /// @brief Brings `view` up to the whole run now, on rank `root`: a world
   /// built from the same scene that nothing steps, which a run's outputs read
   /// (docs/parallel.md "lsdem run on N ranks"). Every rank sends its own
-  /// particles with their contact history (their shapes once, by hash); the
-  /// view's particles no longer in the run leave it, the others take the
-  /// run's state, new ones enter in ascending id; then World::showRunOf
-  /// evaluates its contacts as the ranks did. Collective; `view` is touched
-  /// on `root` only.
+  /// particles with their contact history (their shapes once, by hash) and
+  /// the pairs in contact; the view's particles no longer in the run leave
+  /// it, the others take the run's state, new ones enter in ascending id;
+  /// then World::showRunOf evaluates their contacts as the ranks did, the
+  /// pairs in contact only. Collective; `view` is touched on `root` only.
   void updateView(dynamics::World<D>& view, int root);
 
  private:
