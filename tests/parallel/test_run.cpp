@@ -166,6 +166,45 @@ TEST(DistributedRun, OutputsEqualThoseOfOneProcess) {
   expectSameOutputs(dir / "serial", dir / "spread");
 }
 
+// The scene with a servo platen (a tool) in place of the moving plane: the
+// servo moves by the load of the whole run (DistributedWorld::boundaryLoads),
+// and the view evaluates only the tool contacts the ranks found. The
+// outputs, the platen's load among them, are those of one process.
+TEST(DistributedRun, ServoPlatenOutputsEqualThoseOfOneProcess) {
+  const fs::path dir = sharedPath("run_servo");
+  const fs::path scene = dir / "servo.toml";
+  const fs::path base = writeScene(dir);  // (collective)
+  if (rankOf(MPI_COMM_WORLD) == 0) {
+    std::string text = test::readFile(base);
+    const auto replace = [&](const std::string& from, const std::string& to) {
+      const std::size_t at = text.find(from);
+      if (at == std::string::npos) throw std::runtime_error("test scene: '" + from + "' not found");
+      text.replace(at, from.size(), to);
+    };
+    replace("[[planes]]\nname = \"platen\"\npoint = [0.0, 0.00335]\nnormal = [0.0, -1.0]\nvelocity = [0.0, -0.2]\n",
+            "[[tools]]\nname = \"platen\"\nshape = \"plate\"\nposition = [0.0, 0.00355]\n"
+            "[tools.motion]\ntype = \"servo\"\ndirection = [0.0, -1.0]\ntarget_force = 20.0\n"
+            "gain = 0.01\nmax_speed = 0.2\n");
+    replace("[[particles]]", "[shapes.plate]\nkind = \"box\"\nhalf_extents = [0.0012, 0.0002]\nspacing = 2.5e-5\n\n"
+                             "[[particles]]");
+    std::ofstream(scene) << text;
+  }
+  MPI_Barrier(MPI_COMM_WORLD);
+  const io::RunResult serial = runSerial(scene, dir / "serial");
+  const io::RunResult spread = runOn(MPI_COMM_WORLD, scene, dir / "spread");
+  EXPECT_EQ(spread.steps, kSteps);
+  if (rankOf(MPI_COMM_WORLD) != 0) return;
+  EXPECT_EQ(spread.particles, serial.particles);
+  EXPECT_EQ(spread.breakages, serial.breakages);
+  expectSameOutputs(dir / "serial", dir / "spread");
+  // The servo pressed on the stack: the platen carried a load.
+  double most = 0.0;
+  for (const auto& row : readCsv(dir / "serial" / "history.csv")) {
+    most = std::max(most, std::stod(row.at("platen_force_y_N")));
+  }
+  EXPECT_GT(most, 1.0) << "the servo must press on the grains for this test to mean anything";
+}
+
 // Stopped on every rank after its first breakages, resumed on half of the
 // ranks (one when there are one or two): the outputs are those of the run
 // that was not stopped.
