@@ -1,9 +1,9 @@
 #include "lsdem/dynamics/NarrowPhase.h"
 
 #include <algorithm>
-#include <functional>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <set>
 #include <sstream>

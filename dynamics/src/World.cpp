@@ -682,7 +682,8 @@ void World<D>::computeForces(double dtClosing) {
       if (!ghost_.empty() && ghost_[pair[0]] && ghost_[pair[1]]) continue;
       if (onlyPairs_) {
         const ParticleId a = particles_.id[pair[0]], b = particles_.id[pair[1]];
-        if (!std::binary_search(onlyPairs_->begin(), onlyPairs_->end(), std::array<ParticleId, 2>{std::min(a, b), std::max(a, b)})) continue;
+        const std::array<ParticleId, 2> key{std::min(a, b), std::max(a, b)};
+        if (!std::binary_search(onlyPairs_->begin(), onlyPairs_->end(), key)) continue;
       }
       evaluatedPairs_.push_back(pair);
     }
@@ -781,7 +782,8 @@ void World<D>::showRunOf(const World& run, std::span<const ShownParticle> shown,
     throw std::invalid_argument("World::showRunOf: " + std::to_string(shown.size()) + " particles shown, " +
                                 std::to_string(particles_.size()) + " held");
   }
-  if (!std::is_sorted(touching.begin(), touching.end()) || !std::is_sorted(touchingTools.begin(), touchingTools.end())) {
+  if (!std::is_sorted(touching.begin(), touching.end()) ||
+      !std::is_sorted(touchingTools.begin(), touchingTools.end())) {
     throw std::invalid_argument("World::showRunOf: the touching pairs are not in ascending order");
   }
   // The critical step of the whole set (particles came and went), then the run's step.

@@ -22,6 +22,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lsdem {
@@ -44,8 +45,9 @@ fs::path sharedPath(const std::string& name) {
 
 // The scene file (written by rank 0): kSteps steps, the platen against the
 // stack and fast, a progress call every step (to stop the run where wanted),
-// `extra` lines added to [effects].
-fs::path writeScene(const fs::path& dir, const std::string& extra = "") {
+// `extra` lines added to [effects], then each of `edits` (text, replacement).
+fs::path writeScene(const fs::path& dir, const std::string& extra = "",
+                    const std::vector<std::pair<std::string, std::string>>& edits = {}) {
   if (rankOf(MPI_COMM_WORLD) == 0) {
     std::string text =
         test::readFile(std::string(LSDEM_SOURCE_DIR) + "/apps/scenes/three_grains/three_grains_2d.toml");
@@ -59,6 +61,7 @@ fs::path writeScene(const fs::path& dir, const std::string& extra = "") {
     replace("velocity = [0.0, -0.02]", "velocity = [0.0, -0.2]");
     replace("[output]\n", "[output]\nprogress_seconds = 1e-9\n");
     if (!extra.empty()) replace("[effects]\n", "[effects]\n" + extra);
+    for (const auto& [from, to] : edits) replace(from, to);
     fs::create_directories(dir);
     std::ofstream(dir / "scene.toml") << text;
   }
@@ -152,18 +155,26 @@ io::RunResult runSerial(const fs::path& scene, const fs::path& out) {
   return r;
 }
 
-TEST(DistributedRun, OutputsEqualThoseOfOneProcess) {
-  const fs::path dir = sharedPath("run_outputs");
-  const fs::path scene = writeScene(dir);
+// Runs `scene` in one process (rank 0) and on the ranks; rank 0 checks that
+// the outputs are the same. Returns the one-process run's result (rank 0).
+io::RunResult expectSameAsOneProcess(const fs::path& scene, const fs::path& dir) {
   const io::RunResult serial = runSerial(scene, dir / "serial");
   const io::RunResult spread = runOn(MPI_COMM_WORLD, scene, dir / "spread");
   EXPECT_EQ(spread.steps, kSteps);
+  if (rankOf(MPI_COMM_WORLD) == 0) {
+    EXPECT_EQ(spread.particles, serial.particles);
+    EXPECT_EQ(spread.breakages, serial.breakages);
+    EXPECT_LT(std::abs(spread.massBalanceError), 1e-14);
+    expectSameOutputs(dir / "serial", dir / "spread");
+  }
+  return serial;
+}
+
+TEST(DistributedRun, OutputsEqualThoseOfOneProcess) {
+  const fs::path dir = sharedPath("run_outputs");
+  const io::RunResult serial = expectSameAsOneProcess(writeScene(dir), dir);
   if (rankOf(MPI_COMM_WORLD) != 0) return;
-  EXPECT_EQ(spread.particles, serial.particles);
-  EXPECT_EQ(spread.breakages, serial.breakages);
   EXPECT_GE(serial.breakages, 10u) << "the scene must break grains for this test to mean anything";
-  EXPECT_LT(std::abs(spread.massBalanceError), 1e-14);
-  expectSameOutputs(dir / "serial", dir / "spread");
 }
 
 // The scene with a servo platen (a tool) in place of the moving plane: the
@@ -172,31 +183,15 @@ TEST(DistributedRun, OutputsEqualThoseOfOneProcess) {
 // outputs, the platen's load among them, are those of one process.
 TEST(DistributedRun, ServoPlatenOutputsEqualThoseOfOneProcess) {
   const fs::path dir = sharedPath("run_servo");
-  const fs::path scene = dir / "servo.toml";
-  const fs::path base = writeScene(dir);  // (collective)
-  if (rankOf(MPI_COMM_WORLD) == 0) {
-    std::string text = test::readFile(base);
-    const auto replace = [&](const std::string& from, const std::string& to) {
-      const std::size_t at = text.find(from);
-      if (at == std::string::npos) throw std::runtime_error("test scene: '" + from + "' not found");
-      text.replace(at, from.size(), to);
-    };
-    replace("[[planes]]\nname = \"platen\"\npoint = [0.0, 0.00335]\nnormal = [0.0, -1.0]\nvelocity = [0.0, -0.2]\n",
-            "[[tools]]\nname = \"platen\"\nshape = \"plate\"\nposition = [0.0, 0.00355]\n"
-            "[tools.motion]\ntype = \"servo\"\ndirection = [0.0, -1.0]\ntarget_force = 20.0\n"
-            "gain = 0.01\nmax_speed = 0.2\n");
-    replace("[[particles]]", "[shapes.plate]\nkind = \"box\"\nhalf_extents = [0.0012, 0.0002]\nspacing = 2.5e-5\n\n"
-                             "[[particles]]");
-    std::ofstream(scene) << text;
-  }
-  MPI_Barrier(MPI_COMM_WORLD);
-  const io::RunResult serial = runSerial(scene, dir / "serial");
-  const io::RunResult spread = runOn(MPI_COMM_WORLD, scene, dir / "spread");
-  EXPECT_EQ(spread.steps, kSteps);
+  const fs::path scene = writeScene(
+      dir, "",
+      {{"[[planes]]\nname = \"platen\"\npoint = [0.0, 0.00335]\nnormal = [0.0, -1.0]\nvelocity = [0.0, -0.2]\n",
+        "[[tools]]\nname = \"platen\"\nshape = \"plate\"\nposition = [0.0, 0.00355]\n"
+        "[tools.motion]\ntype = \"servo\"\ndirection = [0.0, -1.0]\ntarget_force = 20.0\ngain = 0.01\nmax_speed = 0.2\n"},
+       {"[[particles]]",
+        "[shapes.plate]\nkind = \"box\"\nhalf_extents = [0.0012, 0.0002]\nspacing = 2.5e-5\n\n[[particles]]"}});
+  expectSameAsOneProcess(scene, dir);
   if (rankOf(MPI_COMM_WORLD) != 0) return;
-  EXPECT_EQ(spread.particles, serial.particles);
-  EXPECT_EQ(spread.breakages, serial.breakages);
-  expectSameOutputs(dir / "serial", dir / "spread");
   // The servo pressed on the stack: the platen carried a load.
   double most = 0.0;
   for (const auto& row : readCsv(dir / "serial" / "history.csv")) {
