@@ -837,6 +837,33 @@ bool certificateLess(const detail::Certificate<D>& c, std::uint64_t owner, std::
   return c.owner < owner || (c.owner == owner && c.other < other);
 }
 
+// Appends pair `p` of a history to `to` with its node records, shear springs
+// and rest overlaps, read from arrays aligned with `nodes` (p.first indexes
+// them; an empty `shear` or `preload` gives zeros where `to` keeps one).
+template <class History, class Nodes, class Shears, class Preloads>
+void appendHistoryPair(History& to, detail::HistoryPair p, const Nodes& nodes, const Shears& shear,
+                       const Preloads& preload, bool withShear, bool withPreload) {
+  using Shear = typename decltype(to.shear)::value_type;
+  const std::size_t from = p.first, to0 = to.nodes.size();
+  p.first = std::uint32_t(to0);
+  to.pairs.push_back(p);
+  to.nodes.insert(to.nodes.end(), nodes.begin() + from, nodes.begin() + from + p.count);
+  if (withShear) {
+    if (shear.empty()) {
+      to.shear.resize(to.nodes.size(), Shear::Zero());
+    } else {
+      to.shear.insert(to.shear.end(), shear.begin() + from, shear.begin() + from + p.count);
+    }
+  }
+  if (withPreload) {
+    if (preload.empty()) {
+      to.preload.resize(to.nodes.size(), 0.0);
+    } else {
+      to.preload.insert(to.preload.end(), preload.begin() + from, preload.begin() + from + p.count);
+    }
+  }
+}
+
 }  // namespace
 
 template <int D>
@@ -1476,15 +1503,8 @@ std::vector<typename ContactSolver<D>::ParticleHistory> ContactSolver<D>::partic
   const auto add = [&](std::uint64_t id, const HistoryPair& h) {
     const auto it = std::lower_bound(ids.begin(), ids.end(), id);
     if (it == ids.end() || *it != id) return;
-    ParticleHistory& to = out[std::size_t(it - ids.begin())];
-    HistoryPair copy = h;
-    copy.first = std::uint32_t(to.nodes.size());
-    to.pairs.push_back(copy);
-    to.nodes.insert(to.nodes.end(), nodes_.begin() + h.first, nodes_.begin() + h.first + h.count);
-    if (!shear_.empty()) to.shear.insert(to.shear.end(), shear_.begin() + h.first, shear_.begin() + h.first + h.count);
-    if (!preload_.empty()) {
-      to.preload.insert(to.preload.end(), preload_.begin() + h.first, preload_.begin() + h.first + h.count);
-    }
+    appendHistoryPair(out[std::size_t(it - ids.begin())], h, nodes_, shear_, preload_, !shear_.empty(),
+                      !preload_.empty());
   };
   for (const HistoryPair& h : history_) {
     add(h.idA, h);
@@ -1511,26 +1531,9 @@ typename ContactSolver<D>::ParticleHistory ContactSolver<D>::mergedHistory(
   }
   std::set<std::pair<std::uint64_t, std::uint64_t>> taken;
   for (const ParticleHistory* h : histories) {
-    for (HistoryPair p : h->pairs) {
+    for (const HistoryPair& p : h->pairs) {
       if (!taken.emplace(p.idA, p.other).second) continue;
-      const std::uint32_t from = p.first;
-      p.first = std::uint32_t(all.nodes.size());
-      all.pairs.push_back(p);
-      all.nodes.insert(all.nodes.end(), h->nodes.begin() + from, h->nodes.begin() + from + p.count);
-      if (withShear) {
-        if (h->shear.empty()) {
-          all.shear.resize(all.nodes.size(), Vec<D>::Zero());
-        } else {
-          all.shear.insert(all.shear.end(), h->shear.begin() + from, h->shear.begin() + from + p.count);
-        }
-      }
-      if (withPreload) {
-        if (h->preload.empty()) {
-          all.preload.resize(all.nodes.size(), 0.0);
-        } else {
-          all.preload.insert(all.preload.end(), h->preload.begin() + from, h->preload.begin() + from + p.count);
-        }
-      }
+      appendHistoryPair(all, p, h->nodes, h->shear, h->preload, withShear, withPreload);
     }
   }
   return all;

@@ -566,14 +566,18 @@ dynamics::BoundaryLoads<D> DistributedWorld<D>::boundaryLoads() const {
 }
 
 template <int D>
+void DistributedWorld<D>::refreshStaleContacts() {
+  if (world_.contactsCurrent()) return;
+  world_.refreshContacts();
+  // (They were evaluated again, at the velocities of now.)
+  forceVelocity_.clear();
+  forceSpin_.clear();
+}
+
+template <int D>
 void DistributedWorld<D>::reduceLoads() {
-  // After a split on another rank, this rank's contacts wait for its next
-  // evaluation (updateView); the loads are those of the contacts now.
-  if (!world_.contactsCurrent()) {
-    world_.refreshContacts();
-    forceVelocity_.clear();
-    forceSpin_.clear();
-  }
+  // The loads are those of the contacts now.
+  refreshStaleContacts();
   world_.setBoundaryLoads(boundaryLoads());
   loadsReduced_ = true;
 }
@@ -797,11 +801,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
   // next step; one world did at once (Breakage's energy check). Done now, on
   // the same state, it changes nothing that follows, and the view gets the
   // run's contacts of now: the fragments' springs with their rest overlaps.
-  if (!world_.contactsCurrent()) {
-    world_.refreshContacts();
-    forceVelocity_.clear();
-    forceSpin_.clear();
-  }
+  refreshStaleContacts();
   // Every rank's own particles with their contact history, and the shapes
   // the root has not got yet.
   const dynamics::Particles<D>& p = world_.particles();

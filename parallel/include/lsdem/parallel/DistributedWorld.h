@@ -190,6 +190,10 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   double reach(std::size_t index) const;
   // Local particle `index`'s bounding radius (the tricubic one when larger).
   double radius(std::size_t index) const;
+  // After a split on another rank, this rank's contacts wait for its next
+  // evaluation: evaluates them now, on the same state (nothing that follows
+  // changes; one world evaluated them at once).
+  void refreshStaleContacts();
   // The run's loads (boundaryLoads) into this rank's world, for its servo
   // platens (collective).
   void reduceLoads();
