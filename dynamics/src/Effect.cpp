@@ -2,11 +2,13 @@
 
 #include "lsdem/dynamics/World.h"
 
+#include <algorithm>
 #include <cmath>
 #include <span>
-#include <utility>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace lsdem::dynamics {
 
@@ -87,10 +89,23 @@ void LocalDamping<D>::applyForces(World<D>& world, double /*dt*/) {
 
 template <int D>
 void Outflow<D>::afterStep(World<D>& world) {
-  // Walk backwards so swap-removal does not skip a particle.
-  for (std::size_t i = world.particles().size(); i-- > 0;) {
-    const Vec<D>& x = world.particles().position[i];
-    if (keep_.contains(x)) continue;
+  // In ascending id order, so the records do not depend on where the
+  // particles sit (a distributed run records each on its owner and orders
+  // them by id); a step without removals allocates nothing.
+  const Particles<D>& p = world.particles();
+  std::size_t leaving = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) leaving += !keep_.contains(p.position[i]);
+  if (leaving == 0) return;
+  std::vector<ParticleId> ids;
+  ids.reserve(leaving);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!keep_.contains(p.position[i])) ids.push_back(p.id[i]);
+  }
+  std::sort(ids.begin(), ids.end());
+  for (const ParticleId id : ids) {
+    // (Swap-removal moves the last particle: look each one up.)
+    const std::size_t i = std::size_t(std::find(p.id.begin(), p.id.end(), id) - p.id.begin());
+    const Vec<D> x = p.position[i];
     world.removeParticle(i, discharge_ && discharge_->contains(x) ? "discharge" : "outflow");
   }
 }
@@ -115,22 +130,25 @@ Feed<D>::Feed(FeedDef<D> def) : def_(std::move(def)) {
 }
 
 template <int D>
-bool Feed<D>::due(const World<D>& world) const {
+bool Feed<D>::due(World<D>& world) const {
   if (def_.count > 0 && dropped_ >= def_.count) return false;
   if (world.time() < def_.startTime) return false;
   if (dropped_ > 0 && def_.interval > 0.0 && world.time() < lastDropTime_ + def_.interval) return false;
   // The drop point must be free: no particle's bounding sphere may reach the
   // next grain's (a grain dropped onto fragments of the last one would start
   // deeply overlapping them). With a clearance, the last grain must also have
-  // moved that far from the point (or be gone: broken or removed).
+  // moved that far from the point (or be gone: broken or removed). In a
+  // distributed run each world asks its own particles and the answer is the
+  // whole run's (World::anyWorld); the tests above agree everywhere.
   const Particles<D>& p = world.particles();
   const double r = def_.shapes[std::size_t(dropped_ % def_.shapes.size())]->boundingRadius();
-  for (std::size_t i = 0; i < p.size(); ++i) {
+  bool blocked = false;
+  for (std::size_t i = 0; i < p.size() && !blocked; ++i) {
     const double distance = (p.position[i] - def_.point).norm();
-    if (distance < r + p.shape[i]->boundingRadius()) return false;
-    if (def_.interval == 0.0 && dropped_ > 0 && p.id[i] == lastId_ && distance <= def_.clearance) return false;
+    blocked = distance < r + p.shape[i]->boundingRadius() ||
+              (def_.interval == 0.0 && dropped_ > 0 && p.id[i] == lastId_ && distance <= def_.clearance);
   }
-  return true;
+  return !world.anyWorld(blocked);
 }
 
 template <int D>

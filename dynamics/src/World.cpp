@@ -344,7 +344,17 @@ void World<D>::stepFromCritical() {
 
 template <int D>
 std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
-  const std::size_t i = particles_.add(def);
+  std::size_t i = 0;
+  if (coordinator_ && def.id == kNoParent) {
+    // The run's next id, the same in every world (a feed adds alike everywhere).
+    ParticleDef<D> withId = def;
+    withId.id = coordinator_->takeId();
+    i = particles_.add(withId);
+    effectAdded_.push_back(withId.id);
+  } else {
+    i = particles_.add(def);
+  }
+  effectChanged_ = true;
   if (!ghost_.empty()) ghost_.push_back(0);
   stiffness_.push_back(shapeStiffness(def.shape));
   if (def_.densityScaling) scaleDensity(i);
@@ -358,6 +368,11 @@ std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
 
 template <int D>
 void World<D>::removeParticle(std::size_t index, const std::string& reason) {
+  if (isGhost(index)) {
+    // A mirror leaves with its particle, which its owner records.
+    detachParticle(index);
+    return;
+  }
   RemovedParticle r;
   r.id = particles_.id[index];
   r.time = time_;
@@ -384,6 +399,7 @@ void World<D>::detachParticle(std::size_t index) {
 template <int D>
 void World<D>::dropParticle(std::size_t index) {
   particles_.remove(index);
+  effectChanged_ = true;
   if (!ghost_.empty()) {
     ghost_[index] = ghost_.back();
     ghost_.pop_back();
@@ -890,7 +906,20 @@ void World<D>::finishStep() {
   for (std::size_t e = 0; e < effects_.size(); ++e) {
     const auto te = Clock::now();
     if (effects_[e]->readsContacts()) refreshContacts();
-    effects_[e]->afterStep(*this);
+    if (coordinator_ && effects_[e]->changesParticles()) {
+      // A distributed run: the worlds agree on what the effect changed.
+      effectChanged_ = false;
+      effectAdded_.clear();
+      effects_[e]->afterStep(*this);
+      if (coordinator_->effectChangedParticles(effectChanged_, effectAdded_)) {
+        broad_.invalidate();
+        forcesValid_ = false;
+        energyCurrent_ = false;
+      }
+      effectAdded_.clear();
+    } else {
+      effects_[e]->afterStep(*this);
+    }
     effectSeconds_[e] += secondsSince(te);
   }
   // A distributed run: a step that replaced nothing here still takes part

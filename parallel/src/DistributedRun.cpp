@@ -22,7 +22,6 @@ class DistributedEngine final : public io::RunEngine<D> {
  public:
   DistributedEngine(MPI_Comm comm, io::SceneWorld<D>& part, const DistributedDef& def)
       : part_(part), world_(comm, *part.world, def), comm_(comm) {
-    if (!part.feeds.empty()) throw std::invalid_argument("a distributed run does not support feeds yet (docs/parallel.md)");
     // What every rank held at the start (a resumed run: the checkpoint's
     // log and removals): the view has it already; the ranks send what follows.
     removedFrom_ = part.world->removed().size();
@@ -44,6 +43,13 @@ class DistributedEngine final : public io::RunEngine<D> {
     }
     const std::vector<dynamics::RemovedParticle> removed = world_.gatherRemoved(kRoot, removedFrom_);
     if (world_.rank() != kRoot) return;
+    // Every rank's feeds drop alike: the view's take this rank's state.
+    for (std::size_t k = 0; k < part_.feeds.size(); ++k) {
+      dynamics::StateWriter w;
+      part_.feeds[k]->saveState(w);
+      dynamics::StateReader r(w.bytes().data(), w.bytes().size());
+      view.feeds[k]->loadState(r);
+    }
     // The view holds the records it was given before (and the checkpoint's); these are in (time, id) order.
     for (std::size_t k = viewRemoved_; k < removed.size(); ++k) view.world->recordRemoval(removed[k], 0.0);
     viewRemoved_ = removed.size();

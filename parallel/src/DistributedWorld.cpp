@@ -143,9 +143,12 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   check(MPI_Comm_rank(comm_, &rank_), "Comm_rank");
   check(MPI_Comm_size(comm_, &ranks_), "Comm_size");
   const dynamics::WorldDef<D>& wd = world_.def();
+  bool breaks = false;
   for (const std::string& name : world_.effectNames()) {
-    if (name == "breakage") {
+    if (name == "breakage" || name == "outflow" || name == "feed") {
+      // Effects that change the particle set: the world agrees with the others through this object.
       coordinated_ = true;
+      breaks = breaks || name == "breakage";
       continue;
     }
     if (name != "gravity" && name != "global_damping" && name != "local_damping") {
@@ -170,7 +173,7 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   skin_ = wd.broadPhase.skin > 0.0 ? wd.broadPhase.skin : 0.1 * largestRadius_;
   // A split looks at the bodies within 4 of its grain's cells
   // (Breakage::clearanceAround): they must be here.
-  if (coordinated_) skin_ = std::max(skin_, 4.0 * spacing);
+  if (breaks) skin_ = std::max(skin_, 4.0 * spacing);
   nextId_ = p.nextId();
   checkSameWorldEverywhere();
   shapesAt_.assign(std::size_t(ranks_), {});
@@ -691,6 +694,48 @@ void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornPartic
   forceVelocity_.clear();  // the contacts are evaluated again now, at the velocities then
   forceSpin_.clear();
   exchange(born);
+}
+
+template <int D>
+bool DistributedWorld<D>::anyWorld(bool here) {
+  int flag = here ? 1 : 0;
+  check(MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MAX, comm_), "Allreduce");
+  return flag != 0;
+}
+
+template <int D>
+std::uint64_t DistributedWorld<D>::takeId() {
+  return nextId_++;
+}
+
+template <int D>
+bool DistributedWorld<D>::effectChangedParticles(bool changed, std::span<const std::uint64_t> added) {
+  // Every rank added the same particles (a feed's grains), as owned: each
+  // stays with its owner, as a mirror where it is in reach, and leaves the
+  // other ranks. Its shape is one every rank built from the scene; its
+  // radius may be the run's largest so far (every rank sees it).
+  const dynamics::Particles<D>& p = world_.particles();
+  for (const std::uint64_t id : added) {
+    const std::size_t i = std::size_t(std::find(p.id.begin(), p.id.end(), id) - p.id.begin());
+    if (i == p.size()) throw std::logic_error("distributed run: particle " + std::to_string(id) + " was added and lost");
+    const std::uint64_t h = shapeHash(p.shape[i]);
+    for (auto& held : shapesAt_) held.insert(h);
+    largestRadius_ = std::max(largestRadius_, radius(i));
+    if (decomposition_.owner(p.position[i]) == rank_) continue;
+    if (decomposition_.distance(p.position[i], rank_) < reach(i)) {
+      world_.setGhost(i, true);
+    } else {
+      world_.detachParticle(i);
+    }
+  }
+  // A change anywhere: the mirrors follow at once (particles that left are
+  // gone from every rank already, each removed by the same test), and every
+  // rank evaluates its contacts again, as one world does.
+  if (!anyWorld(changed)) return false;
+  forceVelocity_.clear();
+  forceSpin_.clear();
+  exchange();
+  return true;
 }
 
 template <int D>

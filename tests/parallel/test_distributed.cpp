@@ -10,10 +10,13 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numeric>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -55,13 +58,19 @@ std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes(double d) {
   return out;
 }
 
+// What a run adds to the pile.
+enum class Extra {
+  None,
+  Servo,  // a plate above the bed, as wide as the box, pressed down by a servo to a force it reaches within the run
+  Flow,   // no wall at x = 0: grains that pass it by a diameter leave (outflow); a feed drops grains at the far end
+};
+
 // A box of planes (floor at height 0, walls at 0 and `width` across every
 // other axis) and a lattice of grains above the floor with random offsets,
-// orientations and velocities (the same on every rank: a fixed seed).
-// `servo`: a plate above the bed, as wide as the box, pressed down by a servo
-// to a force it reaches within the run.
+// orientations and velocities (the same on every rank: a fixed seed), with
+// `extra`. Returns the feed (Extra::Flow), else null.
 template <int D>
-void build(World<D>& w, int perSide, int layers, bool servo = false) {
+const dynamics::Feed<D>* build(World<D>& w, int perSide, int layers, Extra extra = Extra::None) {
   const double d = 0.01;
   const double pitch = 1.1 * d;
   const double width = perSide * pitch;
@@ -76,10 +85,34 @@ void build(World<D>& w, int perSide, int layers, bool servo = false) {
     lo.plane.normal = Vec<D>::Unit(a);
     hi.plane.point = Vec<D>::Unit(a) * width;
     hi.plane.normal = -Vec<D>::Unit(a);
-    w.addPlane(lo);
+    if (a != 0 || extra != Extra::Flow) w.addPlane(lo);
     w.addPlane(hi);
   }
-  if (servo) {
+  const auto pool = shapes<D>(d);
+  const dynamics::Feed<D>* fed = nullptr;
+  if (extra == Extra::Flow) {
+    // Grains whose centroid passes x = 0 by a diameter leave (in 3D, whose
+    // run is 30 times shorter, those that come within 0.3 d of it); those
+    // low over the floor are recorded as discharged.
+    Vec<D> lo = Vec<D>::Constant(-1.0), hi = Vec<D>::Constant(1.0);
+    lo[0] = D == 2 ? -d : 0.3 * d;
+    Vec<D> dlo = Vec<D>::Constant(-1.0), dhi = Vec<D>::Constant(1.0);
+    dhi[up] = D == 2 ? 0.5 * d : pitch;
+    w.addEffect(std::make_unique<dynamics::Outflow<D>>(geometry::Box<D>{lo, hi}, geometry::Box<D>{dlo, dhi}));
+    // A grain every 2 ms (3D: 0.4 ms) at the far end, above the bed, thrown
+    // towards the gap, once the last one has cleared the point.
+    dynamics::FeedDef<D> feed;
+    feed.shapes = {pool[0], pool[2]};
+    feed.point = Vec<D>::Constant(0.5 * width);
+    feed.point[0] = width - 0.6 * d;
+    feed.point[up] = (layers + 1.5) * pitch;
+    feed.velocity[0] = D == 2 ? -1.5 : -8.0;  // (clear of the point within the short 3D run)
+    feed.interval = D == 2 ? 2e-3 : 4e-4;
+    auto effect = std::make_unique<dynamics::Feed<D>>(feed);
+    fed = effect.get();
+    w.addEffect(std::move(effect));
+  }
+  if (extra == Extra::Servo) {
     geometry::ShapeDef<D> plate;
     plate.kind = geometry::ShapeKind::Box;
     plate.halfExtents = Vec<D>::Constant(0.5 * width);
@@ -97,7 +130,6 @@ void build(World<D>& w, int perSide, int layers, bool servo = false) {
     tool.motion = dynamics::ServoPlaten<D>(s);
     w.addTool(tool);
   }
-  const auto pool = shapes<D>(d);
   std::mt19937_64 rng(12345);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const int across = D == 3 ? perSide * perSide : perSide;
@@ -123,6 +155,7 @@ void build(World<D>& w, int perSide, int layers, bool servo = false) {
       w.addParticle(p);
     }
   }
+  return fed;
 }
 
 template <int D>
@@ -141,12 +174,12 @@ WorldDef<D> worldDef() {
 // Runs `steps` steps serially and distributed; every rank checks that the
 // gathered state equals the serial one bit for bit.
 template <int D>
-void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, bool servo = false) {
+void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra extra = Extra::None) {
   MPI_Comm comm = MPI_COMM_WORLD;
   World<D> serial(worldDef<D>());
-  build(serial, perSide, layers, servo);
+  const dynamics::Feed<D>* serialFeed = build(serial, perSide, layers, extra);
   World<D> local(worldDef<D>());
-  build(local, perSide, layers, servo);
+  const dynamics::Feed<D>* localFeed = build(local, perSide, layers, extra);
   parallel::DistributedDef def;
   def.rebalanceEvery = 100;
   def.rebalanceImbalance = 1.05;
@@ -159,13 +192,17 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, bool serv
   EXPECT_EQ(local.time(), serial.time());
 
   const auto states = dist.gather(0);
+  const auto removed = dist.gatherRemoved(0);
   const dynamics::Particles<D>& p = serial.particles();
   if (rankOf(comm) == 0) {
     ASSERT_EQ(states.size(), p.size());
+    // The serial particles by id (gather's order).
+    std::vector<std::size_t> byId(p.size());
+    std::iota(byId.begin(), byId.end(), std::size_t(0));
+    std::sort(byId.begin(), byId.end(), [&](std::size_t x, std::size_t y) { return p.id[x] < p.id[y]; });
     std::size_t moved = 0, spun = 0;
     for (std::size_t k = 0; k < states.size(); ++k) {
-      // Serial ids are 0..N-1 in order (no particle was removed).
-      const std::size_t i = std::size_t(states[k].id);
+      const std::size_t i = byId[k];
       ASSERT_EQ(p.id[i], states[k].id);
       for (int a = 0; a < D; ++a) {
         EXPECT_EQ(states[k].position[a], p.position[i][a]) << "particle " << i << " axis " << a;
@@ -184,6 +221,31 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, bool serv
     }
     EXPECT_GT(moved, 0u);
     EXPECT_GT(spun, 0u);
+    // The removal records, in the serial order.
+    const auto& ref = serial.removed();
+    ASSERT_EQ(removed.size(), ref.size());
+    for (std::size_t k = 0; k < ref.size(); ++k) {
+      EXPECT_EQ(removed[k].id, ref[k].id) << "record " << k;
+      EXPECT_EQ(removed[k].time, ref[k].time) << "record " << k;
+      EXPECT_EQ(removed[k].mass, ref[k].mass) << "record " << k;
+      EXPECT_EQ(removed[k].reason, ref[k].reason) << "record " << k;
+    }
+  }
+  if (extra == Extra::Flow) {
+    // Grains left through the gap and through the discharge, and the feed
+    // dropped grains (the same ones on every rank), some of them after a
+    // removal: ids stay those of one world.
+    const auto& ref = serial.removed();
+    const auto reasons = [&](const std::string& reason) {
+      return std::count_if(ref.begin(), ref.end(), [&](const dynamics::RemovedParticle& r) { return r.reason == reason; });
+    };
+    EXPECT_GT(reasons("outflow"), 0);
+    EXPECT_GT(reasons("discharge"), 0);
+    ASSERT_NE(serialFeed, nullptr);
+    EXPECT_GE(serialFeed->dropped(), 2u);
+    EXPECT_EQ(localFeed->dropped(), serialFeed->dropped());
+    EXPECT_EQ(localFeed->droppedMass(), serialFeed->droppedMass());
+    EXPECT_GT(p.nextId(), std::uint64_t(layers * (D == 3 ? perSide * perSide : perSide)));
   }
   // The run was busy: contacts with shear history, and (on several ranks)
   // particles that changed rank.
@@ -200,22 +262,39 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, bool serv
   }
 
   // The boundary loads of the whole run, on every rank, are the serial ones
-  // bit for bit (summed in the serial order: its particles are in id order),
-  // and so is what the servo made of them.
+  // bit for bit while the serial particles are in id order (summed in the
+  // serial order), and so is what the servo made of them. After a removal
+  // the serial sum takes another order: equal to round-off.
   const auto loads = dist.boundaryLoads();
   const auto& ref = serial.boundaryLoads();
+  const bool inIdOrder = serial.removed().empty();
+  const auto expectSame = [&](const auto& got, const auto& want, const char* what, std::size_t j) {
+    if (inIdOrder) {
+      EXPECT_EQ(got, want) << what << " " << j;
+    } else {
+      using std::abs;
+      const auto size = [](const auto& v) {
+        if constexpr (std::is_arithmetic_v<std::decay_t<decltype(v)>>) {
+          return std::abs(v);
+        } else {
+          return v.norm();
+        }
+      };
+      EXPECT_LE(size(got - want), 1e-12 * size(want) + 1e-300) << what << " " << j;
+    }
+  };
   ASSERT_EQ(loads.planeForce.size(), ref.planeForce.size());
   for (std::size_t j = 0; j < ref.planeForce.size(); ++j) {
-    EXPECT_EQ(loads.planeForce[j], ref.planeForce[j]) << "plane " << j;
-    EXPECT_EQ(loads.planeTorque[j], ref.planeTorque[j]) << "plane " << j;
+    expectSame(loads.planeForce[j], ref.planeForce[j], "plane", j);
+    expectSame(loads.planeTorque[j], ref.planeTorque[j], "plane", j);
   }
   ASSERT_EQ(loads.toolForce.size(), ref.toolForce.size());
   for (std::size_t j = 0; j < ref.toolForce.size(); ++j) {
-    EXPECT_EQ(loads.toolForce[j], ref.toolForce[j]) << "tool " << j;
-    EXPECT_EQ(loads.toolTorque[j], ref.toolTorque[j]) << "tool " << j;
-    EXPECT_EQ(local.boundaryLoads().toolForce[j], ref.toolForce[j]) << "tool " << j;
+    expectSame(loads.toolForce[j], ref.toolForce[j], "tool", j);
+    expectSame(loads.toolTorque[j], ref.toolTorque[j], "tool", j);
+    expectSame(local.boundaryLoads().toolForce[j], ref.toolForce[j], "tool", j);
   }
-  if (servo) {
+  if (extra == Extra::Servo) {
     const auto& platen = std::get<dynamics::ServoPlaten<D>>(serial.tools()[0].motion);
     const auto& mine = std::get<dynamics::ServoPlaten<D>>(local.tools()[0].motion);
     EXPECT_EQ(mine.displacement(), platen.displacement());
@@ -234,7 +313,16 @@ TEST(DistributedWorld, TwoDimensionalPileEqualsSerialBitForBit) { expectEqualToS
 TEST(DistributedWorld, ThreeDimensionalPileEqualsSerialBitForBit) { expectEqualToSerial<3>(5, 4, 2000); }
 
 // A servo platen moves by the load of the whole run, the same on every rank.
-TEST(DistributedWorld, PileUnderServoPlatenEqualsSerialBitForBit) { expectEqualToSerial<2>(12, 8, 2000, true); }
+TEST(DistributedWorld, PileUnderServoPlatenEqualsSerialBitForBit) { expectEqualToSerial<2>(12, 8, 2000, Extra::Servo); }
+
+// Grains leave through an outflow and a feed drops new ones, on every rank
+// alike: ids, states and removal records are those of one world.
+TEST(DistributedWorld, OpenPileWithOutflowAndFeedEqualsSerialBitForBit) {
+  expectEqualToSerial<2>(12, 8, 2000, Extra::Flow);
+}
+TEST(DistributedWorld, OpenPileWithOutflowAndFeedEqualsSerialBitForBit3D) {
+  expectEqualToSerial<3>(5, 4, 2000, Extra::Flow);
+}
 
 // The RCB cuts give every part its share of the weight and the owner of a
 // point is the part whose box holds it.

@@ -54,6 +54,12 @@ class Effect {
   /// effect of the same afterStep changed the particles, it evaluates them
   /// again first (World::refreshContacts), so effects need no declaration order.
   virtual bool readsContacts() const { return false; }
+  /// @brief True when afterStep may add or remove particles other than
+  /// through World::replace (outflow, feeds). In a distributed run the world
+  /// agrees with the others after it (ParticleSetCoordinator.h): such an
+  /// effect must change the particle set alike in every world (a decision
+  /// taken from the whole run's particles goes through World::anyWorld).
+  virtual bool changesParticles() const { return false; }
   /// @brief Writes the effect's state (a checkpoint); stateless effects write nothing.
   virtual void saveState(StateWriter& out) const { (void)out; }
   /// @brief Reads back what saveState wrote, into an effect built from the same definition.
@@ -116,7 +122,9 @@ class Outflow final : public Effect<D> {
   explicit Outflow(const geometry::Box<D>& keep, std::optional<geometry::Box<D>> discharge = std::nullopt)
       : keep_(keep), discharge_(std::move(discharge)) {}
   std::string name() const override { return "outflow"; }
+  /// Removes in ascending id order (the removal records' order).
   void afterStep(World<D>& world) override;
+  bool changesParticles() const override { return true; }
 
  private:
   geometry::Box<D> keep_;
@@ -154,6 +162,7 @@ class Feed final : public Effect<D> {
   explicit Feed(FeedDef<D> def);
   std::string name() const override { return "feed"; }
   void afterStep(World<D>& world) override;
+  bool changesParticles() const override { return true; }
   void saveState(StateWriter& out) const override;
   void loadState(StateReader& in) override;
   /// @brief Grains dropped so far.
@@ -162,7 +171,7 @@ class Feed final : public Effect<D> {
   double droppedMass() const { return droppedMass_; }
 
  private:
-  bool due(const World<D>& world) const;
+  bool due(World<D>& world) const;  // collective in a distributed run (World::anyWorld)
 
   FeedDef<D> def_;
   std::uint64_t dropped_ = 0;

@@ -10,8 +10,12 @@
 /// one world holding everything. World::replace hands its batch to the
 /// coordinator, which agrees with the other worlds; a world that replaced
 /// nothing in a step takes part with an empty batch (World::finishStep), so
-/// every world makes the same collective calls in the same order. A world
-/// without a coordinator (a serial run) never calls one and pays nothing.
+/// every world makes the same collective calls in the same order. Effects
+/// that remove or add particles otherwise (outflow, feeds) change them in
+/// every world alike (a world removes its mirrors of the particles that
+/// leave: their owner records them) and agree after they ran
+/// (effectChangedParticles). A world without a coordinator (a serial run)
+/// never calls one and pays nothing.
 ///
 /// No MPI here: the distributed implementation lives in parallel/.
 
@@ -79,6 +83,26 @@ class ParticleSetCoordinator {
   /// to the new set (particles that left leave, `born` and their births
   /// reach the worlds that need them). May reorder this world's particles.
   virtual void particlesReplaced(std::span<const BornParticle> born) = 0;
+
+  /// @brief Collective: whether `here` holds in any world of the run (a
+  /// decision an effect takes from the whole run's particles, such as
+  /// whether a feed's drop point is free: each world asks it of the
+  /// particles it holds).
+  virtual bool anyWorld(bool here) = 0;
+  /// @brief The run's next free global id, for a particle that an effect
+  /// adds in every world alike (a feed). Not collective: every world asks
+  /// in the same order and gets the same id.
+  virtual std::uint64_t takeId() = 0;
+  /// @brief Collective, after an effect that changes the particle set other
+  /// than through World::replace (Effect::changesParticles: outflow, feeds)
+  /// ran in every world. `changed`: this world's set changed; `added`: the
+  /// ids of the particles the effect added here (every world added them
+  /// alike). Each added particle stays where it is owned, and as a mirror
+  /// where it is in reach; the other worlds drop it. When any world's set
+  /// changed, every world's mirrors are brought up to date.
+  /// @return Whether any world's set changed: every world then evaluates its
+  /// contacts again, as one world does after a change.
+  virtual bool effectChangedParticles(bool changed, std::span<const std::uint64_t> added) = 0;
 };
 
 }  // namespace lsdem::dynamics

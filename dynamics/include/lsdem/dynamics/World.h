@@ -211,6 +211,8 @@ class World {
 
   // ---- building ----
   /// @brief Adds a particle; re-checks the time step. Returns its index.
+  /// In a distributed run a particle without an id (an effect's: a feed's)
+  /// takes the run's next free id (ParticleSetCoordinator::takeId).
   std::size_t addParticle(const ParticleDef<D>& def);
   /// @brief Folds a particle that will only be added later (a feed's grains)
   /// into the automatic time step, so a world can start before it has any
@@ -218,7 +220,8 @@ class World {
   /// @note Throws std::invalid_argument for a missing shape or a mass <= 0.
   void anticipateParticle(const ParticleDef<D>& def);
   /// @brief Removes particle `index`, recording it (for mass balance and size
-  /// distributions) with `reason`.
+  /// distributions) with `reason`. A ghost (setGhost) leaves without a
+  /// record: its owner records it.
   void removeParticle(std::size_t index, const std::string& reason);
   /// @brief Takes particle `index` out without a removal record or any
   /// booking: it goes on elsewhere (a distributed run: a mirrored particle
@@ -287,6 +290,11 @@ class World {
   void setCoordinator(ParticleSetCoordinator* coordinator) { coordinator_ = coordinator; }
   /// @brief Whether this world is one part of a distributed run (setCoordinator).
   bool isDistributed() const { return coordinator_ != nullptr; }
+  /// @brief Whether `here` holds in any world of the run: `here` itself in a
+  /// world of its own; collective in a distributed run (every world asks at
+  /// the same point of its step). For effects that decide from the whole
+  /// run's particles (Effect::changesParticles).
+  bool anyWorld(bool here) { return coordinator_ ? coordinator_->anyWorld(here) : here; }
   /// @brief Sets particle i's strength (breakage: eq. 12-13; infinite: unbreakable).
   void setStrength(std::size_t i, double strength) { particles_.strength.at(i) = strength; }
   /// @brief Tells the world particles were replaced in bulk: the broad phase
@@ -531,6 +539,10 @@ class World {
   std::vector<SplitRequest> splitRequests_;
   std::vector<SplitIds> splitIds_;
   std::vector<BornParticle> born_;
+  // While an effect that changes particles runs (Effect::changesParticles):
+  // the particle set changed here, and the ids of the particles it added.
+  bool effectChanged_ = false;
+  std::vector<ParticleId> effectAdded_;
   // The rest of a step's collective calls once the run's batch is known (not
   // empty): the run's time step, then the mirrors.
   void finishCoordination(std::size_t dtChangesBefore, double dtBefore);

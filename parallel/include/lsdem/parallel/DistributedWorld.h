@@ -51,9 +51,17 @@
 /// in the order one world does (boundaryLoads) and gives the sum to its
 /// world (World::setBoundaryLoads), which the servo reads at the next step.
 ///
-/// Not yet distributed (the constructor refuses them with the reason):
-/// effects that change the particle set other than breakage (outflow,
-/// feeds), density scaling. Gravity and damping work. The energy
+/// Outflow and feeds change the particle set alike on every rank
+/// (ParticleSetCoordinator::effectChangedParticles): a particle that leaves
+/// the outflow's box is removed by its owner, which records it, and by every
+/// rank that mirrors it; a feed decides from the whole run whether its drop
+/// point is free (one all-reduce per step), every rank adds the grain with
+/// the run's next id, and it stays with its owner and where it is in reach.
+/// After a change anywhere every rank exchanges at once and evaluates its
+/// contacts again, as one world does.
+///
+/// Not yet distributed (the constructor refuses it with the reason):
+/// density scaling. Gravity and damping work. The energy
 /// ledger of a rank's world counts its ghosts as well and is not a global
 /// budget; so do a breakage event's fragment springs (its energy check).
 
@@ -142,7 +150,7 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   /// @brief Every particle's state, sorted by id, on rank `root` (empty on
   /// the others; collective).
   std::vector<ParticleState> gather(int root) const;
-  /// @brief Every removal record of the run (breakage fines), sorted by
+  /// @brief Every removal record of the run (breakage fines, outflow), sorted by
   /// (time, id) as one world records them, on rank `root` (empty on the
   /// others; collective). `from`: leave out the first `from` records of each
   /// rank (those every rank held at the start of a resumed run).
@@ -178,6 +186,9 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
                             std::vector<dynamics::SplitIds>& ids) override;
   double agreeTimeStep(double dt, dynamics::TimeStepLimit& limit) override;
   void particlesReplaced(std::span<const dynamics::BornParticle> born) override;
+  bool anyWorld(bool here) override;
+  std::uint64_t takeId() override;
+  bool effectChangedParticles(bool changed, std::span<const std::uint64_t> added) override;
   void rebalance();
   // The shapes of particles `list` that rank `q` lacks, into `w` (then q holds them).
   void putShapes(dynamics::StateWriter& w, int q, std::span<const std::size_t> list);
@@ -213,7 +224,7 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   double skin_ = 0.0;
   bool servo_ = false;               // a tool is a servo platen: its load is the run's (reduceLoads)
   bool loadsReduced_ = false;        // the world's loads are the run's for its contacts now
-  bool coordinated_ = false;         // the world changes its particle set (breakage): world_.setCoordinator(this)
+  bool coordinated_ = false;         // the world changes its particle set (breakage, outflow, feeds): world_.setCoordinator(this)
   dynamics::ParticleId nextId_ = 0;  // the run's next free global id (coordinated runs)
   // Shapes by content hash, and the hash of each shape this rank holds.
   std::unordered_map<std::uint64_t, std::shared_ptr<const geometry::Shape<D>>> shapes_;
