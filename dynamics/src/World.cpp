@@ -273,6 +273,22 @@ double World<D>::unscaledMass(std::size_t i) const {
 }
 
 template <int D>
+double World<D>::decidedDensityScale(std::size_t i) const {
+  if (densityScales_.empty()) return 0.0;
+  const auto it = densityScales_.find(particles_.id[i]);
+  return it == densityScales_.end() ? 0.0 : it->second;
+}
+
+template <int D>
+void World<D>::setDecidedDensityScale(std::size_t i, double factor) {
+  if (factor > 0.0) {
+    densityScales_[particles_.id[i]] = factor;
+  } else {
+    densityScales_.erase(particles_.id[i]);
+  }
+}
+
+template <int D>
 void World<D>::scaleDensity(std::size_t i) {
   // Only small fragments, each decided once.
   const DensityScalingDef& ds = *def_.densityScaling;
@@ -357,7 +373,8 @@ std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
   effectChanged_ = true;
   if (!ghost_.empty()) ghost_.push_back(0);
   stiffness_.push_back(shapeStiffness(def.shape));
-  if (def_.densityScaling) scaleDensity(i);
+  // (A mass given is a copy's, scaled by its owner: setDecidedDensityScale.)
+  if (def_.densityScaling && !(def.mass > 0.0)) scaleDensity(i);
   updateTimeStep(true);
   broad_.invalidate();
   forcesValid_ = false;
@@ -591,6 +608,12 @@ std::vector<std::size_t> World<D>::replace(std::vector<Replacement<D>>& splits) 
 
 template <int D>
 void World<D>::finishCoordination(std::size_t dtChangesBefore, double dtBefore) {
+  // The new small fragments' density scaling, from the run's reference, and
+  // the step they leave this part.
+  if (def_.densityScaling) {
+    scaleNewFragments();
+    updateTimeStep(false);
+  }
   // Each part saw its own particles and mirrors; the run's step is the smallest.
   TimeStepLimit runLimit = limit_;
   dt_ = coordinator_->agreeTimeStep(dt_, runLimit);
@@ -624,20 +647,33 @@ void World<D>::particlesChanged() {
   stiffness_.resize(particles_.size());
   for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(particles_.shape[i]);
   if (def_.densityScaling) {
-    // The reference: the fastest particle the scaling leaves alone (so far);
-    // then the new small fragments; then forget the particles that left.
-    Particles<D>& p = particles_;
-    const double below = def_.densityScaling->belowDiameter;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (p.parentId[i] != kNoParent && p.shape[i]->descriptors().equivalentDiameter < below) continue;
-      scalingStats_.referenceOmega2 = std::max(scalingStats_.referenceOmega2, stiffness_[i].stiffness / p.mass[i]);
-    }
-    for (std::size_t i = 0; i < p.size(); ++i) scaleDensity(i);
-    std::vector<std::uint64_t> present(p.id.begin(), p.id.end());
-    std::sort(present.begin(), present.end());
-    std::erase_if(densityScales_, [&](const auto& e) { return !std::binary_search(present.begin(), present.end(), e.first); });
+    // A distributed run scales, and then re-checks the step (which never
+    // grows), once the run's reference is known: finishCoordination.
+    if (coordinator_) return;
+    scaleNewFragments();
   }
   updateTimeStep(false);
+}
+
+template <int D>
+void World<D>::scaleNewFragments() {
+  // The reference: the fastest particle the scaling leaves alone (so far),
+  // of the whole run; then the new small fragments (a mirror's is its
+  // owner's, decided already); then forget the particles that left.
+  Particles<D>& p = particles_;
+  const double below = def_.densityScaling->belowDiameter;
+  double reference = scalingStats_.referenceOmega2;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.parentId[i] != kNoParent && p.shape[i]->descriptors().equivalentDiameter < below) continue;
+    reference = std::max(reference, stiffness_[i].stiffness / p.mass[i]);
+  }
+  scalingStats_.referenceOmega2 = coordinator_ ? coordinator_->largest(reference) : reference;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!isGhost(i)) scaleDensity(i);
+  }
+  std::vector<std::uint64_t> present(p.id.begin(), p.id.end());
+  std::sort(present.begin(), present.end());
+  std::erase_if(densityScales_, [&](const auto& e) { return !std::binary_search(present.begin(), present.end(), e.first); });
 }
 
 template <int D>

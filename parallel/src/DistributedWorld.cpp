@@ -83,7 +83,8 @@ void getRaw(StateReader& in, std::vector<T>& v) {
 // One particle's record in a message: what a mirror or a view needs to
 // hold it as its owner does (the shape travels apart, by hash).
 template <int D>
-void putParticle(StateWriter& w, const dynamics::Particles<D>& p, std::size_t i, std::uint64_t shapeHash) {
+void putParticle(StateWriter& w, const dynamics::World<D>& world, std::size_t i, std::uint64_t shapeHash) {
+  const dynamics::Particles<D>& p = world.particles();
   w.put(p.id[i]);
   w.put(shapeHash);
   w.put(p.mass[i]);
@@ -97,10 +98,13 @@ void putParticle(StateWriter& w, const dynamics::Particles<D>& p, std::size_t i,
   w.put(p.orientation[i]);
   w.put(p.velocity[i]);
   w.put(p.angularVelocity[i]);
+  w.put(world.decidedDensityScale(i));
 }
-// Reads putParticle's record into a definition without its shape; the shape's hash into `shapeHash`.
+// Reads putParticle's record into a definition without its shape; the
+// shape's hash into `shapeHash`, the density scaling its owner decided into
+// `densityScale` (World::decidedDensityScale).
 template <int D>
-dynamics::ParticleDef<D> getParticle(StateReader& r, std::uint64_t& shapeHash) {
+dynamics::ParticleDef<D> getParticle(StateReader& r, std::uint64_t& shapeHash, double& densityScale) {
   dynamics::ParticleDef<D> def;
   def.id = r.get<ParticleId>();
   shapeHash = r.get<std::uint64_t>();
@@ -115,6 +119,7 @@ dynamics::ParticleDef<D> getParticle(StateReader& r, std::uint64_t& shapeHash) {
   def.orientation = r.get<dynamics::Orientation<D>>();
   def.velocity = r.get<Vec<D>>();
   def.angularVelocity = r.get<dynamics::Spin<D>>();
+  densityScale = r.get<double>();
   return def;
 }
 
@@ -155,9 +160,6 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
       throw std::invalid_argument("a distributed run does not support the effect '" + name +
                                   "' yet (docs/parallel.md); run it on one rank");
     }
-  }
-  if (wd.densityScaling) {
-    throw std::invalid_argument("a distributed run does not support density scaling yet (docs/parallel.md)");
   }
   for (const auto& tool : world_.tools()) {
     servo_ = servo_ || std::holds_alternative<dynamics::ServoPlaten<D>>(tool.motion);
@@ -200,6 +202,14 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   }
   if (coordinated_) world_.setCoordinator(this);
   if (resumed) world_.keepForces();
+  // The density scaling's counts are summed over the ranks (a view's are the
+  // run's): a resumed run's are rank 0's.
+  if (rank_ != 0) {
+    dynamics::DensityScalingStats stats = world_.densityScaling();
+    stats.scaled = 0;
+    stats.capped = 0;
+    world_.setDensityScalingStats(stats);
+  }
   // A checkpoint's loads are the run's; a new run's are summed at its first step.
   loadsReduced_ = resumed;
 }
@@ -369,7 +379,7 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
     w.put(std::uint64_t(list.size()));
     for (std::size_t i : list) {
       w.put(std::int32_t(newOwner[i]));
-      putParticle(w, p, i, shapeHash(p.shape[i]));
+      putParticle(w, world_, i, shapeHash(p.shape[i]));
       if (newOwner[i] == q) {
         putHistory<D>(w, world_.contacts().particleHistory(p.id[i]));
         ++stats_.migrations;
@@ -431,7 +441,8 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
     for (std::uint64_t k = 0, count = r.get<std::uint64_t>(); k < count; ++k) {
       const int owner = r.get<std::int32_t>();
       std::uint64_t h = 0;
-      dynamics::ParticleDef<D> def = getParticle<D>(r, h);
+      double densityScale = 0.0;
+      dynamics::ParticleDef<D> def = getParticle<D>(r, h, densityScale);
       if (owner == rank_) adopted.push_back({def.id, getHistory<D>(r)});
       const auto it = local.find(def.id);
       if (it != local.end()) {
@@ -441,7 +452,9 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
         world_.setGhost(it->second, owner != rank_);
       } else {
         def.shape = receivedShape(h, def.id, q);
-        world_.setGhost(world_.addParticle(def), owner != rank_);
+        const std::size_t i = world_.addParticle(def);
+        world_.setDecidedDensityScale(i, densityScale);
+        world_.setGhost(i, owner != rank_);
         keep.push_back(1);
       }
     }
@@ -697,10 +710,9 @@ void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornPartic
 }
 
 template <int D>
-bool DistributedWorld<D>::anyWorld(bool here) {
-  int flag = here ? 1 : 0;
-  check(MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MAX, comm_), "Allreduce");
-  return flag != 0;
+double DistributedWorld<D>::largest(double here) {
+  check(MPI_Allreduce(MPI_IN_PLACE, &here, 1, MPI_DOUBLE, MPI_MAX, comm_), "Allreduce");
+  return here;
 }
 
 template <int D>
@@ -731,7 +743,7 @@ bool DistributedWorld<D>::effectChangedParticles(bool changed, std::span<const s
   // A change anywhere: the mirrors follow at once (particles that left are
   // gone from every rank already, each removed by the same test), and every
   // rank evaluates its contacts again, as one world does.
-  if (!anyWorld(changed)) return false;
+  if (!(largest(changed ? 1.0 : 0.0) > 0.0)) return false;
   forceVelocity_.clear();
   forceSpin_.clear();
   exchange();
@@ -871,7 +883,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
   w.put(std::uint64_t(own.size()));
   for (std::size_t k = 0; k < own.size(); ++k) {
     const std::size_t i = own[k];
-    putParticle(w, p, i, shapeHash(p.shape[i]));
+    putParticle(w, world_, i, shapeHash(p.shape[i]));
     putHistory<D>(w, ownHistories[k]);
     w.put(halfStep ? forceVelocity_[i] : p.velocity[i]);
     w.put(halfStep ? forceSpin_[i] : p.angularVelocity[i]);
@@ -887,12 +899,14 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
   for (const auto& c : world_.contacts().toolContacts()) touchingTools.push_back({p.id[c.a], c.b});
   putRaw(w, touching);
   putRaw(w, touchingTools);
+  w.put(world_.densityScaling());  // this rank's decisions
   const std::vector<std::vector<char>> parts = gatherBytes(w.bytes(), root);
   if (rank_ != root) return;
 
   struct Entry {
     dynamics::ParticleDef<D> def;
     std::uint64_t hash = 0;
+    double densityScale = 0.0;
     int from = 0;
     typename dynamics::ContactSolver<D>::ParticleHistory history;
     Vec<D> forceVelocity;
@@ -901,6 +915,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
     dynamics::Spin<D> torque;
   };
   std::vector<Entry> run;
+  dynamics::DensityScalingStats scaling;
   touching.clear();  // (root's own are in its part)
   touchingTools.clear();
   for (int q = 0; q < ranks_; ++q) {
@@ -909,7 +924,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
     getShapes(r, q);
     for (std::uint64_t k = 0, count = r.get<std::uint64_t>(); k < count; ++k) {
       Entry e;
-      e.def = getParticle<D>(r, e.hash);
+      e.def = getParticle<D>(r, e.hash, e.densityScale);
       e.from = q;
       e.history = getHistory<D>(r);
       e.forceVelocity = r.get<Vec<D>>();
@@ -923,6 +938,12 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
     touching.insert(touching.end(), part.begin(), part.end());
     getRaw(r, part);
     touchingTools.insert(touchingTools.end(), part.begin(), part.end());
+    // The run's density scaling: every rank's decisions, one reference.
+    const auto stats = r.get<dynamics::DensityScalingStats>();
+    scaling.scaled += stats.scaled;
+    scaling.capped += stats.capped;
+    scaling.largestFactor = std::max(scaling.largestFactor, stats.largestFactor);
+    scaling.referenceOmega2 = std::max(scaling.referenceOmega2, stats.referenceOmega2);
     if (!r.atEnd()) throw std::runtime_error("MPI view: message from rank " + std::to_string(q) + " is malformed");
   }
   std::sort(run.begin(), run.end(), [](const Entry& a, const Entry& b) { return a.def.id < b.def.id; });
@@ -946,7 +967,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
       view.setStrength(it->second, e.def.strength);
     } else {
       e.def.shape = receivedShape(e.hash, e.def.id, e.from);
-      view.addParticle(e.def);
+      view.setDecidedDensityScale(view.addParticle(e.def), e.densityScale);
     }
   }
   std::vector<ParticleId> ids;
@@ -966,6 +987,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
     list->erase(std::unique(list->begin(), list->end()), list->end());
   }
   view.showRunOf(world_, shown, touching, touchingTools);
+  view.setDensityScalingStats(scaling);
 }
 
 template class DistributedWorld<2>;

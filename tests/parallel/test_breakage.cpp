@@ -51,6 +51,7 @@ struct Counts {
   std::size_t breakages = 0;
   std::size_t fines = 0;
   std::size_t particles = 0;
+  std::size_t scaled = 0;  // fragments the density scaling scaled (serial)
 };
 
 // Runs `steps` steps of the scene in one world and spread over the ranks;
@@ -91,10 +92,29 @@ Counts expectEqualToSerial(const io::SceneDef<D>& scene, std::uint64_t steps, st
   std::uint64_t migrations = dist.stats().migrations;
   MPI_Allreduce(MPI_IN_PLACE, &migrations, 1, MPI_UINT64_T, MPI_SUM, comm);
 
+  // Density scaling: every rank's decisions, summed, are the serial ones.
+  std::uint64_t scaledHere = local.world->densityScaling().scaled;
+  MPI_Allreduce(MPI_IN_PLACE, &scaledHere, 1, MPI_UINT64_T, MPI_SUM, comm);
+  EXPECT_EQ(scaledHere, serial.world->densityScaling().scaled);
+  EXPECT_EQ(local.world->densityScaling().referenceOmega2, serial.world->densityScaling().referenceOmega2);
+  // Each particle a rank holds (its own and mirrors) has the serial particle's scale and mass.
+  {
+    const dynamics::Particles<D>& p = serial.world->particles();
+    const dynamics::Particles<D>& q = local.world->particles();
+    for (std::size_t j = 0; j < q.size(); ++j) {
+      const std::size_t i = std::size_t(std::find(p.id.begin(), p.id.end(), q.id[j]) - p.id.begin());
+      EXPECT_LT(i, p.size()) << "id " << q.id[j];
+      if (i == p.size()) break;
+      EXPECT_EQ(local.world->decidedDensityScale(j), serial.world->decidedDensityScale(i)) << "id " << q.id[j];
+      EXPECT_EQ(q.mass[j], p.mass[i]) << "id " << q.id[j];
+    }
+  }
+
   Counts c;
   c.breakages = serial.breakage->breakages();
   c.particles = serial.world->particles().size();
   c.fines = serial.world->removed().size();
+  c.scaled = serial.world->densityScaling().scaled;
   if (rankOf(comm) != 0) return c;
   int ranks = 1;
   MPI_Comm_size(comm, &ranks);
@@ -173,6 +193,21 @@ TEST(DistributedBreakage, ThreeGrains2DEqualsSerialBitForBit) {
   const Counts c = expectEqualToSerial(scene, 6000, 2);
   EXPECT_GE(c.breakages, 20u);
   EXPECT_GT(c.fines, 0u);
+}
+
+// The same with density scaling of the fragments under half a grain: each
+// rank scales its own fragments from the whole run's reference, and a
+// fragment's scale travels with it to the ranks that mirror or take it.
+TEST(DistributedBreakage, ThreeGrains2DWithDensityScalingEqualsSerialBitForBit) {
+  const auto scene = threeGrains<2>("three_grains_2d.toml",
+                                    {{"simulation.density_scaling_below", "0.0005"},
+                                     {"simulation.density_scaling_max", "100"}},
+                                    {{"point = [0.0, 0.0035]", "point = [0.0, 0.00335]"},
+                                     {"velocity = [0.0, -0.02]", "velocity = [0.0, -0.2]"}});
+  ASSERT_TRUE(scene.world.densityScaling);
+  const Counts c = expectEqualToSerial(scene, 6000, 2);
+  EXPECT_GE(c.breakages, 20u);
+  EXPECT_GE(c.scaled, 3u);
 }
 
 // The 3D stack likewise (platen 7.5x faster): the grains break into a few

@@ -84,11 +84,10 @@ class ParticleSetCoordinator {
   /// reach the worlds that need them). May reorder this world's particles.
   virtual void particlesReplaced(std::span<const BornParticle> born) = 0;
 
-  /// @brief Collective: whether `here` holds in any world of the run (a
-  /// decision an effect takes from the whole run's particles, such as
-  /// whether a feed's drop point is free: each world asks it of the
-  /// particles it holds).
-  virtual bool anyWorld(bool here) = 0;
+  /// @brief Collective: the largest of the worlds' `here`. For what is
+  /// decided from the whole run's particles: whether a feed's drop point is
+  /// free (World::anyWorld), the density scaling's reference.
+  virtual double largest(double here) = 0;
   /// @brief The run's next free global id, for a particle that an effect
   /// adds in every world alike (a feed). Not collective: every world asks
   /// in the same order and gets the same id.

@@ -294,7 +294,7 @@ class World {
   /// world of its own; collective in a distributed run (every world asks at
   /// the same point of its step). For effects that decide from the whole
   /// run's particles (Effect::changesParticles).
-  bool anyWorld(bool here) { return coordinator_ ? coordinator_->anyWorld(here) : here; }
+  bool anyWorld(bool here) { return coordinator_ ? coordinator_->largest(here ? 1.0 : 0.0) > 0.0 : here; }
   /// @brief Sets particle i's strength (breakage: eq. 12-13; infinite: unbreakable).
   void setStrength(std::size_t i, double strength) { particles_.strength.at(i) = strength; }
   /// @brief Tells the world particles were replaced in bulk: the broad phase
@@ -418,6 +418,16 @@ class World {
   double densityScale(std::size_t i) const;
   /// @brief What the density scaling did (all zero without it).
   const DensityScalingStats& densityScaling() const { return scalingStats_; }
+  /// @brief Particle i's density scaling as decided (0: not decided: not a
+  /// small fragment, or no scaling), for a copy of the particle elsewhere.
+  double decidedDensityScale(std::size_t i) const;
+  /// @brief Gives particle i the decision `factor` (decidedDensityScale; 0:
+  /// none) without touching its mass: a distributed run's mirror or view of
+  /// a particle, whose mass came with it as its owner scaled it.
+  void setDecidedDensityScale(std::size_t i, double factor);
+  /// @brief Sets what the density scaling did (a view of a distributed run:
+  /// the run's totals).
+  void setDensityScalingStats(const DensityScalingStats& stats) { scalingStats_ = stats; }
   std::uint64_t steps() const { return steps_; }
   const WorldDef<D>& def() const { return def_; }
   const ContactSolver<D>& contacts() const { return contacts_; }
@@ -486,6 +496,10 @@ class World {
   /// Density scaling of particle i if it is a small fragment not yet decided
   /// (DensityScalingDef); books the kinetic energy it adds.
   void scaleDensity(std::size_t i);
+  /// After a replacement: the reference (the whole run's, collective in a
+  /// distributed run), then the new small fragments' factors; forgets the
+  /// particles that left.
+  void scaleNewFragments();
   /// The TimeStepLimit of particle i (its stiffness must be current).
   TimeStepLimit limitOf(std::size_t i) const;
   void refreshEnergy() const;

@@ -186,7 +186,7 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
                             std::vector<dynamics::SplitIds>& ids) override;
   double agreeTimeStep(double dt, dynamics::TimeStepLimit& limit) override;
   void particlesReplaced(std::span<const dynamics::BornParticle> born) override;
-  bool anyWorld(bool here) override;
+  double largest(double here) override;
   std::uint64_t takeId() override;
   bool effectChangedParticles(bool changed, std::span<const std::uint64_t> added) override;
   void rebalance();
