@@ -532,8 +532,10 @@ std::vector<std::size_t> World<D>::replace(std::vector<Replacement<D>>& splits) 
   }
   // A distributed run: the run's ids for this batch (collective).
   if (coordinator_) {
-    if (coordinatedThisStep_) {
-      throw std::logic_error("World::replace: a distributed run replaces particles at most once per step");
+    if (!replaceAllowed_ || coordinatedThisStep_) {
+      throw std::logic_error(
+          "World::replace: in a distributed run only an effect that declares replacesParticles() replaces particles, "
+          "at most once per step");
     }
     splitRequests_.clear();
     for (const Replacement<D>& s : splits) {
@@ -608,15 +610,18 @@ std::vector<std::size_t> World<D>::replace(std::vector<Replacement<D>>& splits) 
 
 template <int D>
 void World<D>::finishCoordination(std::size_t dtChangesBefore, double dtBefore) {
-  // The new small fragments' density scaling, from the run's reference, and
-  // the step they leave this part.
-  if (def_.densityScaling) {
-    scaleNewFragments();
-    updateTimeStep(false);
-  }
-  // Each part saw its own particles and mirrors; the run's step is the smallest.
+  // The new small fragments' density scaling, from the run's reference; the
+  // critical step of what this part holds (one world takes it over all its
+  // particles after a replacement).
+  if (def_.densityScaling) scaleNewFragments();
+  updateTimeStep(false);
+  // Each part saw its own particles and mirrors; the run's step is the
+  // smallest, and every part keeps the run's critical step and what sets it
+  // (a mirror that arrives later cannot lower it: it was counted).
   TimeStepLimit runLimit = limit_;
   dt_ = coordinator_->agreeTimeStep(dt_, runLimit);
+  dtCritical_ = runLimit.criticalDt;
+  limit_ = runLimit;
   dtChanges_.resize(dtChangesBefore);
   if (dt_ != dtBefore) dtChanges_.push_back({time_, dt_, runLimit});
   coordinator_->particlesReplaced(born_);
@@ -646,12 +651,10 @@ void World<D>::particlesChanged() {
   energyCurrent_ = false;
   stiffness_.resize(particles_.size());
   for (std::size_t i = 0; i < particles_.size(); ++i) stiffness_[i] = shapeStiffness(particles_.shape[i]);
-  if (def_.densityScaling) {
-    // A distributed run scales, and then re-checks the step (which never
-    // grows), once the run's reference is known: finishCoordination.
-    if (coordinator_) return;
-    scaleNewFragments();
-  }
+  // A distributed run scales, and then re-checks the step (which never
+  // grows), once the run's reference is known: finishCoordination.
+  if (coordinator_) return;
+  if (def_.densityScaling) scaleNewFragments();
   updateTimeStep(false);
 }
 
@@ -838,8 +841,10 @@ void World<D>::showRunOf(const World& run, std::span<const ShownParticle> shown,
       !std::is_sorted(touchingTools.begin(), touchingTools.end())) {
     throw std::invalid_argument("World::showRunOf: the touching pairs are not in ascending order");
   }
-  // The critical step of the whole set (particles came and went), then the run's step.
-  if (!particles_.empty()) updateTimeStep(false);
+  // The run's critical step and what sets it (every part of a distributed
+  // run keeps the run's: finishCoordination), and its step.
+  dtCritical_ = run.dtCritical_;
+  limit_ = run.limit_;
   time_ = run.time_;
   steps_ = run.steps_;
   dt_ = run.dt_;
@@ -942,30 +947,12 @@ void World<D>::finishStep() {
   for (std::size_t e = 0; e < effects_.size(); ++e) {
     const auto te = Clock::now();
     if (effects_[e]->readsContacts()) refreshContacts();
-    if (coordinator_ && effects_[e]->changesParticles()) {
-      // A distributed run: the worlds agree on what the effect changed.
-      effectChanged_ = false;
-      effectAdded_.clear();
-      effects_[e]->afterStep(*this);
-      if (coordinator_->effectChangedParticles(effectChanged_, effectAdded_)) {
-        broad_.invalidate();
-        forcesValid_ = false;
-        energyCurrent_ = false;
-      }
-      effectAdded_.clear();
+    if (coordinator_) {
+      afterStepCoordinated(*effects_[e]);
     } else {
       effects_[e]->afterStep(*this);
     }
     effectSeconds_[e] += secondsSince(te);
-  }
-  // A distributed run: a step that replaced nothing here still takes part
-  // in the run's collective calls (ParticleSetCoordinator.h).
-  if (coordinator_) {
-    if (!coordinatedThisStep_) {
-      born_.clear();
-      if (coordinator_->allocateIds({}, splitIds_) > 0) finishCoordination(dtChanges_.size(), dt_);
-    }
-    coordinatedThisStep_ = false;
   }
   stageSeconds_[std::size_t(Stage::AfterStep)] += secondsSince(t0);
 
@@ -973,6 +960,32 @@ void World<D>::finishStep() {
   // ledger is read (energy()), not every step.
   energyCurrent_ = false;
   if (def_.checkFinite) checkFinite();
+}
+
+template <int D>
+void World<D>::afterStepCoordinated(Effect<D>& effect) {
+  // Every world makes the same collective calls after the same effects, in
+  // the scene's order (ParticleSetCoordinator.h).
+  const bool replaces = effect.replacesParticles();
+  const bool changes = effect.changesParticles();
+  effectChanged_ = false;
+  effectAdded_.clear();
+  coordinatedThisStep_ = false;
+  replaceAllowed_ = replaces;
+  effect.afterStep(*this);
+  replaceAllowed_ = false;
+  // A world that replaced nothing takes part with an empty batch.
+  if (replaces && !coordinatedThisStep_) {
+    born_.clear();
+    if (coordinator_->allocateIds({}, splitIds_) > 0) finishCoordination(dtChanges_.size(), dt_);
+  }
+  coordinatedThisStep_ = false;
+  if (changes && coordinator_->effectChangedParticles(effectChanged_, effectAdded_)) {
+    broad_.invalidate();
+    forcesValid_ = false;
+    energyCurrent_ = false;
+  }
+  effectAdded_.clear();
 }
 
 template <int D>

@@ -186,7 +186,8 @@ class Runner {
   // yet, so the view keeps none (its terms would read 0).
   SceneDef<D> viewScene() const {
     SceneDef<D> s = scene_;
-    s.groups.clear();
+    // (Its particles are the run's; a feed stays, as the effect whose state the view shows.)
+    std::erase_if(s.groups, [](const ParticleGroupDef<D>& g) { return g.placement != Placement::Feed; });
     s.world.energyLedger = false;
     s.world.checkFinite = false;
     return s;

@@ -241,6 +241,7 @@ class Breakage final : public dynamics::Effect<D> {
   void afterStep(dynamics::World<D>& world) override;
   /// @brief The stresses and fracture planes come from the contact records.
   bool readsContacts() const override { return true; }
+  bool replacesParticles() const override { return true; }
   /// @brief Writes the log, totals and which manual breaks are done (checkpoints).
   void saveState(dynamics::StateWriter& out) const override;
   void loadState(dynamics::StateReader& in) override;

@@ -54,6 +54,11 @@ class Effect {
   /// effect of the same afterStep changed the particles, it evaluates them
   /// again first (World::refreshContacts), so effects need no declaration order.
   virtual bool readsContacts() const { return false; }
+  /// @brief True when afterStep may replace particles (World::replace, at
+  /// most once per step: breakage). In a distributed run every world joins
+  /// the replacement's collective calls after it, with an empty batch when
+  /// it replaced nothing (ParticleSetCoordinator.h).
+  virtual bool replacesParticles() const { return false; }
   /// @brief True when afterStep may add or remove particles other than
   /// through World::replace (outflow, feeds). In a distributed run the world
   /// agrees with the others after it (ParticleSetCoordinator.h): such an

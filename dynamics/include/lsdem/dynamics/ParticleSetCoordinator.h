@@ -9,8 +9,9 @@
 /// global ids, its time step and every world's mirrors must come out as in
 /// one world holding everything. World::replace hands its batch to the
 /// coordinator, which agrees with the other worlds; a world that replaced
-/// nothing in a step takes part with an empty batch (World::finishStep), so
-/// every world makes the same collective calls in the same order. Effects
+/// nothing takes part with an empty batch right after the same effect
+/// (Effect::replacesParticles; World::finishStep), so every world makes the
+/// same collective calls in the same order. Effects
 /// that remove or add particles otherwise (outflow, feeds) change them in
 /// every world alike (a world removes its mirrors of the particles that
 /// leave: their owner records them) and agree after they ran
@@ -66,7 +67,8 @@ struct BornParticle {
 class ParticleSetCoordinator {
  public:
   virtual ~ParticleSetCoordinator() = default;
-  /// @brief Collective, once per step in every world: the global ids of this
+  /// @brief Collective, once per step and replacing effect in every world
+  /// (Effect::replacesParticles): the global ids of this
   /// world's splits. The run's splits are numbered as one world would number
   /// them (World::replace): in ascending parent id, first every fine of every
   /// split, then every child.

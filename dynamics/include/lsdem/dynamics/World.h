@@ -280,12 +280,16 @@ class World {
   /// that world's and a mirror here (isGhost).
   /// @note Throws std::out_of_range for a parent index out of range or given
   /// twice; with a coordinator, std::invalid_argument for parents not in
-  /// ascending id and std::logic_error for a second replace() in one step.
+  /// ascending id and std::logic_error for a replace() outside the afterStep
+  /// of an effect that declares Effect::replacesParticles, or a second one
+  /// in it.
   std::vector<std::size_t> replace(std::vector<Replacement<D>>& splits);
   /// @brief Makes this world one part of a run spread over several (a
   /// distributed run; ParticleSetCoordinator.h): replace() then goes through
-  /// `coordinator`, and every step that replaced nothing still takes part in
-  /// its collective calls (finishStep). Null (the default): a world of its
+  /// `coordinator`, and after each effect that may replace or change
+  /// particles (Effect::replacesParticles, changesParticles) every world
+  /// takes part in the collective calls, whether it changed any or not
+  /// (finishStep). Null (the default): a world of its
   /// own, which never calls one.
   void setCoordinator(ParticleSetCoordinator* coordinator) { coordinator_ = coordinator; }
   /// @brief Whether this world is one part of a distributed run (setCoordinator).
@@ -549,7 +553,8 @@ class World {
 
   // A distributed run (setCoordinator): null in a world of its own.
   ParticleSetCoordinator* coordinator_ = nullptr;
-  bool coordinatedThisStep_ = false;  // replace() took part in this step's collective calls
+  bool coordinatedThisStep_ = false;  // replace() took part in this effect's collective calls
+  bool replaceAllowed_ = false;       // an effect that replaces particles (Effect::replacesParticles) runs
   std::vector<SplitRequest> splitRequests_;
   std::vector<SplitIds> splitIds_;
   std::vector<BornParticle> born_;
@@ -560,6 +565,9 @@ class World {
   // The rest of a step's collective calls once the run's batch is known (not
   // empty): the run's time step, then the mirrors.
   void finishCoordination(std::size_t dtChangesBefore, double dtBefore);
+  // A distributed run: effect.afterStep, then the collective calls every
+  // world makes after it (the replacement batch, the other changes).
+  void afterStepCoordinated(Effect<D>& effect);
 
   double time_ = 0.0;
   std::uint64_t steps_ = 0;
