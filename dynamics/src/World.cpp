@@ -373,7 +373,8 @@ std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
   effectChanged_ = true;
   if (!ghost_.empty()) ghost_.push_back(0);
   stiffness_.push_back(shapeStiffness(def.shape));
-  // (A mass given is a copy's, scaled by its owner: setDecidedDensityScale.)
+  // A mass given is a copy's (a distributed run's mirror or view), as its
+  // owner scaled it; the owner's decision comes with it (setDecidedDensityScale).
   if (def_.densityScaling && !(def.mass > 0.0)) scaleDensity(i);
   updateTimeStep(true);
   broad_.invalidate();
@@ -618,7 +619,8 @@ void World<D>::finishCoordination(std::size_t dtChangesBefore, double dtBefore) 
   // Each part saw its own particles and mirrors; the run's step is the
   // smallest, and every part keeps the run's critical step and what sets it
   // (a mirror that arrives later cannot lower it: it was counted).
-  TimeStepLimit runLimit = limit_;
+  // (A part that holds no particle offers none: its limit_ is an old one.)
+  TimeStepLimit runLimit = particles_.empty() ? TimeStepLimit{} : limit_;
   dt_ = coordinator_->agreeTimeStep(dt_, runLimit);
   dtCritical_ = runLimit.criticalDt;
   limit_ = runLimit;
@@ -944,6 +946,7 @@ void World<D>::finishStep() {
   // Between steps: removal, breakage, recorders. An effect that reads the
   // contacts gets them for the particles as they are (Effect::readsContacts).
   t0 = Clock::now();
+  const std::size_t recordsBefore = removed_.size();
   for (std::size_t e = 0; e < effects_.size(); ++e) {
     const auto te = Clock::now();
     if (effects_[e]->readsContacts()) refreshContacts();
@@ -953,6 +956,13 @@ void World<D>::finishStep() {
       effects_[e]->afterStep(*this);
     }
     effectSeconds_[e] += secondsSince(te);
+  }
+  // The step's removal records (every effect's) in ascending id: removed()
+  // is in (time, id) order, whatever the effects' order, as a distributed
+  // run gathers them.
+  if (removed_.size() > recordsBefore + 1) {
+    std::sort(removed_.begin() + std::ptrdiff_t(recordsBefore), removed_.end(),
+              [](const RemovedParticle& a, const RemovedParticle& b) { return a.id < b.id; });
   }
   stageSeconds_[std::size_t(Stage::AfterStep)] += secondsSince(t0);
 

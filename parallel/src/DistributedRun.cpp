@@ -10,6 +10,15 @@ namespace {
 
 constexpr int kRoot = 0;
 
+// Gives `to` the state of `from` (an effect built from the same definition).
+template <class Effect>
+void copyState(const Effect& from, Effect& to) {
+  dynamics::StateWriter w;
+  from.saveState(w);
+  dynamics::StateReader r(w.bytes().data(), w.bytes().size());
+  to.loadState(r);
+}
+
 DistributedDef distributedDef(const io::ParallelDef& p) {
   DistributedDef def;
   def.rebalanceImbalance = p.rebalanceImbalance;
@@ -27,10 +36,7 @@ class DistributedEngine final : public io::RunEngine<D> {
     removedFrom_ = part.world->removed().size();
     if (part.breakage) {
       base_ = std::make_unique<breakage::Breakage<D>>(part.breakage->def());
-      dynamics::StateWriter w;
-      part.breakage->saveState(w);
-      dynamics::StateReader r(w.bytes().data(), w.bytes().size());
-      base_->loadState(r);
+      copyState(*part.breakage, *base_);
     }
   }
 
@@ -44,12 +50,7 @@ class DistributedEngine final : public io::RunEngine<D> {
     const std::vector<dynamics::RemovedParticle> removed = world_.gatherRemoved(kRoot, removedFrom_);
     if (world_.rank() != kRoot) return;
     // Every rank's feeds drop alike: the view's take this rank's state.
-    for (std::size_t k = 0; k < part_.feeds.size(); ++k) {
-      dynamics::StateWriter w;
-      part_.feeds[k]->saveState(w);
-      dynamics::StateReader r(w.bytes().data(), w.bytes().size());
-      view.feeds[k]->loadState(r);
-    }
+    for (std::size_t k = 0; k < part_.feeds.size(); ++k) copyState(*part_.feeds[k], *view.feeds[k]);
     // The view holds the records it was given before (and the checkpoint's); these are in (time, id) order.
     for (std::size_t k = viewRemoved_; k < removed.size(); ++k) view.world->recordRemoval(removed[k], 0.0);
     viewRemoved_ = removed.size();

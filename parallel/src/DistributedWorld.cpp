@@ -192,14 +192,7 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   std::vector<double> weights(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) weights[i] = weight(i);
   decomposition_ = Decomposition<D>::build(points, weights, ranks_);
-  for (std::size_t i = p.size(); i-- > 0;) {
-    if (decomposition_.owner(p.position[i]) == rank_) continue;
-    if (decomposition_.distance(p.position[i], rank_) < reach(i)) {
-      world_.setGhost(i, true);
-    } else {
-      world_.detachParticle(i);
-    }
-  }
+  for (std::size_t i = p.size(); i-- > 0;) place(i);
   if (coordinated_) world_.setCoordinator(this);
   if (resumed) world_.keepForces();
   // The density scaling's counts are summed over the ranks (a view's are the
@@ -212,6 +205,17 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   }
   // A checkpoint's loads are the run's; a new run's are summed at its first step.
   loadsReduced_ = resumed;
+}
+
+template <int D>
+void DistributedWorld<D>::place(std::size_t i) {
+  const Vec<D>& x = world_.particles().position[i];
+  if (decomposition_.owner(x) == rank_) return;
+  if (decomposition_.distance(x, rank_) < reach(i)) {
+    world_.setGhost(i, true);
+  } else {
+    world_.detachParticle(i);
+  }
 }
 
 template <int D>
@@ -716,6 +720,11 @@ double DistributedWorld<D>::largest(double here) {
 }
 
 template <int D>
+bool DistributedWorld<D>::anyRank(bool here) {
+  return largest(here ? 1.0 : 0.0) > 0.0;
+}
+
+template <int D>
 std::uint64_t DistributedWorld<D>::takeId() {
   return nextId_++;
 }
@@ -733,17 +742,12 @@ bool DistributedWorld<D>::effectChangedParticles(bool changed, std::span<const s
     const std::uint64_t h = shapeHash(p.shape[i]);
     for (auto& held : shapesAt_) held.insert(h);
     largestRadius_ = std::max(largestRadius_, radius(i));
-    if (decomposition_.owner(p.position[i]) == rank_) continue;
-    if (decomposition_.distance(p.position[i], rank_) < reach(i)) {
-      world_.setGhost(i, true);
-    } else {
-      world_.detachParticle(i);
-    }
+    place(i);
   }
   // A change anywhere: the mirrors follow at once (particles that left are
   // gone from every rank already, each removed by the same test), and every
   // rank evaluates its contacts again, as one world does.
-  if (!(largest(changed ? 1.0 : 0.0) > 0.0)) return false;
+  if (!anyRank(changed)) return false;
   forceVelocity_.clear();
   forceSpin_.clear();
   exchange();
@@ -988,6 +992,9 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
   }
   view.showRunOf(world_, shown, touching, touchingTools);
   view.setDensityScalingStats(scaling);
+  // The run's next free id (past particles the view never held: a fragment
+  // gone before this view, a split into fines only), for its checkpoint.
+  view.reserveIdsBelow(nextId_);
 }
 
 template class DistributedWorld<2>;

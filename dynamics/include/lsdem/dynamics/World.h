@@ -429,6 +429,9 @@ class World {
   /// none) without touching its mass: a distributed run's mirror or view of
   /// a particle, whose mass came with it as its owner scaled it.
   void setDecidedDensityScale(std::size_t i, double factor);
+  /// @brief Hands out no id below `next` from now on (a view of a
+  /// distributed run: the run's next free id, past particles it never held).
+  void reserveIdsBelow(ParticleId next) { particles_.reserveIdsBelow(next); }
   /// @brief Sets what the density scaling did (a view of a distributed run:
   /// the run's totals).
   void setDensityScalingStats(const DensityScalingStats& stats) { scalingStats_ = stats; }
@@ -460,6 +463,7 @@ class World {
     if (!energyCurrent_) refreshEnergy();
     return energy_;
   }
+  /// (In (time, id) order: each step's records sorted by id.)
   const std::vector<RemovedParticle>& removed() const { return removed_; }
   /// @brief Names of the effects that run, in order.
   std::vector<std::string> effectNames() const;

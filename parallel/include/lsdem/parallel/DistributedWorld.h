@@ -60,8 +60,11 @@
 /// After a change anywhere every rank exchanges at once and evaluates its
 /// contacts again, as one world does.
 ///
-/// Not yet distributed (the constructor refuses it with the reason):
-/// density scaling. Gravity and damping work. The energy
+/// Density scaling: after a batch of splits every rank takes the run's
+/// reference (one all-reduce), scales its own new small fragments, and a
+/// fragment's factor travels with it in every particle record.
+///
+/// Gravity and damping work. The energy
 /// ledger of a rank's world counts its ghosts as well and is not a global
 /// budget; so do a breakage event's fragment springs (its energy check).
 
@@ -190,6 +193,12 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   std::uint64_t takeId() override;
   bool effectChangedParticles(bool changed, std::span<const std::uint64_t> added) override;
   void rebalance();
+  // Local particle `i`, which this rank holds as its own: stays so when its
+  // centroid is in this rank's part, else becomes a ghost when in reach or
+  // leaves (a new world's particles, a feed's grain).
+  void place(std::size_t i);
+  // Whether `here` holds on any rank (collective).
+  bool anyRank(bool here);
   // The shapes of particles `list` that rank `q` lacks, into `w` (then q holds them).
   void putShapes(dynamics::StateWriter& w, int q, std::span<const std::size_t> list);
   // Reads putShapes' shapes, sent by rank `q`.
