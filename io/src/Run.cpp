@@ -68,8 +68,10 @@ class Runner {
     // Everything is read and checked before any output changes.
     std::string runState;
     if (resume) {
-      runState = loadCheckpoint<D>(checkpointFile(), world);
-      if (&world != sw_.world.get()) loadCheckpoint<D>(checkpointFile(), *sw_.world);
+      // (A distributed run's view too, from the same read of the file.)
+      std::vector<World*> worlds{&world};
+      if (&world != sw_.world.get()) worlds.push_back(sw_.world.get());
+      runState = loadCheckpoint<D>(checkpointFile(), worlds);
     } else {
       context_.basis.initialMass = sw_.initialMass;
       if (scene_.specimen) context_.basis.specimenHeight = specimenHeight(*scene_.specimen, world);

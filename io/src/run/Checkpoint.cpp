@@ -111,7 +111,7 @@ void writeCheckpoint(const fs::path& file, const std::string& scenePath, std::ui
 }
 
 template <int D>
-std::string loadCheckpoint(const fs::path& file, dynamics::World<D>& world) {
+std::string loadCheckpoint(const fs::path& file, std::span<dynamics::World<D>* const> worlds) {
   const std::string path = file.string();
   const std::string bytes = readCheckpointFile(path);
   return asCheckpointError(path, [&] {
@@ -126,11 +126,14 @@ std::string loadCheckpoint(const fs::path& file, dynamics::World<D>& world) {
     }
     const std::string state = in.getString();
     std::string runState = in.getString();
-    dynamics::StateReader r(state.data(), state.size());
-    world.loadState(r, [&](std::uint32_t k) {
-      if (k >= shapes.size()) throw std::runtime_error("shape " + std::to_string(k) + " is not in the checkpoint");
-      return shapes[k];
-    });
+    // Every world from the same bytes and shapes (read and checked once).
+    for (dynamics::World<D>* world : worlds) {
+      dynamics::StateReader r(state.data(), state.size());
+      world->loadState(r, [&](std::uint32_t k) {
+        if (k >= shapes.size()) throw std::runtime_error("shape " + std::to_string(k) + " is not in the checkpoint");
+        return shapes[k];
+      });
+    }
     return runState;
   });
 }
@@ -183,7 +186,7 @@ template void writeCheckpoint<2>(const fs::path&, const std::string&, std::uint6
                                  const std::string&);
 template void writeCheckpoint<3>(const fs::path&, const std::string&, std::uint64_t, const dynamics::World<3>&,
                                  const std::string&);
-template std::string loadCheckpoint<2>(const fs::path&, dynamics::World<2>&);
-template std::string loadCheckpoint<3>(const fs::path&, dynamics::World<3>&);
+template std::string loadCheckpoint<2>(const fs::path&, std::span<dynamics::World<2>* const>);
+template std::string loadCheckpoint<3>(const fs::path&, std::span<dynamics::World<3>* const>);
 
 }  // namespace lsdem::io

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -44,12 +45,13 @@ template <int D>
 void writeCheckpoint(const std::filesystem::path& file, const std::string& scenePath, std::uint64_t hash,
                      const dynamics::World<D>& world, const std::string& runState);
 
-/// @brief Restores `world` from the checkpoint `file` and returns the run's
-/// state as writeCheckpoint took it.
+/// @brief Restores each of `worlds` from the checkpoint `file` (read and
+/// checked once; the worlds share its shapes: a distributed run's part and
+/// view) and returns the run's state as writeCheckpoint took it.
 /// @note Throws InputError naming the file when it is not a checkpoint of
 /// this lsdem and dimension, or is damaged.
 template <int D>
-std::string loadCheckpoint(const std::filesystem::path& file, dynamics::World<D>& world);
+std::string loadCheckpoint(const std::filesystem::path& file, std::span<dynamics::World<D>* const> worlds);
 
 /// @brief The scene a resumed run uses: the one given, else the one the
 /// checkpoint names, else (it moved) the copy in the output folder. It must be
@@ -61,7 +63,7 @@ extern template void writeCheckpoint<2>(const std::filesystem::path&, const std:
                                         const dynamics::World<2>&, const std::string&);
 extern template void writeCheckpoint<3>(const std::filesystem::path&, const std::string&, std::uint64_t,
                                         const dynamics::World<3>&, const std::string&);
-extern template std::string loadCheckpoint<2>(const std::filesystem::path&, dynamics::World<2>&);
-extern template std::string loadCheckpoint<3>(const std::filesystem::path&, dynamics::World<3>&);
+extern template std::string loadCheckpoint<2>(const std::filesystem::path&, std::span<dynamics::World<2>* const>);
+extern template std::string loadCheckpoint<3>(const std::filesystem::path&, std::span<dynamics::World<3>* const>);
 
 }  // namespace lsdem::io
