@@ -262,9 +262,8 @@ void World<D>::boundaryMaterialsChanged() {
 
 template <int D>
 double World<D>::densityScale(std::size_t i) const {
-  if (densityScales_.empty()) return 1.0;
-  const auto it = densityScales_.find(particles_.id[i]);
-  return it == densityScales_.end() ? 1.0 : it->second;
+  const double decided = decidedDensityScale(i);  // (a factor is >= 1; 0: none decided)
+  return decided > 0.0 ? decided : 1.0;
 }
 
 template <int D>

@@ -272,7 +272,6 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra ext
     if (inIdOrder) {
       EXPECT_EQ(got, want) << what << " " << j;
     } else {
-      using std::abs;
       const auto size = [](const auto& v) {
         if constexpr (std::is_arithmetic_v<std::decay_t<decltype(v)>>) {
           return std::abs(v);
