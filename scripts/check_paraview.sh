@@ -32,7 +32,7 @@ scenes=apps/scenes/three_grains
 work=$(mktemp -d)
 copies=()
 cleanup() {
-  rm -rf "$work"
+  rm -rf "$work" "$work.pieces"
   for c in "${copies[@]}"; do rm -f "$c"; done
 }
 trap cleanup EXIT
@@ -64,10 +64,22 @@ run 2d-ascii 2d ascii 6000
 run 2d-tools 2d compressed 400 apps/scenes/jaw_crusher/jaw_crusher_css100.toml
 for c in "${copies[@]}"; do rm -f "$c"; done
 copies=()
+# A distributed run's frames in per-rank pieces ([output] frame_pieces =
+# "ranks", docs/parallel.md): the 2D scene of the 2d-binary run on 2 ranks,
+# outside $work (its files are .pvtp indices and their pieces).
+pieces=""
+if command -v mpirun >/dev/null && ldd "$lsdem" | grep -q libmpi; then
+  pieces=$work.pieces
+  mkdir -p "$pieces"
+  awk '{ print } /^\[output\][[:space:]]*$/ { print "vtk_format = \"binary\""; print "frame_pieces = \"ranks\"" }' \
+    "$scenes/three_grains_2d.toml" >"$pieces/scene.toml"
+  mpirun --allow-run-as-root --oversubscribe -np 2 -x OMP_NUM_THREADS=1 \
+    "$lsdem" run "$pieces/scene.toml" --out "$pieces/2d-pieces" --threads 1 -q --steps 6000
+fi
 echo "check_paraview: runs done ($((SECONDS - start)) s)"
 
 status=0
-"$pvpython" - "$work" >"$work/read.log" 2>&1 <<'PY' || status=$?
+"$pvpython" - "$work" "$pieces" >"$work/read.log" 2>&1 <<'PY' || status=$?
 import glob, os, re, sys
 from paraview import servermanager as sm
 import paraview.simple as pv
@@ -192,6 +204,34 @@ for dim in ("2d", "3d"):
         ref = runs.pop(0) if runs else None
     for r in runs:
         check(last_points[r] == last_points[ref], "%s and %s: particles' last frames differ" % (r, ref))
+
+# Frames in per-rank pieces: each .pvd lists .pvtp indices of 2 pieces, and
+# ParaView reads them as the frames of the same run written whole (2d-binary).
+if len(sys.argv) > 2 and sys.argv[2]:
+    folder = os.path.join(sys.argv[2], "2d-pieces")
+    whole = os.path.join(work, "2d-binary")
+    for series in ("particles", "surfaces", "contacts"):
+        pvd = os.path.join(folder, series + ".pvd")
+        listed = re.findall(r'file="([^"]+)"', open(pvd).read())
+        check(listed and all(f.endswith(".pvtp") for f in listed), "2d-pieces: %s.pvd lists %s" % (series, listed[:2]))
+        for f in listed[-1:]:
+            check(open(os.path.join(folder, f)).read().count("<Piece ") == 2, "2d-pieces: %s names not 2 pieces" % f)
+        a, b = pv.PVDReader(FileName=pvd), pv.PVDReader(FileName=os.path.join(whole, series + ".pvd"))
+        ta, tb = list(a.TimestepValues), list(b.TimestepValues)
+        check(len(ta) == len(tb), "2d-pieces: %s: %d time steps, the whole frames %d" % (series, len(ta), len(tb)))
+        a.UpdatePipeline(ta[-1])
+        b.UpdatePipeline(tb[-1])
+        da, db = sm.Fetch(a), sm.Fetch(b)
+        check(da.GetNumberOfPoints() == db.GetNumberOfPoints() and da.GetNumberOfCells() == db.GetNumberOfCells(),
+              "2d-pieces: %s at the last time: %d points %d cells, the whole frame %d points %d cells" %
+              (series, da.GetNumberOfPoints(), da.GetNumberOfCells(), db.GetNumberOfPoints(), db.GetNumberOfCells()))
+        if series == "particles":
+            pa = sorted(da.GetPoints().GetPoint(i) for i in range(da.GetNumberOfPoints()))
+            pb = sorted(db.GetPoints().GetPoint(i) for i in range(db.GetNumberOfPoints()))
+            check(pa == pb, "2d-pieces: the particles of the last frame are not those of the whole frame")
+        pv.Delete(a)
+        pv.Delete(b)
+    print("check_paraview: 2d-pieces: frames in per-rank pieces read by ParaView as the whole frames")
 
 if failures:
     for f in failures[:30]:

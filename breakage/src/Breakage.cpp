@@ -517,7 +517,7 @@ void Breakage<D>::checkEnergy(World<D>& world, std::size_t firstEvent) {
       continue;
     }
     const double gain = ev.energyGain();
-    const double scale = world.energy().scale();
+    const double scale = world.energyScale();
     if (!std::isfinite(gain) || !std::isfinite(scale)) {
       if (!std::isfinite(energyLimit_)) continue;  // reported by the ledger and the state checks
       std::ostringstream os;

@@ -18,6 +18,7 @@ void Gravity<D>::applyForces(World<D>& world, double dt) {
   const std::span<Vec<D>> force = world.forces();
   double power = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
+    if (world.isGhost(i)) continue;  // (a mirror's force and work are its owner's)
     const Vec<D> f = p.mass[i] * g_;
     force[i] += f;
     power += f.dot(p.velocity[i]);
@@ -40,6 +41,7 @@ void GlobalDamping<D>::applyForces(World<D>& world, double /*dt*/) {
   const std::span<Spin<D>> torque = world.torques();
   double power = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
+    if (world.isGhost(i)) continue;
     const Vec<D> f = -c_ * p.mass[i] * p.velocity[i];
     force[i] += f;
     power -= f.dot(p.velocity[i]);
@@ -77,6 +79,7 @@ void LocalDamping<D>::applyForces(World<D>& world, double /*dt*/) {
     power -= df * v;
   };
   for (std::size_t i = 0; i < p.size(); ++i) {
+    if (world.isGhost(i)) continue;
     for (int a = 0; a < D; ++a) damp(force[i][a], p.velocity[i][a]);
     if constexpr (D == 2) {
       damp(torque[i], p.angularVelocity[i]);

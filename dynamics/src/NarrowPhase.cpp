@@ -1642,35 +1642,40 @@ const BoundaryLoads<D>& ContactSolver<D>::accumulate(Particles<D>& particles) {
     throw std::invalid_argument("contact solver: accumulate() got " + std::to_string(particles.size()) +
                                 " particles, compute() had " + std::to_string(particleCount_));
   }
-  loads_.planeForce.assign(planeCount_, Vec<D>::Zero());
-  loads_.planeTorque.assign(planeCount_, Rotation<D>::zeroSpin());
-  loads_.toolForce.assign(toolCount_, Vec<D>::Zero());
-  loads_.toolTorque.assign(toolCount_, Rotation<D>::zeroSpin());
-  // Particle pairs: a gets the force, b the reaction.
-  std::size_t k = 0;
-  for (; k < particlePairCount_; ++k) {
+  // Particle pairs: a gets the force, b the reaction; planes and tools: the
+  // particle gets the force, the boundary's load the reaction.
+  for (std::size_t k = 0; k < pairs_.size(); ++k) {
     const PairContact<D>& rec = pairs_[k];
     particles.force[rec.a] += rec.force;
     particles.torque[rec.a] += rec.torqueA;
-    particles.force[rec.b] -= rec.force;
-    particles.torque[rec.b] += rec.torqueB;
+    if (k < particlePairCount_) {
+      particles.force[rec.b] -= rec.force;
+      particles.torque[rec.b] += rec.torqueB;
+    }
   }
-  // Planes, then tools: the particle gets the force, the boundary's load the reaction.
-  for (; k < particlePairCount_ + planePairCount_; ++k) {
+  return boundaryLoadsOf({}, loads_);
+}
+
+template <int D>
+const BoundaryLoads<D>& ContactSolver<D>::boundaryLoadsOf(const std::vector<std::uint8_t>& skip,
+                                                           BoundaryLoads<D>& out) const {
+  out.planeForce.assign(planeCount_, Vec<D>::Zero());
+  out.planeTorque.assign(planeCount_, Rotation<D>::zeroSpin());
+  out.toolForce.assign(toolCount_, Vec<D>::Zero());
+  out.toolTorque.assign(toolCount_, Rotation<D>::zeroSpin());
+  const std::size_t planeEnd = particlePairCount_ + planePairCount_;
+  for (std::size_t k = particlePairCount_; k < pairs_.size(); ++k) {
     const PairContact<D>& rec = pairs_[k];
-    particles.force[rec.a] += rec.force;
-    particles.torque[rec.a] += rec.torqueA;
-    loads_.planeForce[rec.b] -= rec.force;
-    loads_.planeTorque[rec.b] += rec.torqueB;
+    if (!skip.empty() && skip[rec.a]) continue;
+    if (k < planeEnd) {
+      out.planeForce[rec.b] -= rec.force;
+      out.planeTorque[rec.b] += rec.torqueB;
+    } else {
+      out.toolForce[rec.b] -= rec.force;
+      out.toolTorque[rec.b] += rec.torqueB;
+    }
   }
-  for (; k < pairs_.size(); ++k) {
-    const PairContact<D>& rec = pairs_[k];
-    particles.force[rec.a] += rec.force;
-    particles.torque[rec.a] += rec.torqueA;
-    loads_.toolForce[rec.b] -= rec.force;
-    loads_.toolTorque[rec.b] += rec.torqueB;
-  }
-  return loads_;
+  return out;
 }
 
 template <int D>

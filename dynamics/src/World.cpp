@@ -51,23 +51,29 @@ std::pair<Vec<D>, Spin<D>> advanced(const Particles<D>& p, std::size_t i, double
 // Power the contact dashpots take out of the particles at the velocities the
 // particles reach after `lead` seconds of their current forces: minus the
 // dashpots' work rate on the particles, plus their work rate on moving
-// boundaries (which the boundary work already counts).
+// boundaries (which the boundary work already counts). With ghosts (flags
+// not empty), each pair's work on a particle counts where that particle is
+// not a ghost (its owner, whose force on it is whole), a boundary's with
+// its particle.
 template <int D>
-double dashpotLoss(const Particles<D>& p, const ContactSolver<D>& contacts, double lead) {
+double dashpotLoss(const Particles<D>& p, const ContactSolver<D>& contacts, double lead,
+                   const std::vector<std::uint8_t>& ghost) {
   const std::span<const PairContact<D>> pairs = contacts.pairContacts();
   const std::span<const PairDashpot<D>> dash = contacts.pairDashpots();
   const std::size_t particlePairs = contacts.particleContacts().size();
+  const auto own = [&](std::size_t i) { return ghost.empty() || ghost[i] == 0; };
   double loss = 0.0;
   for (std::size_t k = 0; k < pairs.size(); ++k) {
     const PairDashpot<D>& d = dash[k];
     if (d.power == 0.0) continue;
-    const auto [va, wa] = advanced(p, pairs[k].a, lead);
-    loss -= d.force.dot(va) + Rotation<D>::dot(d.torqueA, wa);
-    if (k < particlePairs) {
+    if (own(pairs[k].a)) {
+      const auto [va, wa] = advanced(p, pairs[k].a, lead);
+      loss -= d.force.dot(va) + Rotation<D>::dot(d.torqueA, wa);
+      if (k >= particlePairs) loss += d.boundaryPower;
+    }
+    if (k < particlePairs && own(pairs[k].b)) {
       const auto [vb, wb] = advanced(p, pairs[k].b, lead);
       loss -= -d.force.dot(vb) + Rotation<D>::dot(d.torqueB, wb);
-    } else {
-      loss += d.boundaryPower;
     }
   }
   return loss;
@@ -96,6 +102,20 @@ double EnergyLedger::scale() const {
 }
 
 double EnergyLedger::relativeBalanceError() const { return balanceError() / scale(); }
+
+void EnergyLedger::add(const EnergyLedger& o) {
+  kineticTranslational += o.kineticTranslational;
+  kineticRotational += o.kineticRotational;
+  elastic += o.elastic;
+  gravityWork += o.gravityWork;
+  boundaryWork += o.boundaryWork;
+  dampingLoss += o.dampingLoss;
+  contactLoss += o.contactLoss;
+  removedEnergy += o.removedEnergy;
+  addedEnergy += o.addedEnergy;
+  splitRelease += o.splitRelease;
+  initial += o.initial;
+}
 
 template <int D>
 World<D>::World(const WorldDef<D>& def) : def_(def), broad_(def.broadPhase), contacts_(def.contact) {
@@ -359,16 +379,29 @@ void World<D>::stepFromCritical() {
 
 template <int D>
 std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
-  std::size_t i = 0;
   if (coordinator_ && def.id == kNoParent) {
-    // The run's next id, the same in every world (a feed adds alike everywhere).
+    // The run's next id, the same in every world (a feed adds alike
+    // everywhere); the world that keeps it as its own books the energy it
+    // brings (afterStepCoordinated).
     ParticleDef<D> withId = def;
     withId.id = coordinator_->takeId();
-    i = particles_.add(withId);
     effectAdded_.push_back(withId.id);
-  } else {
-    i = particles_.add(def);
+    return insertParticle(withId, false);
   }
+  return insertParticle(def, true);
+}
+
+template <int D>
+std::size_t World<D>::addCopy(const ParticleDef<D>& def, double densityScale) {
+  if (!(def.mass > 0.0)) throw std::invalid_argument("World::addCopy: a copy needs its owner's mass");
+  const std::size_t i = insertParticle(def, false);
+  setDecidedDensityScale(i, densityScale);
+  return i;
+}
+
+template <int D>
+std::size_t World<D>::insertParticle(const ParticleDef<D>& def, bool books) {
+  const std::size_t i = particles_.add(def);
   effectChanged_ = true;
   if (!ghost_.empty()) ghost_.push_back(0);
   stiffness_.push_back(shapeStiffness(def.shape));
@@ -379,7 +412,7 @@ std::size_t World<D>::addParticle(const ParticleDef<D>& def) {
   broad_.invalidate();
   forcesValid_ = false;
   energyCurrent_ = false;
-  if (steps_ > 0) energy_.addedEnergy += particles_.kineticEnergy(i);
+  if (books && steps_ > 0) energy_.addedEnergy += particles_.kineticEnergy(i);
   return i;
 }
 
@@ -625,12 +658,13 @@ void World<D>::finishCoordination(std::size_t dtChangesBefore, double dtBefore) 
   limit_ = runLimit;
   dtChanges_.resize(dtChangesBefore);
   if (dt_ != dtBefore) dtChanges_.push_back({time_, dt_, runLimit});
-  coordinator_->particlesReplaced(born_);
-  // One world re-evaluates all its contacts after a replacement (at once or
-  // at the next step); so does every part, whether or not its own set changed.
+  // One world re-evaluates all its contacts after a replacement; so does
+  // every part, whether or not its own set changed (the coordinator, once
+  // the mirrors are up to date).
   broad_.invalidate();
   forcesValid_ = false;
   energyCurrent_ = false;
+  coordinator_->particlesReplaced(born_);
 }
 
 template <int D>
@@ -747,6 +781,13 @@ void World<D>::computeForces(double dtClosing) {
   }
   contacts_.compute(particles_, *pairs, planes_, toolPoses_, dtClosing > 0.0 ? dtClosing : dt_,
                     dtClosing > 0.0 || steps_ == 0);
+  evaluatedElastic_ = contacts_.elasticEnergy();
+  if (!ghost_.empty()) {
+    evaluatedElastic_ = 0.0;
+    for (const PairContact<D>& rec : contacts_.pairContacts()) {
+      if (!ghost_[rec.a]) evaluatedElastic_ += rec.elasticEnergy;
+    }
+  }
   stageSeconds_[std::size_t(Stage::NarrowPhase)] += secondsSince(t0);
 
   // Sum contact forces into the particles in a fixed order.
@@ -778,20 +819,30 @@ void World<D>::bookClosing(double dtClosing) {
   // Sliding friction: capping a shear spring at the Coulomb limit took
   // energy out of it at this evaluation, booked whole (power x the solver's
   // step). At a re-evaluation between steps that drop is part of splitRelease.
+  // With ghosts, a pair's loss is booked where its lower-id particle (a) is
+  // not a ghost.
   if (dtClosing > 0.0) {
-    double dashpotPower = 0.0;
-    for (const PairDashpot<D>& d : contacts_.pairDashpots()) dashpotPower += d.power;
-    energy_.contactLoss += (contacts_.dissipatedPower() - dashpotPower) * dtClosing;
+    const std::span<const PairContact<D>> records = contacts_.pairContacts();
+    const std::span<const PairDashpot<D>> dash = contacts_.pairDashpots();
+    double dissipated = 0.0, dashpotPower = 0.0;
+    for (std::size_t k = 0; k < records.size(); ++k) {
+      if (isGhost(records[k].a)) continue;
+      dissipated += records[k].dissipatedPower;
+      dashpotPower += dash[k].power;
+    }
+    energy_.contactLoss += (dissipated - dashpotPower) * dtClosing;
   }
 
-  // Powers of the damping effects and moving boundaries (see lastPower_).
+  // Powers of the damping effects and moving boundaries (see lastPower_),
+  // with ghosts through this world's own particles only.
   double dampingPower = 0.0;
   for (const auto& e : effects_) dampingPower += e->dampingPower();
+  const BoundaryLoads<D>& loads = ghost_.empty() ? loads_ : contacts_.boundaryLoadsOf(ghost_, ownLoads_);
   double boundaryPower = 0.0;
-  for (std::size_t k = 0; k < planes_.size(); ++k) boundaryPower -= loads_.planeForce[k].dot(planes_[k].velocity);
+  for (std::size_t k = 0; k < planes_.size(); ++k) boundaryPower -= loads.planeForce[k].dot(planes_[k].velocity);
   for (std::size_t k = 0; k < toolPoses_.size(); ++k) {
-    boundaryPower -= loads_.toolForce[k].dot(toolPoses_[k].velocity);
-    boundaryPower -= Rotation<D>::dot(loads_.toolTorque[k], toolPoses_[k].angularVelocity);
+    boundaryPower -= loads.toolForce[k].dot(toolPoses_[k].velocity);
+    boundaryPower -= Rotation<D>::dot(loads.toolTorque[k], toolPoses_[k].angularVelocity);
   }
   lastPower_ = {dampingPower, boundaryPower};
 
@@ -809,21 +860,48 @@ void World<D>::bookHalfKick(double halfDt, double lead) {
   // c v^2 dt instead overstates the loss by about c dt / (2 m) of it, which for
   // small or slender bodies (whose effective mass at a contact is a fraction
   // of their mass) showed as energy from nothing.
-  if (def_.contact.hasDamping) energy_.contactLoss += halfDt * dashpotLoss(particles_, contacts_, lead);
+  if (def_.contact.hasDamping) energy_.contactLoss += halfDt * dashpotLoss(particles_, contacts_, lead, ghost_);
 }
 
 template <int D>
 void World<D>::refreshContacts() {
   if (forcesValid_) return;
-  const double elasticBefore = contacts_.elasticEnergy();
+  const double elasticBefore = evaluatedElastic_;
   computeForces(0.0);
   energyCurrent_ = false;
   if (steps_ == 0) {
     refreshEnergy();
     energy_.initial = energy_.total();
   } else {
-    energy_.splitRelease += (elasticBefore - contacts_.elasticEnergy());
+    energy_.splitRelease += (elasticBefore - evaluatedElastic_);
   }
+}
+
+template <int D>
+void World<D>::keepForces() {
+  keepForces_ = true;
+  if (def_.energyLedger && forcesValid_) bookHalfKick(0.5 * dt_, 0.25 * dt_);
+}
+
+template <int D>
+EnergyLedger World<D>::bookedEnergy() const {
+  EnergyLedger e = energy_;
+  e.kineticTranslational = 0.0;
+  e.kineticRotational = 0.0;
+  e.elastic = 0.0;
+  return e;
+}
+
+template <int D>
+void World<D>::setBookedEnergy(const EnergyLedger& booked) {
+  energy_ = booked;
+  energyCurrent_ = false;
+}
+
+template <int D>
+void World<D>::resetLedger() {
+  setBookedEnergy({});
+  evaluatedElastic_ = 0.0;
 }
 
 template <int D>
@@ -913,12 +991,14 @@ void World<D>::beginStep() {
     throw std::logic_error("no time step: give dt, or add particles so the automatic step can be estimated");
   }
   // Forces of the current state, once, before the first step or after changes.
-  if (!keepForces_) refreshContacts();
+  // (Kept forces: keepForces booked this half kick.)
+  const bool keptForces = keepForces_;
+  if (!keptForces) refreshContacts();
   keepForces_ = false;
 
   // The opening half kick books the work of the forces it applies.
   auto t0 = Clock::now();
-  if (def_.energyLedger) bookHalfKick(0.5 * dt_, 0.25 * dt_);
+  if (def_.energyLedger && !keptForces) bookHalfKick(0.5 * dt_, 0.25 * dt_);
   stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
 
   // Half kick and drift.
@@ -993,6 +1073,15 @@ void World<D>::afterStepCoordinated(Effect<D>& effect) {
     broad_.invalidate();
     forcesValid_ = false;
     energyCurrent_ = false;
+  }
+  // The energy a new particle brings, booked once: by the world that keeps
+  // it as its own.
+  if (!effectAdded_.empty() && steps_ > 0) {
+    for (std::size_t i = 0; i < particles_.size(); ++i) {
+      if (!isGhost(i) && std::find(effectAdded_.begin(), effectAdded_.end(), particles_.id[i]) != effectAdded_.end()) {
+        energy_.addedEnergy += particles_.kineticEnergy(i);
+      }
+    }
   }
   effectAdded_.clear();
 }
@@ -1106,6 +1195,7 @@ void World<D>::loadState(StateReader& in,
   particles_.loadState(in, shapeAt);
   ghost_.clear();  // a checkpoint holds one world's own particles
   contacts_.loadState(in);
+  evaluatedElastic_ = contacts_.elasticEnergy();
   in.getVector(loads_.planeForce);
   in.getVector(loads_.planeTorque);
   in.getVector(loads_.toolForce);
@@ -1144,12 +1234,13 @@ template <int D>
 void World<D>::refreshEnergy() const {
   double kt = 0.0, kr = 0.0;
   for (std::size_t i = 0; i < particles_.size(); ++i) {
+    if (isGhost(i)) continue;
     kt += particles_.translationalEnergy(i);
     kr += particles_.rotationalEnergy(i);
   }
   energy_.kineticTranslational = kt;
   energy_.kineticRotational = kr;
-  energy_.elastic = contacts_.elasticEnergy();
+  energy_.elastic = evaluatedElastic_;
   energyCurrent_ = true;
 }
 

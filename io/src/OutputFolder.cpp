@@ -36,7 +36,9 @@ std::vector<std::string> outputFiles() {
 bool isFrameFile(const std::string& name) {
   for (const char* series : outputs::kSeries) {
     if (name.rfind(std::string(series) + "_", 0) != 0) continue;
-    return name.ends_with(".vtp") || name.ends_with(".vtp.tmp");
+    // (.pvtp: a distributed run's index of the ranks' pieces.)
+    return name.ends_with(".vtp") || name.ends_with(".vtp.tmp") || name.ends_with(".pvtp") ||
+           name.ends_with(".pvtp.tmp");
   }
   return false;
 }

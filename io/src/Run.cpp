@@ -13,6 +13,7 @@
 #include "OutputFolder.h"
 #include "OutputNames.h"
 #include "run/Checkpoint.h"
+#include "run/FrameRecorder.h"
 #include "run/RunPlan.h"
 #include "run/Specimen.h"
 
@@ -81,6 +82,13 @@ class Runner {
     checkpoints_ = checkpointSchedule(scene_, end_, world);
     // (Every process keeps the schedules; only the one that writes records.)
     recorders_ = makeRecorders(context_, end_);
+    // A distributed run's frames in per-rank pieces: every process writes its piece.
+    if (engine && scene_.output.framePiecesPerRank) {
+      for (auto& r : recorders_) {
+        if (auto* f = dynamic_cast<FrameRecorder<D>*>(r.get())) frames_ = f;
+      }
+      if (frames_) frames_->usePieces(engine->ranks);
+    }
     if (resume) loadRunState(runState);
     if (engine) engine_ = makeEngine(*engine);
     if (writes_) {
@@ -102,6 +110,9 @@ class Runner {
       updateView();
       if (writes_) {
         for (auto& r : recorders_) r->create();
+      }
+      writeFramePieces(true);
+      if (writes_) {
         for (auto& r : recorders_) r->record(*sw_.world, now());
       }
       advanceSchedules();
@@ -130,6 +141,7 @@ class Runner {
       bool due = checkpoint;
       for (auto& r : recorders_) due = due || r->schedule().due(t);
       if (due) updateView();
+      if (frames_) writeFramePieces(frames_->schedule().due(t));
       if (writes_) {
         for (auto& r : recorders_) {
           if (r->schedule().due(t)) r->record(*sw_.world, t);
@@ -150,6 +162,7 @@ class Runner {
     updateView();
     writeCheckpoint();
     context_.stopped = stopped;
+    if (frames_) writeFramePieces(frames_->recordsAtFinish(now()));
     if (writes_) {
       for (auto& r : recorders_) r->finish(*sw_.world, now());
     }
@@ -184,13 +197,12 @@ class Runner {
   const SceneWorld<D>& stepped() const { return part_.world ? part_ : sw_; }
   Instant now() const { return end_.now(stepped().world->time(), stepped().world->steps()); }
   // The scene of a distributed run's view, without its particles (the view
-  // takes the part's). Its energy budget is not summed over the processes
-  // yet, so the view keeps none (its terms would read 0).
+  // takes the part's). Its energy ledger is the sum of the parts'
+  // (DistributedWorld::updateView).
   SceneDef<D> viewScene() const {
     SceneDef<D> s = scene_;
     // (Its particles are the run's; a feed stays, as the effect whose state the view shows.)
     std::erase_if(s.groups, [](const ParticleGroupDef<D>& g) { return g.placement != Placement::Feed; });
-    s.world.energyLedger = false;
     s.world.checkFinite = false;
     return s;
   }
@@ -208,6 +220,18 @@ class Runner {
   // A distributed run: the view of the whole run brought up to now (collective).
   void updateView() {
     if (engine_) engine_->updateView(sw_);
+  }
+  // A distributed run whose frames are per-rank pieces, when the writing
+  // process writes a frame now (`due` there): every process writes its piece
+  // of the world it steps first (collective). Without pieces: nothing.
+  void writeFramePieces(bool due) {
+    if (!frames_) return;
+    constexpr std::uint64_t kNone = ~std::uint64_t(0);
+    const std::uint64_t number = engine_->fromWriter(writes_ && due ? frames_->nextFrame() : kNone);
+    if (number == kNone) return;
+    frames_->writePiece(*stepped().world, number, options_.engine->rank);
+    // The frame's index names every piece: written once they all are.
+    engine_->barrier();
   }
   void advanceSchedules() {
     const Instant t = now();
@@ -308,6 +332,7 @@ class Runner {
   SceneWorld<D> part_;    // a distributed run's writing process: the world it steps (its part of the run)
   bool writes_ = true;    // this process writes the outputs
   std::unique_ptr<RunEngine<D>> engine_;  // a distributed run's; null: steps here
+  FrameRecorder<D>* frames_ = nullptr;    // a distributed run's frames in per-rank pieces (in recorders_)
   RunContext<D> context_;
   RunEnd end_;
   Schedule checkpoints_;

@@ -833,6 +833,13 @@ class SceneReader {
     } else if (r.boolean("ascii", false)) {
       o.vtkFormat = VtkEncoding::Ascii;  // the older key
     }
+    if (r.has("frame_pieces")) {
+      const std::string pieces = r.string("frame_pieces");
+      if (pieces != "gathered" && pieces != "ranks") {
+        r.fail("frame_pieces", "unknown choice '" + pieces + "' (gathered, ranks)");
+      }
+      o.framePiecesPerRank = pieces == "ranks";
+    }
     o.historyRows = count("history_rows", o.historyRows);
     o.distributions = count("distributions", o.distributions);
     if (r.has("distribution_times")) {

@@ -652,6 +652,50 @@ void writeVtp(const std::filesystem::path& file, const VtpPiece& piece, VtkEncod
   writeFileAtomically(file, out);
 }
 
+VtpPiece layoutOf(const VtpPiece& piece) {
+  VtpPiece layout;
+  const auto strip = [](const std::vector<VtkArray>& arrays, std::vector<VtkArray>& into) {
+    for (const VtkArray& a : arrays) {
+      VtkArray e{a.name, a.components, {}};
+      std::visit([&](const auto& v) { e.values = std::decay_t<decltype(v)>(); }, a.values);
+      into.push_back(std::move(e));
+    }
+  };
+  strip(piece.pointData, layout.pointData);
+  strip(piece.cellData, layout.cellData);
+  layout.singlePrecisionPoints = piece.singlePrecisionPoints;
+  return layout;
+}
+
+void writePvtp(const std::filesystem::path& file, const VtpPiece& layout, std::span<const std::string> pieceFiles) {
+  const auto declare = [](std::string& out, const VtkArray& a) {
+    std::visit(
+        [&](const auto& v) {
+          using T = typename std::decay_t<decltype(v)>::value_type;
+          out += "      <PDataArray type=\"" + std::string(vtkTypeName<T>()) + "\" Name=\"" + xmlEscape(a.name) +
+                 "\" NumberOfComponents=\"" + std::to_string(a.components) + "\"/>\n";
+        },
+        a.values);
+  };
+  std::string out = "<?xml version=\"1.0\"?>\n";
+  out += "<VTKFile type=\"PPolyData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n";
+  out += "  <PPolyData GhostLevel=\"0\">\n";
+  out += "    <PPointData>\n";
+  for (const VtkArray& a : layout.pointData) declare(out, a);
+  out += "    </PPointData>\n";
+  out += "    <PCellData>\n";
+  for (const VtkArray& a : layout.cellData) declare(out, a);
+  out += "    </PCellData>\n";
+  out += "    <PPoints>\n";
+  out += std::string("      <PDataArray type=\"") + (layout.singlePrecisionPoints ? "Float32" : "Float64") +
+         "\" Name=\"Points\" NumberOfComponents=\"3\"/>\n";
+  out += "    </PPoints>\n";
+  for (const std::string& piece : pieceFiles) out += "    <Piece Source=\"" + xmlEscape(piece) + "\"/>\n";
+  out += "  </PPolyData>\n";
+  out += "</VTKFile>\n";
+  writeFileAtomically(file, out);
+}
+
 // ---------------------------------------------------------------------------
 // Body contours and their cache
 
@@ -727,8 +771,21 @@ StressInvariants stressInvariants(const geometry::Mat<D>& sigma) {
   return out;
 }
 
+namespace {
+// The indices of the particles `world` owns (all but its ghosts: World::setGhost), in store order.
 template <int D>
-void writeParticleFrame(const std::filesystem::path& file, const dynamics::World<D>& world,
+std::vector<std::size_t> ownParticles(const dynamics::World<D>& world) {
+  std::vector<std::size_t> own;
+  own.reserve(world.particles().size());
+  for (std::size_t i = 0; i < world.particles().size(); ++i) {
+    if (!world.isGhost(i)) own.push_back(i);
+  }
+  return own;
+}
+}  // namespace
+
+template <int D>
+VtpPiece writeParticleFrame(const std::filesystem::path& file, const dynamics::World<D>& world,
                         std::span<const double> stressMeasure, VtkEncoding encoding,
                         std::span<const geometry::Mat<D>> stressTensors) {
   const dynamics::Particles<D>& p = world.particles();
@@ -738,38 +795,42 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
     throw std::invalid_argument("particle frame: " + std::to_string(stressTensors.size()) + " stress tensors for " +
                                 std::to_string(n) + " particles");
   }
-  // Per-particle columns.
+  // Per-particle columns, of the world's own particles (a distributed run's
+  // piece leaves its ghosts to their owners' pieces).
+  const std::vector<std::size_t> own = ownParticles(world);
+  const std::size_t m = own.size();
   VtpPiece piece;
-  std::vector<std::uint64_t> id(n);
-  std::vector<std::int64_t> parent(n);
-  std::vector<std::int32_t> generation(n);
-  std::vector<double> radius(n), diameter(n), mass(n), stress(n, 0.0), strength(n), ratio(n);
-  std::vector<double> meanStress(n, 0.0), vonMises(n, 0.0), principal(3 * n, 0.0);
+  std::vector<std::uint64_t> id(m);
+  std::vector<std::int64_t> parent(m);
+  std::vector<std::int32_t> generation(m);
+  std::vector<double> radius(m), diameter(m), mass(m), stress(m, 0.0), strength(m), ratio(m);
+  std::vector<double> meanStress(m, 0.0), vonMises(m, 0.0), principal(3 * m, 0.0);
   std::vector<double> velocity, spin, orientation;
   std::array<std::vector<double>, 3> axes;  // the body axes in the world (glyph orientation)
-  velocity.reserve(3 * n);
-  spin.reserve(3 * n);
-  orientation.reserve(4 * n);
-  for (auto& a : axes) a.reserve(3 * n);
-  piece.points.reserve(3 * n);
-  for (std::size_t i = 0; i < n; ++i) {
+  velocity.reserve(3 * m);
+  spin.reserve(3 * m);
+  orientation.reserve(4 * m);
+  for (auto& a : axes) a.reserve(3 * m);
+  piece.points.reserve(3 * m);
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t i = own[k];
     push3<D>(piece.points, p.position[i]);
-    const std::int64_t index = std::int64_t(i);
+    const std::int64_t index = std::int64_t(k);
     piece.verts.add(std::span<const std::int64_t>(&index, 1));
-    id[i] = p.id[i];
-    parent[i] = p.parentId[i] == dynamics::kNoParent ? -1 : std::int64_t(p.parentId[i]);
-    generation[i] = p.generation[i];
-    radius[i] = p.shape[i]->boundingRadius();
-    diameter[i] = p.shape[i]->descriptors().equivalentDiameter;
-    mass[i] = p.mass[i];
-    if (!stressMeasure.empty()) stress[i] = stressMeasure[i];
-    strength[i] = shownStrength(p.strength[i]);
-    ratio[i] = criterionRatio(stress[i], p.strength[i]);
+    id[k] = p.id[i];
+    parent[k] = p.parentId[i] == dynamics::kNoParent ? -1 : std::int64_t(p.parentId[i]);
+    generation[k] = p.generation[i];
+    radius[k] = p.shape[i]->boundingRadius();
+    diameter[k] = p.shape[i]->descriptors().equivalentDiameter;
+    mass[k] = p.mass[i];
+    if (!stressMeasure.empty()) stress[k] = stressMeasure[i];
+    strength[k] = shownStrength(p.strength[i]);
+    ratio[k] = criterionRatio(stress[k], p.strength[i]);
     if (!stressTensors.empty()) {
       const StressInvariants s = stressInvariants<D>(stressTensors[i]);
-      meanStress[i] = s.mean;
-      vonMises[i] = s.vonMises;
-      std::copy(s.principal.begin(), s.principal.end(), principal.begin() + std::ptrdiff_t(3 * i));
+      meanStress[k] = s.mean;
+      vonMises[k] = s.vonMises;
+      std::copy(s.principal.begin(), s.principal.end(), principal.begin() + std::ptrdiff_t(3 * k));
     }
     push3<D>(velocity, p.velocity[i]);
     pushSpin<D>(spin, p.angularVelocity[i]);
@@ -804,10 +865,11 @@ void writeParticleFrame(const std::filesystem::path& file, const dynamics::World
   piece.pointData.push_back({"principal_stress", 3, std::move(principal)});
   piece.time = world.time();
   writeVtp(file, piece, encoding);
+  return layoutOf(piece);
 }
 
 template <int D>
-void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
+VtpPiece writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
                        VtkEncoding encoding, std::span<const double> stressMeasure) {
   const dynamics::Particles<D>& p = world.particles();
   checkStressMeasure("surface", stressMeasure, p.size());
@@ -823,7 +885,8 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
   std::vector<float> normals;
   // Room for every point, cell and field first (a frame can hold millions).
   std::size_t totalPoints = 0, totalCells = 0, totalIndices = 0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
+  const std::vector<std::size_t> own = ownParticles(world);
+  for (const std::size_t i : own) {
     const BodyContour<D>& contour = cache.contour(p.shape[i]);
     totalPoints += contour.vertices.size();
     totalCells += contour.cellCount();
@@ -840,7 +903,7 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
   strength.reserve(totalCells);
   ratio.reserve(totalCells);
   // Each particle's body contour at its pose, with the particle's fields on its cells.
-  for (std::size_t i = 0; i < p.size(); ++i) {
+  for (const std::size_t i : own) {
     const BodyContour<D>& contour = cache.contour(p.shape[i]);
     appendPlaced<D>(piece, cells, contour, p.rotation(i), p.position[i], &normals);
     const std::size_t count = contour.cellCount();
@@ -864,6 +927,7 @@ void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<
   piece.singlePrecisionPoints = true;
   piece.time = world.time();
   writeVtp(file, piece, encoding);
+  return layoutOf(piece);
 }
 
 template <int D>
@@ -918,7 +982,7 @@ void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World
 }
 
 template <int D>
-void writeContactFrame(const std::filesystem::path& file, const dynamics::World<D>& world, VtkEncoding encoding) {
+VtpPiece writeContactFrame(const std::filesystem::path& file, const dynamics::World<D>& world, VtkEncoding encoding) {
   const dynamics::Particles<D>& p = world.particles();
   const auto& nodes = world.contacts().nodeContacts();
   VtpPiece piece;
@@ -934,7 +998,8 @@ void writeContactFrame(const std::filesystem::path& file, const dynamics::World<
   const std::span<const dynamics::PairContact<D>> pairs =
       world.contactsCurrent() ? world.contacts().particleContacts() : std::span<const dynamics::PairContact<D>>();
   for (const dynamics::PairContact<D>& c : pairs) {
-    if (c.nodeCount == 0 || c.a >= p.size() || c.b >= p.size()) continue;
+    // (A pair with a ghost is shown by the owner of its lower-id particle, a.)
+    if (c.nodeCount == 0 || c.a >= p.size() || c.b >= p.size() || world.isGhost(c.a)) continue;
     const std::int64_t first = std::int64_t(pointId.size());
     const std::array<std::int64_t, 2> ends{first, first + 1};
     piece.lines.add(ends);
@@ -974,6 +1039,7 @@ void writeContactFrame(const std::filesystem::path& file, const dynamics::World<
   piece.cellData.push_back({"id_b", 1, std::move(idB)});
   piece.time = world.time();
   writeVtp(file, piece, encoding);
+  return layoutOf(piece);
 }
 
 // ---------------------------------------------------------------------------
@@ -1109,34 +1175,92 @@ void FrameWriter<D>::updateNextFrame() {
   }
 }
 
+namespace {
+
+// `stress` when it holds one tensor per particle; else the grains' stress
+// tensors (eq. 5) into `scratch` while the contact records describe the
+// particles (zeros otherwise).
+template <int D>
+std::span<const geometry::Mat<D>> stressesOf(const dynamics::World<D>& world, std::span<const geometry::Mat<D>> stress,
+                                             std::vector<geometry::Mat<D>>& scratch) {
+  if (stress.size() == world.particles().size()) return stress;
+  scratch.clear();
+  if (world.contactsCurrent()) breakage::grainStresses(world.particles(), world.contacts(), scratch);
+  if (scratch.size() != world.particles().size()) scratch.assign(world.particles().size(), geometry::Mat<D>::Zero());
+  return scratch;
+}
+
+// A frame's number as its files spell it.
+std::string frameNumber(std::size_t number) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%06zu", number);
+  return text;
+}
+
+// The file of rank `rank`'s piece of a frame of `series`, relative to frames/.
+std::string pieceName(const char* series, const std::string& number, int rank) {
+  char text[16];
+  std::snprintf(text, sizeof(text), "_r%05d.vtp", rank);
+  return std::string(series) + "_" + number + text;
+}
+
+}  // namespace
+
+template <int D>
+std::array<VtpPiece, 3> writeFramePieces(const FrameWriterDef<D>& def, std::size_t number, int rank,
+                                         const dynamics::World<D>& world, SurfaceCache<D>& cache,
+                                         std::span<const double> stressMeasure,
+                                         std::span<const geometry::Mat<D>> stress) {
+  const std::string n = frameNumber(number);
+  const std::filesystem::path frames = def.directory / "frames";
+  std::array<VtpPiece, 3> layouts;
+  if (def.particles) {
+    std::vector<geometry::Mat<D>> scratch;
+    layouts[0] = writeParticleFrame<D>(frames / pieceName(outputs::kParticles, n, rank), world, stressMeasure,
+                                       def.encoding, stressesOf<D>(world, stress, scratch));
+  }
+  if (def.surfaces) {
+    layouts[1] = writeSurfaceFrame<D>(frames / pieceName(outputs::kSurfaces, n, rank), world, cache, def.encoding,
+                                      stressMeasure);
+  }
+  if (def.contacts) {
+    layouts[2] = writeContactFrame<D>(frames / pieceName(outputs::kContacts, n, rank), world, def.encoding);
+  }
+  return layouts;
+}
+
 template <int D>
 void FrameWriter<D>::write(const dynamics::World<D>& world, std::span<const double> stressMeasure,
                            std::span<const geometry::Mat<D>> stress) {
-  char number[32];
-  std::snprintf(number, sizeof(number), "%06zu", nextFrame_);
+  const std::string number = frameNumber(nextFrame_);
   const double time = world.time();
-  // One frame of a series: the file, then its entry.
-  auto frame = [&](std::optional<PvdSeries>& series, const char* name, const auto& writeFile) {
+  if (def_.pieces > 0 && !pieceLayouts_) {
+    throw std::logic_error("FrameWriter: a frame in pieces needs the pieces' layouts (setPieceLayouts)");
+  }
+  // One frame of a series: the file (or the index of the ranks' pieces), then its entry.
+  auto frame = [&](std::optional<PvdSeries>& series, const char* name, std::size_t layout, const auto& writeFile) {
     if (!series) return;
+    if (def_.pieces > 0) {
+      const std::string relative = std::string("frames/") + name + "_" + number + ".pvtp";
+      std::vector<std::string> pieces;
+      for (int r = 0; r < def_.pieces; ++r) pieces.push_back(pieceName(name, number, r));
+      writePvtp(def_.directory / relative, (*pieceLayouts_)[layout], pieces);
+      series->add(time, relative);
+      return;
+    }
     const std::string relative = std::string("frames/") + name + "_" + number + ".vtp";
     writeFile(def_.directory / relative);
     series->add(time, relative);
   };
-  frame(particles_, outputs::kParticles, [&](const std::filesystem::path& f) {
-    // The grains' stress tensors (eq. 5), while the contact records describe the particles.
-    if (stress.size() != world.particles().size()) {
-      stress_.clear();
-      if (world.contactsCurrent()) breakage::grainStresses(world.particles(), world.contacts(), stress_);
-      if (stress_.size() != world.particles().size()) stress_.assign(world.particles().size(), geometry::Mat<D>::Zero());
-      stress = stress_;
-    }
-    writeParticleFrame<D>(f, world, stressMeasure, def_.encoding, stress);
+  frame(particles_, outputs::kParticles, 0, [&](const std::filesystem::path& f) {
+    writeParticleFrame<D>(f, world, stressMeasure, def_.encoding, stressesOf<D>(world, stress, stress_));
   });
-  frame(surfaces_, outputs::kSurfaces,
+  frame(surfaces_, outputs::kSurfaces, 1,
         [&](const std::filesystem::path& f) { writeSurfaceFrame<D>(f, world, cache_, def_.encoding, stressMeasure); });
   if (boundaries_) writeBoundaries(world, number);
-  frame(contacts_, outputs::kContacts,
+  frame(contacts_, outputs::kContacts, 2,
         [&](const std::filesystem::path& f) { writeContactFrame<D>(f, world, def_.encoding); });
+  pieceLayouts_.reset();
   ++nextFrame_;
 }
 
@@ -1224,24 +1348,30 @@ template BodyContour<2> bodyContour<2>(const geometry::Shape<2>&);
 template BodyContour<3> bodyContour<3>(const geometry::Shape<3>&);
 template class SurfaceCache<2>;
 template class SurfaceCache<3>;
-template void writeParticleFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, std::span<const double>,
+template VtpPiece writeParticleFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, std::span<const double>,
                                     VtkEncoding, std::span<const geometry::Mat<2>>);
-template void writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, std::span<const double>,
+template VtpPiece writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, std::span<const double>,
                                     VtkEncoding, std::span<const geometry::Mat<3>>);
 template StressInvariants stressInvariants<2>(const geometry::Mat<2>&);
 template StressInvariants stressInvariants<3>(const geometry::Mat<3>&);
 template std::vector<VtpPiece> boundaryPieces<2>(const dynamics::World<2>&, SurfaceCache<2>&, const geometry::Box<2>&);
 template std::vector<VtpPiece> boundaryPieces<3>(const dynamics::World<3>&, SurfaceCache<3>&, const geometry::Box<3>&);
-template void writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
+template VtpPiece writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
                                    VtkEncoding, std::span<const double>);
-template void writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
+template VtpPiece writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
                                    VtkEncoding, std::span<const double>);
 template void writeBoundaryFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
                                     const geometry::Box<2>&, VtkEncoding);
 template void writeBoundaryFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
                                     const geometry::Box<3>&, VtkEncoding);
-template void writeContactFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, VtkEncoding);
-template void writeContactFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, VtkEncoding);
+template VtpPiece writeContactFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, VtkEncoding);
+template VtpPiece writeContactFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, VtkEncoding);
+template std::array<VtpPiece, 3> writeFramePieces<2>(const FrameWriterDef<2>&, std::size_t, int,
+                                                       const dynamics::World<2>&, SurfaceCache<2>&,
+                                                       std::span<const double>, std::span<const geometry::Mat<2>>);
+template std::array<VtpPiece, 3> writeFramePieces<3>(const FrameWriterDef<3>&, std::size_t, int,
+                                                       const dynamics::World<3>&, SurfaceCache<3>&,
+                                                       std::span<const double>, std::span<const geometry::Mat<3>>);
 template class FrameWriter<2>;
 template class FrameWriter<3>;
 

@@ -551,6 +551,18 @@ VtpPiece readVtp(const std::filesystem::path& file) {
   // The root: PolyData, little-endian, uncompressed.
   const std::optional<Tag> root = scan.next();
   if (!root || root->closing || root->name != "VTKFile") scan.fail(0, "VTKFile", "not a VTK XML file (no <VTKFile>)");
+  // A parallel index (.pvtp): its pieces, joined.
+  if (root->attribute("type").value_or("") == "PPolyData") {
+    std::vector<VtpPiece> pieces;
+    while (const std::optional<Tag> tag = scan.next()) {
+      if (tag->closing || tag->name != "Piece") continue;
+      const auto source = tag->attribute("Source");
+      if (!source || source->empty()) scan.fail(tag->begin, "Piece.Source", "missing");
+      pieces.push_back(readVtp(file.parent_path() / *source));
+    }
+    if (pieces.empty()) scan.fail(root->begin, "PPolyData", "names no piece");
+    return joinPieces(pieces);
+  }
   if (root->attribute("type").value_or("") != "PolyData") {
     scan.fail(root->begin, "VTKFile.type", "'" + root->attribute("type").value_or("") + "' is not PolyData");
   }

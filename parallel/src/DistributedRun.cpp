@@ -64,6 +64,15 @@ class DistributedEngine final : public io::RunEngine<D> {
     return flag != 0;
   }
 
+  std::uint64_t fromWriter(std::uint64_t value) override {
+    if (MPI_Bcast(&value, 1, MPI_UINT64_T, kRoot, comm_) != MPI_SUCCESS) throw std::runtime_error("MPI: Bcast failed");
+    return value;
+  }
+
+  void barrier() override {
+    if (MPI_Barrier(comm_) != MPI_SUCCESS) throw std::runtime_error("MPI: Barrier failed");
+  }
+
  private:
   io::SceneWorld<D>& part_;
   DistributedWorld<D> world_;
@@ -76,10 +85,13 @@ class DistributedEngine final : public io::RunEngine<D> {
 }  // namespace
 
 std::shared_ptr<const io::RunEngineFactory> distributedRun(MPI_Comm comm) {
-  int rank = 0;
+  int rank = 0, ranks = 1;
   if (MPI_Comm_rank(comm, &rank) != MPI_SUCCESS) throw std::runtime_error("MPI: Comm_rank failed");
+  if (MPI_Comm_size(comm, &ranks) != MPI_SUCCESS) throw std::runtime_error("MPI: Comm_size failed");
   auto factory = std::make_shared<io::RunEngineFactory>();
   factory->writesOutputs = rank == kRoot;
+  factory->rank = rank;
+  factory->ranks = ranks;
   factory->make2 = [comm](io::SceneWorld<2>& part, const io::ParallelDef& p) -> std::unique_ptr<io::RunEngine<2>> {
     return std::make_unique<DistributedEngine<2>>(comm, part, distributedDef(p));
   };

@@ -192,9 +192,15 @@ DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, 
   std::vector<double> weights(p.size());
   for (std::size_t i = 0; i < p.size(); ++i) weights[i] = weight(i);
   decomposition_ = Decomposition<D>::build(points, weights, ranks_);
+  if (resumed) world_.keepForces();  // (while its contact records are the whole run's: it books the opening half kick)
   for (std::size_t i = p.size(); i-- > 0;) place(i);
   if (coordinated_) world_.setCoordinator(this);
-  if (resumed) world_.keepForces();
+  // The energy ledger: each rank books its own particles' and pairs' terms
+  // (World::setGhost), and the run's is their sum. A world that had run
+  // already (resumed) holds the run's ledger so far: rank 0 keeps it, the
+  // others start from nothing. (A new run's parts book their initial energy
+  // at their first evaluation.)
+  if (world_.steps() > 0 && rank_ != 0) world_.resetLedger();
   // The density scaling's counts are summed over the ranks (a view's are the
   // run's): a resumed run's are rank 0's.
   if (rank_ != 0) {
@@ -456,9 +462,7 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
         world_.setGhost(it->second, owner != rank_);
       } else {
         def.shape = receivedShape(h, def.id, q);
-        const std::size_t i = world_.addParticle(def);
-        world_.setDecidedDensityScale(i, densityScale);
-        world_.setGhost(i, owner != rank_);
+        world_.setGhost(world_.addCopy(def, densityScale), owner != rank_);
         keep.push_back(1);
       }
     }
@@ -711,6 +715,11 @@ void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornPartic
   forceVelocity_.clear();  // the contacts are evaluated again now, at the velocities then
   forceSpin_.clear();
   exchange(born);
+  // Every rank evaluates its contacts on the new set now, as one world does
+  // after a batch (Breakage's energy check), and the split's energy is
+  // checked against the run's energy scale.
+  refreshStaleContacts();
+  world_.setRunEnergyScale(energy().scale());
 }
 
 template <int D>
@@ -821,6 +830,18 @@ std::vector<dynamics::RemovedParticle> DistributedWorld<D>::gatherRemoved(int ro
 }
 
 template <int D>
+dynamics::EnergyLedger DistributedWorld<D>::energy() const {
+  StateWriter w;
+  w.put(world_.energy());
+  dynamics::EnergyLedger run;
+  for (const std::vector<char>& bytes : gatherBytes(w.bytes(), kAllRanks)) {
+    StateReader r(bytes.data(), bytes.size());
+    run.add(r.get<dynamics::EnergyLedger>());
+  }
+  return run;
+}
+
+template <int D>
 double DistributedWorld<D>::particleMass() const {
   double m = 0.0;
   for (std::size_t i = 0; i < world_.particles().size(); ++i) {
@@ -904,6 +925,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
   putRaw(w, touching);
   putRaw(w, touchingTools);
   w.put(world_.densityScaling());  // this rank's decisions
+  w.put(world_.bookedEnergy());    // this rank's share of the ledger
   const std::vector<std::vector<char>> parts = gatherBytes(w.bytes(), root);
   if (rank_ != root) return;
 
@@ -920,6 +942,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
   };
   std::vector<Entry> run;
   dynamics::DensityScalingStats scaling;
+  dynamics::EnergyLedger booked;
   touching.clear();  // (root's own are in its part)
   touchingTools.clear();
   for (int q = 0; q < ranks_; ++q) {
@@ -948,6 +971,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
     scaling.capped += stats.capped;
     scaling.largestFactor = std::max(scaling.largestFactor, stats.largestFactor);
     scaling.referenceOmega2 = std::max(scaling.referenceOmega2, stats.referenceOmega2);
+    booked.add(r.get<dynamics::EnergyLedger>());  // (in rank order)
     if (!r.atEnd()) throw std::runtime_error("MPI view: message from rank " + std::to_string(q) + " is malformed");
   }
   std::sort(run.begin(), run.end(), [](const Entry& a, const Entry& b) { return a.def.id < b.def.id; });
@@ -971,7 +995,7 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
       view.setStrength(it->second, e.def.strength);
     } else {
       e.def.shape = receivedShape(e.hash, e.def.id, e.from);
-      view.setDecidedDensityScale(view.addParticle(e.def), e.densityScale);
+      view.addCopy(e.def, e.densityScale);
     }
   }
   std::vector<ParticleId> ids;
@@ -992,6 +1016,9 @@ void DistributedWorld<D>::updateView(dynamics::World<D>& view, int root) {
   }
   view.showRunOf(world_, shown, touching, touchingTools);
   view.setDensityScalingStats(scaling);
+  // The run's ledger: its booked terms summed over the ranks; the kinetic
+  // and elastic energy the view works out from the run's state.
+  view.setBookedEnergy(booked);
   // The run's next free id (past particles the view never held: a fragment
   // gone before this view, a split into fines only), for its checkpoint.
   view.reserveIdsBelow(nextId_);

@@ -99,6 +99,11 @@ TEST(Scene, ParallelSettings) {
           .string()));
   EXPECT_EQ(set.parallel.rebalanceImbalance, 0.0);
   EXPECT_EQ(set.parallel.rebalanceEvery, 50u);
+  // Frames: gathered by default, or in per-rank pieces.
+  EXPECT_FALSE(base.output.framePiecesPerRank);
+  const auto pieces =
+      as<2>(io::readScene(writeScene("frame_pieces", std::string(kBase) + "[output]\nframe_pieces = \"ranks\"\n").string()));
+  EXPECT_TRUE(pieces.output.framePiecesPerRank);
 }
 
 TEST(Scene, FrictionFromAStartTime) {
@@ -235,6 +240,8 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "whole numbers >= 0"},
       {"track_negative", std::string(kBase) + "[output]\ntrack = [-1]\n", 22, "output.track", "whole numbers >= 0"},
       {"track_twice", std::string(kBase) + "[output]\ntrack = [1, 0, 1]\n", 22, "output.track", "listed twice"},
+      {"frame_pieces", std::string(kBase) + "[output]\nframe_pieces = \"rank\"\n", 22, "output.frame_pieces",
+       "unknown choice 'rank' (gathered, ranks)"},
       {"track_every_alone", std::string(kBase) + "[output]\ntrack_every = 0.1\n", 22, "output.track_every",
        "needs `track`"},
       {"track_every_negative", std::string(kBase) + "[output]\ntrack = [0]\ntrack_every = -1.0\n", 23,

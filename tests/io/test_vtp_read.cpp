@@ -340,3 +340,37 @@ TEST(VtpRead, FindArrayAndDoubles) {
   EXPECT_EQ(arrayAsDoubles(*gen), (std::vector<double>{0, -1, 2, -2147483648.0}));
   EXPECT_EQ(findArray(p.cellData, "nothing"), nullptr);
 }
+
+// A parallel index (.pvtp) of two pieces: it declares the pieces' arrays
+// with their types, and reads back as the pieces joined; an index that names
+// no piece, or a piece that is not there, is refused.
+TEST(VtpRead, ParallelIndexReadsAsItsPiecesJoined) {
+  const fs::path dir = tempDir();
+  const VtpPiece a = samplePiece();
+  VtpPiece b = samplePiece();
+  for (double& x : b.points) x += 10.0;
+  writeVtp(dir / "p_0.vtp", a, VtkEncoding::Compressed);
+  writeVtp(dir / "p_1.vtp", b, VtkEncoding::Binary);
+  const std::vector<std::string> pieces{"p_0.vtp", "p_1.vtp"};
+  writePvtp(dir / "p.pvtp", layoutOf(a), pieces);
+  const std::string index = readText(dir / "p.pvtp");
+  EXPECT_NE(index.find("type=\"PPolyData\""), std::string::npos);
+  EXPECT_NE(index.find("<PDataArray type=\"UInt64\" Name=\"id\" NumberOfComponents=\"1\"/>"), std::string::npos);
+  EXPECT_NE(index.find("<PDataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\"/>"), std::string::npos);
+  EXPECT_NE(index.find("<PDataArray type=\"Int32\" Name=\"generation\" NumberOfComponents=\"1\"/>"), std::string::npos);
+  EXPECT_NE(index.find("<Piece Source=\"p_1.vtp\"/>"), std::string::npos);
+  const std::vector<VtpPiece> both{a, b};
+  expectSamePiece(readVtp(dir / "p.pvtp"), joinPieces(both));
+  EXPECT_EQ(readVtp(dir / "p.pvtp").pointCount(), 2 * a.pointCount());
+
+  writePvtp(dir / "none.pvtp", layoutOf(a), {});
+  expectRefused(dir / "none.pvtp", "names no piece");
+  const std::vector<std::string> missing{"p_0.vtp", "p_7.vtp"};
+  writePvtp(dir / "missing.pvtp", layoutOf(a), missing);
+  try {
+    readVtp(dir / "missing.pvtp");
+    ADD_FAILURE() << "no error for a missing piece";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("p_7.vtp"), std::string::npos) << e.what();
+  }
+}

@@ -86,6 +86,7 @@ Counts expectEqualToSerial(const io::SceneDef<D>& scene, std::uint64_t steps, st
   const auto events = dist.gatherBreakageEvents(*local.breakage, 0);
   const auto removed = dist.gatherRemoved(0);
   const double mass = dist.particleMass();
+  const dynamics::EnergyLedger ledger = dist.energy();
   // Where the splits happened: a run on several ranks breaks grains on more than one.
   std::uint64_t mine = local.breakage->breakages(), ranksThatBroke = mine > 0 ? 1 : 0;
   MPI_Allreduce(MPI_IN_PLACE, &ranksThatBroke, 1, MPI_UINT64_T, MPI_SUM, comm);
@@ -177,6 +178,14 @@ Counts expectEqualToSerial(const io::SceneDef<D>& scene, std::uint64_t steps, st
   const double total = serial.world->particleMass() + serial.world->removedMass();
   EXPECT_NEAR(mass + finesMass, total, 1e-12 * total);
   EXPECT_NEAR(mass, serial.world->particleMass(), 1e-12 * total);
+  // The energy budget, summed over the ranks (each books its own particles
+  // and pairs), is the serial one: the splits' fines, fragments and springs.
+  const dynamics::EnergyLedger& budget = serial.world->energy();
+  test::expectSameLedger(ledger, budget);
+  EXPECT_GT(budget.removedEnergy, 0.0);
+  EXPECT_NE(budget.splitRelease, 0.0);
+  EXPECT_GT(budget.contactLoss, 0.0);
+  EXPECT_NE(budget.boundaryWork, 0.0);
   // Splits on several ranks, where the scene gives them.
   if (ranks > 1) {
     EXPECT_GE(ranksThatBroke, ranksThatBreak);

@@ -158,8 +158,10 @@ const dynamics::Feed<D>* build(World<D>& w, int perSide, int layers, Extra extra
   return fed;
 }
 
+// The damping effects (their losses are booked per owned particle): local
+// damping on the pile, global damping under the servo.
 template <int D>
-WorldDef<D> worldDef() {
+WorldDef<D> worldDef(Extra extra = Extra::Flow) {
   WorldDef<D> def;
   Vec<D> g = Vec<D>::Zero();
   g[1] = -9.81;
@@ -168,6 +170,8 @@ WorldDef<D> worldDef() {
   def.contact.ks = 1.6e5;
   def.contact.friction = 0.5;
   def.contact.dampingRatio = 0.3;
+  if (extra == Extra::None) def.localDamping = 0.05;
+  if (extra == Extra::Servo) def.globalDamping = 0.5;
   return def;
 }
 
@@ -176,9 +180,9 @@ WorldDef<D> worldDef() {
 template <int D>
 void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra extra = Extra::None) {
   MPI_Comm comm = MPI_COMM_WORLD;
-  World<D> serial(worldDef<D>());
+  World<D> serial(worldDef<D>(extra));
   const dynamics::Feed<D>* serialFeed = build(serial, perSide, layers, extra);
-  World<D> local(worldDef<D>());
+  World<D> local(worldDef<D>(extra));
   const dynamics::Feed<D>* localFeed = build(local, perSide, layers, extra);
   parallel::DistributedDef def;
   def.rebalanceEvery = 100;
@@ -190,6 +194,22 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra ext
   dist.run(steps);
   EXPECT_EQ(local.dt(), serial.dt());
   EXPECT_EQ(local.time(), serial.time());
+  // The energy budget, summed over the ranks (each books its own particles
+  // and the pairs whose lower id is its own), is the serial one.
+  const dynamics::EnergyLedger& budget = serial.energy();
+  test::expectSameLedger(dist.energy(), budget);
+  EXPECT_NE(budget.gravityWork, 0.0);
+  EXPECT_GT(budget.contactLoss, 0.0);
+  if (extra != Extra::Flow) {
+    EXPECT_GT(budget.dampingLoss, 0.0);
+  }
+  if (extra == Extra::Servo) {
+    EXPECT_NE(budget.boundaryWork, 0.0);
+  }
+  if (extra == Extra::Flow) {
+    EXPECT_GT(budget.removedEnergy, 0.0);
+    EXPECT_GT(budget.addedEnergy, 0.0);
+  }
 
   const auto states = dist.gather(0);
   const auto removed = dist.gatherRemoved(0);

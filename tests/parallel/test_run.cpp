@@ -7,6 +7,7 @@
 #include "lsdem/parallel/DistributedRun.h"
 
 #include "lsdem/io/Run.h"
+#include "lsdem/io/VtpRead.h"
 #include "support/Files.h"
 #include "support/Mpi.h"
 
@@ -110,15 +111,37 @@ void expectSameCsv(const fs::path& a, const fs::path& b, const std::set<std::str
   }
 }
 
-// The budget's terms: a distributed run keeps none (DistributedRun.h).
+// The energy budget's columns: each a sum of the ranks' shares (another
+// order than one process's), compared within `relative` of the row's energy
+// scale (its largest term), since a term can be near 0 (the balance error).
+// (The kinetic and elastic energy are the view's own, compared as the other columns.)
 const std::set<std::string> kLedgerColumns = {"gravity_work_J", "boundary_work_J", "damping_loss_J",
-                                              "contact_loss_J",  "split_release_J", "energy_error_J"};
+                                              "contact_loss_J", "split_release_J", "energy_error_J"};
+void expectSameLedgerColumns(const fs::path& a, const fs::path& b, double relative) {
+  const auto x = readCsv(a), y = readCsv(b);
+  ASSERT_EQ(x.size(), y.size()) << b;
+  std::size_t booked = 0;
+  for (std::size_t r = 0; r < x.size(); ++r) {
+    double scale = std::abs(std::stod(x[r].at("kinetic_J"))) + std::abs(std::stod(x[r].at("elastic_J")));
+    for (const std::string& column : kLedgerColumns) scale = std::max(scale, std::abs(std::stod(x[r].at(column))));
+    for (const std::string& column : kLedgerColumns) {
+      const std::string& text = y[r].at(column);
+      ASSERT_FALSE(text.empty()) << b << " row " << r << " column " << column << ": no value";
+      const double u = std::stod(x[r].at(column)), v = std::stod(text);
+      EXPECT_LE(std::abs(u - v), relative * scale) << b << " row " << r << " column " << column << ": " << v
+                                                   << " against " << u << " (energy scale " << scale << " J)";
+      booked += column != "energy_error_J" && u != 0.0;
+    }
+  }
+  EXPECT_GT(booked, x.size()) << "the run must book energy for this check to mean anything";
+}
 // A split's fragments' energy counts the springs the splitting rank sees
 // (docs/parallel.md "lsdem run on N ranks").
 const std::set<std::string> kFragmentEnergyColumns = {"fragment_energy_J", "energy_gain_J"};
 
 void expectSameOutputs(const fs::path& serial, const fs::path& distributed) {
   expectSameCsv(serial / "history.csv", distributed / "history.csv", kLedgerColumns, 1e-12);
+  expectSameLedgerColumns(serial / "history.csv", distributed / "history.csv", 1e-9);
   expectSameCsv(serial / "breakage_log.csv", distributed / "breakage_log.csv", kFragmentEnergyColumns, 0.0);
   expectSameCsv(serial / "removed.csv", distributed / "removed.csv", {}, 0.0);
   expectSameCsv(serial / "psd.csv", distributed / "psd.csv", {}, 1e-12);
@@ -233,6 +256,69 @@ TEST(DistributedRun, ResumesOnAnotherNumberOfRanks) {
   }
   MPI_Barrier(MPI_COMM_WORLD);
   if (rank == 0) expectSameOutputs(dir / "serial", dir / "resumed");
+}
+
+// Frames in per-rank pieces (`[output] frame_pieces = "ranks"`): each frame
+// of particles, surfaces and contacts is an index (.pvtp) of one piece per
+// rank, each written by its rank from the particles it owns; read together
+// they are the frame rank 0 writes whole from its view: the same particles
+// at the same places, the same surface cells and force chains.
+TEST(DistributedRun, FramesInPiecesPerRankShowTheGatheredFrames) {
+  const fs::path dir = sharedPath("run_pieces");
+  const fs::path whole = writeScene(dir / "gathered");
+  const fs::path pieces = writeScene(dir / "pieces", "", {{"[output]\n", "[output]\nframe_pieces = \"ranks\"\n"}});
+  runOn(MPI_COMM_WORLD, whole, dir / "gathered" / "out");
+  runOn(MPI_COMM_WORLD, pieces, dir / "pieces" / "out");
+  if (rankOf(MPI_COMM_WORLD) != 0) return;
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  // Each particle's id, position and stress in a frame, by id.
+  struct Shown {
+    std::array<double, 3> position;
+    double stress;
+  };
+  const auto byId = [](const io::VtpPiece& piece) {
+    std::map<std::uint64_t, Shown> out;
+    const std::vector<double> id = io::arrayAsDoubles(*io::findArray(piece.pointData, "id"));
+    const std::vector<double> stress = io::arrayAsDoubles(*io::findArray(piece.pointData, "stress"));
+    for (std::size_t k = 0; k < id.size(); ++k) {
+      out[std::uint64_t(id[k])] = {{piece.points[3 * k], piece.points[3 * k + 1], piece.points[3 * k + 2]}, stress[k]};
+    }
+    EXPECT_EQ(out.size(), id.size()) << "a particle shown twice";
+    return out;
+  };
+  std::size_t frames = 0, broken = 0;
+  for (const char* series : {"particles", "surfaces", "contacts"}) {
+    const auto a = io::readPvd(dir / "gathered" / "out" / (std::string(series) + ".pvd"));
+    const auto b = io::readPvd(dir / "pieces" / "out" / (std::string(series) + ".pvd"));
+    ASSERT_EQ(a.size(), b.size()) << series;
+    ASSERT_GE(a.size(), 3u) << series;
+    for (std::size_t f = 0; f < a.size(); ++f) {
+      EXPECT_EQ(a[f].time, b[f].time) << series << " frame " << f;
+      ASSERT_EQ(fs::path(b[f].file).extension(), ".pvtp") << series << " frame " << f;
+      const std::string index = test::readFile(dir / "pieces" / "out" / b[f].file);
+      std::size_t named = 0;
+      for (std::size_t at = index.find("<Piece "); at != std::string::npos; at = index.find("<Piece ", at + 1)) ++named;
+      EXPECT_EQ(named, std::size_t(ranks)) << b[f].file;
+      const io::VtpPiece x = io::readVtp(dir / "gathered" / "out" / a[f].file);
+      const io::VtpPiece y = io::readVtp(dir / "pieces" / "out" / b[f].file);
+      EXPECT_EQ(y.pointCount(), x.pointCount()) << b[f].file;
+      EXPECT_EQ(y.cellCount(), x.cellCount()) << b[f].file;
+      if (std::string(series) != "particles") continue;
+      const auto u = byId(x), v = byId(y);
+      ASSERT_EQ(u.size(), v.size()) << b[f].file;
+      for (const auto& [id, shown] : u) {
+        const auto it = v.find(id);
+        ASSERT_NE(it, v.end()) << b[f].file << ": particle " << id << " missing";
+        EXPECT_EQ(it->second.position, shown.position) << b[f].file << ": particle " << id;
+        EXPECT_NEAR(it->second.stress, shown.stress, 1e-9 * std::abs(shown.stress)) << b[f].file << ": particle " << id;
+      }
+      ++frames;
+      broken += std::any_of(u.begin(), u.end(), [](const auto& e) { return e.first > 2; });
+    }
+  }
+  EXPECT_GE(frames, 3u);
+  EXPECT_GT(broken, 0u) << "the run must break grains for this test to mean anything";
 }
 
 // The shipped jaw crusher (CSS 50 mm) for 150,000 steps (1.5 s): a feed

@@ -27,6 +27,7 @@ FrameWriterDef<D> FrameRecorder<D>::writerDef(bool resume) const {
   def.contacts = scene.output.contacts;
   if (scene.domain) def.extent = *scene.domain;
   def.resume = resume;
+  def.pieces = pieces_;
   return def;
 }
 
@@ -63,8 +64,21 @@ void FrameRecorder<D>::write(const World& w) {
                                " has a non-finite position or velocity: the simulation diverged; the run stops here");
     }
   }
+  // (In pieces, the ranks' pieces hold the particles: this writes their index.)
+  if (pieces_ > 0) {
+    writer_->write(w);
+  } else {
+    measure(w);
+    writer_->write(w, stressMeasure_, stress_);
+  }
+  lastFrameTime_ = w.time();
+}
+
+template <int D>
+void FrameRecorder<D>::measure(const World& w) {
   // Contacts are read only while they describe the particles: not right
   // after a breakage or removal, when the frame shows zero stresses.
+  const auto& p = w.particles();
   stress_.clear();
   if (w.contactsCurrent()) breakage::grainStresses(p, w.contacts(), stress_);
   stress_.resize(p.size(), geometry::Mat<D>::Zero());
@@ -72,8 +86,13 @@ void FrameRecorder<D>::write(const World& w) {
   for (std::size_t i = 0; w.contactsCurrent() && i < p.size(); ++i) {
     stressMeasure_[i] = criterion_->characteristicStress(breakage::principalStressTriple<D>(stress_[i]));
   }
-  writer_->write(w, stressMeasure_, stress_);
-  lastFrameTime_ = w.time();
+}
+
+template <int D>
+void FrameRecorder<D>::writePiece(const World& part, std::size_t number, int rank) {
+  measure(part);
+  const auto layouts = writeFramePieces<D>(writerDef(false), number, rank, part, pieceCache_, stressMeasure_, stress_);
+  if (writer_) writer_->setPieceLayouts(layouts);
 }
 
 template class FrameRecorder<2>;

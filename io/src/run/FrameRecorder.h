@@ -21,7 +21,20 @@ class FrameRecorder final : public Recorder<D> {
   using typename Recorder<D>::World;
   FrameRecorder(Schedule schedule, const RunContext<D>& context);
 
+  /// A distributed run whose frames are per-rank pieces (`[output]
+  /// frame_pieces = "ranks"`), on `ranks` ranks: record() writes each frame's
+  /// indices, after every rank wrote its piece (writePiece). Before create()
+  /// or load().
+  void usePieces(int ranks) { pieces_ = ranks; }
+  /// The number of the frame the next record() writes (the writing process).
+  std::size_t nextFrame() const { return writer_ ? writer_->nextFrame() : 0; }
+  /// This rank's piece of frame `number`, of the world it steps (collective
+  /// in spirit: every rank writes its piece of the same frame).
+  void writePiece(const World& part, std::size_t number, int rank);
+
  private:
+  // The grains' stresses and the criterion's measure of `w` into stress_ and stressMeasure_.
+  void measure(const World& w);
   void write(const World& world) override;
   void onCreate() override;
   void onLoad(dynamics::StateReader& in) override;
@@ -34,6 +47,8 @@ class FrameRecorder final : public Recorder<D> {
   std::vector<geometry::Mat<D>> stress_;
   std::vector<double> stressMeasure_;
   double lastFrameTime_ = -1.0;  // simulated time of the last frame, s
+  int pieces_ = 0;               // usePieces
+  SurfaceCache<D> pieceCache_;   // the body contours of this rank's pieces
 };
 
 extern template class FrameRecorder<2>;

@@ -85,6 +85,8 @@ class Recorder {
   void record(const World& world, const Instant& now);
   /// The end of the run: a last record unless the last one was at `now`.
   void finish(const World& world, const Instant& now);
+  /// Whether finish(world, now) records.
+  bool recordsAtFinish(const Instant& now) const { return lastClock_ != now.clock; }
 
  protected:
   Recorder(std::string name, Schedule schedule, const RunContext<D>& context);

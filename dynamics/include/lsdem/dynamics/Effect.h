@@ -37,7 +37,8 @@ class Effect {
   /// @brief Adds this effect's forces and torques to the particles, after the
   /// contact forces and before the closing half kick. Velocities are the
   /// half-step ones; `dt` is the step the forces close (0 for the initial
-  /// force evaluation, when no work is done).
+  /// force evaluation, when no work is done). A ghost (World::isGhost) is
+  /// left alone: its force, and the work and power of it, are its owner's.
   virtual void applyForces(World<D>& world, double dt) {
     (void)world;
     (void)dt;

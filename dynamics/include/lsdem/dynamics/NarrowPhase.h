@@ -350,6 +350,11 @@ class ContactSolver {
   /// @note `particles` must hold the same particles as at compute(); throws
   /// std::invalid_argument when its size differs.
   const BoundaryLoads<D>& accumulate(Particles<D>& particles);
+  /// @brief The loads on the planes and tools of the last compute() from the
+  /// particles whose flag in `skip` is 0 (all when it is empty), summed as
+  /// accumulate() sums them, into `out`, which it returns. A part of a
+  /// distributed run: the loads of its own particles (skip: its ghosts).
+  const BoundaryLoads<D>& boundaryLoadsOf(const std::vector<std::uint8_t>& skip, BoundaryLoads<D>& out) const;
 
   /// @brief Touching pairs of the last compute(), in order: particle pairs (in
   /// candidate order), then particle-plane contacts (by particle, then plane),

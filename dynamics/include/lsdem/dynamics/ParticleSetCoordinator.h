@@ -83,7 +83,10 @@ class ParticleSetCoordinator {
   virtual double agreeTimeStep(double dt, TimeStepLimit& limit) = 0;
   /// @brief Collective, after agreeTimeStep: brings every world's mirrors up
   /// to the new set (particles that left leave, `born` and their births
-  /// reach the worlds that need them). May reorder this world's particles.
+  /// reach the worlds that need them), then has each world evaluate its
+  /// contacts on the new set (World::refreshContacts) and gives it the run's
+  /// energy scale (World::setRunEnergyScale). May reorder this world's
+  /// particles.
   virtual void particlesReplaced(std::span<const BornParticle> born) = 0;
 
   /// @brief Collective: the largest of the worlds' `here`. For what is

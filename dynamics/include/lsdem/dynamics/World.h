@@ -171,6 +171,8 @@ struct EnergyLedger {
   double scale() const;
   /// @brief balanceError relative to scale().
   double relativeBalanceError() const;
+  /// @brief Adds every term of `other` (the parts of a distributed run sum their ledgers).
+  void add(const EnergyLedger& other);
 };
 
 /// A particle taken out of the simulation (outflow, fines).
@@ -214,6 +216,12 @@ class World {
   /// In a distributed run a particle without an id (an effect's: a feed's)
   /// takes the run's next free id (ParticleSetCoordinator::takeId).
   std::size_t addParticle(const ParticleDef<D>& def);
+  /// @brief Adds a copy of a particle another world holds (a distributed
+  /// run's mirror, a particle handed over, a view's copy), with its owner's
+  /// mass (def.mass) and density scaling decision (`densityScale`,
+  /// decidedDensityScale). Nothing is booked: the energy it brings is its
+  /// owner's. Returns its index.
+  std::size_t addCopy(const ParticleDef<D>& def, double densityScale);
   /// @brief Folds a particle that will only be added later (a feed's grains)
   /// into the automatic time step, so a world can start before it has any
   /// particle; the step never grows afterwards.
@@ -246,7 +254,11 @@ class World {
   /// @brief Marks particle `index` as a ghost (or not): a mirror of a
   /// particle another rank of a distributed run owns and moves. Pairs of two
   /// ghosts are not computed (no force they give acts on a particle this
-  /// world owns); everything else treats ghosts like the other particles.
+  /// world owns); everything else treats ghosts like the other particles,
+  /// but the energy ledger: it books the terms of this world's own particles
+  /// (their work, damping, kinetic energy, their half of a pair's dashpot
+  /// work) and of the pairs whose lower-id particle is its own (springs,
+  /// friction), so that the ledgers of a run's parts sum to the run's.
   /// A world without ghosts keeps no flags and pays nothing.
   void setGhost(std::size_t index, bool ghost);
   /// @brief Whether particle `index` is a ghost (setGhost).
@@ -333,13 +345,14 @@ class World {
   /// @brief Advances n steps.
   void run(std::uint64_t n);
   /// @brief The next step opens with the particles' forces and torques as
-  /// they are, though particles left or became ghosts since they were
-  /// evaluated (detachParticle, setGhost): a distributed run spread from a
-  /// checkpoint, whose parts step on with the forces the whole run evaluated,
-  /// as the run would have. Call it after those changes, before the step.
-  /// The contact records stay stale (contactsCurrent() false) until the step
-  /// evaluates them.
-  void keepForces() { keepForces_ = true; }
+  /// they are, though particles may leave or become ghosts before it
+  /// (detachParticle, setGhost): a distributed run spread from a checkpoint,
+  /// whose parts step on with the forces the whole run evaluated, as the run
+  /// would have. Call it while the contacts are current, before those
+  /// changes: the ledger books the opening half kick's work now, from the
+  /// contact records that still describe the particles (the step books
+  /// none). The records then stay stale until the step evaluates them.
+  void keepForces();
   /// One particle of a run that a world shows (showRunOf), as the run's last
   /// force evaluation left it.
   struct ShownParticle {
@@ -463,6 +476,26 @@ class World {
     if (!energyCurrent_) refreshEnergy();
     return energy_;
   }
+  /// @brief The run's energy scale (EnergyLedger::scale), J, against which
+  /// breakage checks a split's energy: this world's; a part of a distributed
+  /// run holds the whole run's as of its last split (setRunEnergyScale).
+  double energyScale() const { return coordinator_ ? runEnergyScale_ : energy().scale(); }
+  /// @brief Sets energyScale() of a part of a distributed run (its coordinator, after each split).
+  void setRunEnergyScale(double joules) { runEnergyScale_ = joules; }
+  /// @brief The terms of energy() booked as the run goes (work, losses,
+  /// energy removed and added, splitRelease, initial), with the kinetic and
+  /// elastic energy 0: what the parts of a distributed run sum.
+  EnergyLedger bookedEnergy() const;
+  /// @brief Sets the booked terms to those of `booked` (its kinetic and
+  /// elastic energy are not read: energy() works them out from the state). A
+  /// distributed run's view shows the sum of its parts'.
+  void setBookedEnergy(const EnergyLedger& booked);
+  /// @brief Starts this world's ledger from nothing: every booked term 0, and
+  /// the springs taken as storing nothing at the last evaluation (from which
+  /// a re-evaluation between steps books splitRelease). A part of a
+  /// distributed run spread from a world that had run (resumed): the first
+  /// part keeps the run's ledger, the others start from nothing.
+  void resetLedger();
   /// (In (time, id) order: each step's records sorted by id.)
   const std::vector<RemovedParticle>& removed() const { return removed_; }
   /// @brief Names of the effects that run, in order.
@@ -511,6 +544,8 @@ class World {
   /// The TimeStepLimit of particle i (its stiffness must be current).
   TimeStepLimit limitOf(std::size_t i) const;
   void refreshEnergy() const;
+  // addParticle and addCopy: `books` the kinetic energy it brings (after the start).
+  std::size_t insertParticle(const ParticleDef<D>& def, bool books);
 
   WorldDef<D> def_;
   Particles<D> particles_;
@@ -592,6 +627,14 @@ class World {
   // Powers of the last force evaluation, W: damping effects, moving
   // boundaries (on the particles).
   std::array<double, 2> lastPower_{};
+  // The energy the contact springs of the last evaluation store, J: those
+  // of the pairs whose lower-id particle is not a ghost (setGhost). What a
+  // re-evaluation between steps books splitRelease from.
+  double evaluatedElastic_ = 0.0;
+  double runEnergyScale_ = 0.0;  // setRunEnergyScale
+  // With ghosts: the loads of this world's own particles on planes and
+  // tools (scratch of bookClosing).
+  BoundaryLoads<D> ownLoads_;
   void bookHalfKick(double halfDt, double lead);
   // The closing half of the ledger's booking after a force evaluation.
   void bookClosing(double dtClosing);

@@ -44,12 +44,18 @@ class RunEngine {
   virtual void updateView(SceneWorld<D>& view) = 0;
   /// @brief Whether any process was asked to stop (collective).
   virtual bool anyStop(bool stop) = 0;
+  /// @brief The writing process's `value`, on every process (collective).
+  virtual std::uint64_t fromWriter(std::uint64_t value) = 0;
+  /// @brief Returns once every process called it (collective).
+  virtual void barrier() = 0;
 };
 
 /// @brief Makes a run's engine for the world each process built alike,
 /// with the scene's `[parallel]` settings.
 struct RunEngineFactory {
   bool writesOutputs = true;  ///< this process writes the outputs (one process of a run does)
+  int rank = 0;               ///< this process's number in the run, from 0 (the writing one's is 0)
+  int ranks = 1;              ///< processes in the run
   std::function<std::unique_ptr<RunEngine<2>>(SceneWorld<2>&, const ParallelDef&)> make2;
   std::function<std::unique_ptr<RunEngine<3>>(SceneWorld<3>&, const ParallelDef&)> make3;
 };

@@ -61,6 +61,12 @@ struct OutputDef {
   std::uint64_t frames = 50;            ///< ParaView frames over the run (0: none), including the first and the last
   bool particles = true, surfaces = true, boundaries = true, contacts = false;  ///< ParaView series written
   VtkEncoding vtkFormat = VtkEncoding::Compressed;  ///< how VTP arrays are stored (`vtk_format`; io/Vtk.h)
+  /// A distributed run's frames of particles, surfaces and contacts: each
+  /// rank writes its own particles' piece and the frame is a `.pvtp` of the
+  /// pieces (`frame_pieces = "ranks"`), or rank 0 writes the whole frame
+  /// from its view of the run (false, `"gathered"`: the default). One
+  /// process writes whole frames either way.
+  bool framePiecesPerRank = false;
   std::uint64_t historyRows = 500;      ///< rows of history.csv over the run
   std::uint64_t distributions = 5;      ///< PSD and shape-statistics snapshots over the run (including the first and last)
   std::vector<double> distributionTimes;  ///< instead: snapshots at these simulated times, s (ascending), plus the first and last

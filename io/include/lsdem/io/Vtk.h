@@ -123,6 +123,18 @@ VtpPiece joinPieces(std::span<const VtpPiece> pieces);
 /// written (missing or read-only directory, full disk).
 void writeVtp(const std::filesystem::path& file, const VtpPiece& piece, VtkEncoding encoding);
 
+/// @brief The layout of `piece`: the names, types and component counts of
+/// its point and cell data and the precision of its points, with no values
+/// and no geometry (what a `.pvtp` declares of its pieces).
+VtpPiece layoutOf(const VtpPiece& piece);
+
+/// @brief Writes a parallel PolyData index (`.pvtp`, VTK's PPolyData) of the
+/// pieces `pieceFiles` (paths relative to the index's directory), each a
+/// `.vtp` with the arrays of `layout` (layoutOf one of them), atomically.
+/// ParaView reads it as one data set; io::readVtp joins its pieces.
+/// @note Throws std::runtime_error naming the path when it cannot be written.
+void writePvtp(const std::filesystem::path& file, const VtpPiece& layout, std::span<const std::string> pieceFiles);
+
 /// @brief Writes `content` to `file` atomically: to `file.tmp`, then renamed over `file`.
 /// @note Throws std::runtime_error naming the path when it cannot be written.
 void writeFileAtomically(const std::filesystem::path& file, const std::string& content);
@@ -188,6 +200,10 @@ class SurfaceCache {
 /// Pa): mean_stress (tr(sigma) / 3), von_mises_stress (sqrt(3 J2)) and
 /// principal_stress (3: principalStressTriple, s1 >= s2 >= s3 in 3D; 2D plane
 /// stress (s1, s2, 0)).
+/// A world with ghosts (a part of a distributed run) writes its own
+/// particles only, as do the surface and contact frames (a pair with a ghost
+/// is its lower-id particle's owner's): its piece of the run's frame. Each of
+/// the three returns the layout of what it wrote (layoutOf).
 /// @param stressMeasure one value per particle in store order, or empty (zeros written).
 /// @param stressTensors each particle's average stress tensor (world frame,
 /// Pa, tension positive; breakage::grainStresses), or empty (the invariants
@@ -196,7 +212,7 @@ class SurfaceCache {
 /// neither empty nor one value per particle; std::runtime_error when the file
 /// cannot be written.
 template <int D>
-void writeParticleFrame(const std::filesystem::path& file, const dynamics::World<D>& world,
+VtpPiece writeParticleFrame(const std::filesystem::path& file, const dynamics::World<D>& world,
                         std::span<const double> stressMeasure, VtkEncoding encoding,
                         std::span<const geometry::Mat<D>> stressTensors = {});
 
@@ -225,7 +241,7 @@ StressInvariants stressInvariants(const geometry::Mat<D>& sigma);
 /// @param cache body contours, reused across frames (pruned here).
 /// @param stressMeasure per particle criterion value (Pa), or empty (0).
 template <int D>
-void writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
+VtpPiece writeSurfaceFrame(const std::filesystem::path& file, const dynamics::World<D>& world, SurfaceCache<D>& cache,
                        VtkEncoding encoding, std::span<const double> stressMeasure = {});
 
 /// @brief The boundaries' geometry, one piece per boundary group: piece 0
@@ -259,7 +275,7 @@ void writeBoundaryFrame(const std::filesystem::path& file, const dynamics::World
 /// right after a step they match the particles. Pairs whose indices are beyond
 /// the particle store (particles removed since) are skipped.
 template <int D>
-void writeContactFrame(const std::filesystem::path& file, const dynamics::World<D>& world, VtkEncoding encoding);
+VtpPiece writeContactFrame(const std::filesystem::path& file, const dynamics::World<D>& world, VtkEncoding encoding);
 
 /// A ParaView time series (`.pvd`): a list of (time, part, file) entries,
 /// rewritten atomically after every change, so a run killed at any moment
@@ -319,7 +335,27 @@ struct FrameWriterDef {
   /// the particles' bounding spheres grown by 10% on each side, per frame.
   geometry::Box<D> extent;
   bool resume = false;                       ///< keep the entries of existing .pvd files (then call truncateAfter)
+  /// A distributed run's frames in per-rank pieces: the number of ranks (0:
+  /// whole frames). Then a frame of particles, surfaces and contacts is
+  /// `frames/<series>_NNNNNN.pvtp`, an index of the ranks' pieces
+  /// `frames/<series>_NNNNNN_rRRRRR.vtp` (writeFramePieces).
+  int pieces = 0;
 };
+
+/// @brief Rank `rank`'s piece of frame `number` of a distributed run
+/// (FrameWriterDef::pieces): the particle, surface and contact frames of the
+/// series `def` enables, of `world`'s own particles (writeParticleFrame), to
+/// `frames/<series>_NNNNNN_rRRRRR.vtp`. Every rank calls it for the frame;
+/// the writing rank's FrameWriter then writes the frame's index.
+/// @param stressMeasure, stress as for FrameWriter::write (empty: stresses
+/// from the world's contact records).
+/// @return the layouts of the pieces written (particles, surfaces, contacts;
+/// empty for a series not written), for FrameWriter::setPieceLayouts.
+template <int D>
+std::array<VtpPiece, 3> writeFramePieces(const FrameWriterDef<D>& def, std::size_t number, int rank,
+                                         const dynamics::World<D>& world, SurfaceCache<D>& cache,
+                                         std::span<const double> stressMeasure = {},
+                                         std::span<const geometry::Mat<D>> stress = {});
 
 /// The four series of a run: `particles.pvd`, `surfaces.pvd`,
 /// `boundaries.pvd`, `contacts.pvd` in the output directory, with frames in
@@ -351,6 +387,10 @@ class FrameWriter {
              std::span<const geometry::Mat<D>> stress = {});
   /// @brief Drops frames later than `time` (s) from every series (resumed runs).
   void truncateAfter(double time);
+  /// @brief With pieces (FrameWriterDef::pieces): the layouts of the pieces
+  /// of the frame write() writes next (writeFramePieces' result, of any
+  /// rank), which its indices declare.
+  void setPieceLayouts(std::array<VtpPiece, 3> layouts) { pieceLayouts_ = std::move(layouts); }
   /// @brief The number the next frame gets.
   std::size_t nextFrame() const { return nextFrame_; }
   /// @brief What the writer was made with.
@@ -375,6 +415,7 @@ class FrameWriter {
   std::vector<geometry::Mat<D>> stress_;     ///< scratch: the grains' stress tensors
   std::optional<PvdSeries> particles_, surfaces_, boundaries_, contacts_;
   std::size_t nextFrame_ = 0;
+  std::optional<std::array<VtpPiece, 3>> pieceLayouts_;  ///< setPieceLayouts
 };
 
 extern template struct BodyContour<2>;
@@ -383,9 +424,9 @@ extern template BodyContour<2> bodyContour<2>(const geometry::Shape<2>&);
 extern template BodyContour<3> bodyContour<3>(const geometry::Shape<3>&);
 extern template class SurfaceCache<2>;
 extern template class SurfaceCache<3>;
-extern template void writeParticleFrame<2>(const std::filesystem::path&, const dynamics::World<2>&,
+extern template VtpPiece writeParticleFrame<2>(const std::filesystem::path&, const dynamics::World<2>&,
                                            std::span<const double>, VtkEncoding, std::span<const geometry::Mat<2>>);
-extern template void writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&,
+extern template VtpPiece writeParticleFrame<3>(const std::filesystem::path&, const dynamics::World<3>&,
                                            std::span<const double>, VtkEncoding, std::span<const geometry::Mat<3>>);
 extern template StressInvariants stressInvariants<2>(const geometry::Mat<2>&);
 extern template StressInvariants stressInvariants<3>(const geometry::Mat<3>&);
@@ -393,16 +434,24 @@ extern template std::vector<VtpPiece> boundaryPieces<2>(const dynamics::World<2>
                                                         const geometry::Box<2>&);
 extern template std::vector<VtpPiece> boundaryPieces<3>(const dynamics::World<3>&, SurfaceCache<3>&,
                                                         const geometry::Box<3>&);
-extern template void writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
+extern template VtpPiece writeSurfaceFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
                                           VtkEncoding, std::span<const double>);
-extern template void writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
+extern template VtpPiece writeSurfaceFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
                                           VtkEncoding, std::span<const double>);
 extern template void writeBoundaryFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, SurfaceCache<2>&,
                                            const geometry::Box<2>&, VtkEncoding);
 extern template void writeBoundaryFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, SurfaceCache<3>&,
                                            const geometry::Box<3>&, VtkEncoding);
-extern template void writeContactFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, VtkEncoding);
-extern template void writeContactFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, VtkEncoding);
+extern template VtpPiece writeContactFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, VtkEncoding);
+extern template VtpPiece writeContactFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, VtkEncoding);
+extern template std::array<VtpPiece, 3> writeFramePieces<2>(const FrameWriterDef<2>&, std::size_t, int,
+                                                              const dynamics::World<2>&, SurfaceCache<2>&,
+                                                              std::span<const double>,
+                                                              std::span<const geometry::Mat<2>>);
+extern template std::array<VtpPiece, 3> writeFramePieces<3>(const FrameWriterDef<3>&, std::size_t, int,
+                                                              const dynamics::World<3>&, SurfaceCache<3>&,
+                                                              std::span<const double>,
+                                                              std::span<const geometry::Mat<3>>);
 extern template class FrameWriter<2>;
 extern template class FrameWriter<3>;
 

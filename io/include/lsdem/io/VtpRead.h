@@ -31,6 +31,9 @@ namespace lsdem::io {
 
 /// @brief Reads one VTK XML PolyData file into a piece (points, the four cell
 /// kinds but strips, point and cell data, in file order).
+/// A parallel index (`.pvtp`, VTK's PPolyData: writePvtp) is read as its
+/// pieces joined (joinPieces), each read from its `Source` relative to the
+/// index's folder.
 /// @return the piece; points are 3 coordinates each, as in the file.
 /// @note Throws io::InputError (file, line of the offending element, the
 /// element or array name, the problem) when the file cannot be read, is not

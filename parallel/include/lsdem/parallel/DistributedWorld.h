@@ -64,9 +64,11 @@
 /// reference (one all-reduce), scales its own new small fragments, and a
 /// fragment's factor travels with it in every particle record.
 ///
-/// Gravity and damping work. The energy
-/// ledger of a rank's world counts its ghosts as well and is not a global
-/// budget; so do a breakage event's fragment springs (its energy check).
+/// The energy ledger: each rank's world books the terms of its own
+/// particles and of the pairs whose lower-id particle is its own
+/// (World::setGhost); the run's budget is their sum (energy(), and a view's
+/// ledger). A breakage event's fragment springs (its energy check) count
+/// only the contacts on the fragment's rank.
 
 #include "lsdem/breakage/Breakage.h"
 #include "lsdem/dynamics/World.h"
@@ -158,6 +160,10 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   /// others; collective). `from`: leave out the first `from` records of each
   /// rank (those every rank held at the start of a resumed run).
   std::vector<dynamics::RemovedParticle> gatherRemoved(int root, std::size_t from = 0) const;
+  /// @brief The run's energy budget, on every rank (collective): the ranks'
+  /// ledgers (World::energy, each of its own particles and pairs: setGhost)
+  /// summed in rank order; to round-off one world's.
+  dynamics::EnergyLedger energy() const;
   /// @brief The true mass of the run's particles, kg, summed over the ranks
   /// (collective; to round-off the serial World::particleMass, another order).
   double particleMass() const;
