@@ -494,6 +494,14 @@ void Breakage<D>::springsPerParticle(const World<D>& world) {
 
 template <int D>
 void Breakage<D>::fragmentSprings(const World<D>& world, std::size_t firstEvent) {
+  // A part of a distributed run: the run's, summed over its parts (a
+  // fragment on another part holds springs this one does not compute).
+  if (world.isDistributed()) {
+    for (std::size_t e = firstEvent; e < events_.size(); ++e) {
+      events_[e].fragmentSpringEnergy = world.runFragmentSprings(events_[e].parent);
+    }
+    return;
+  }
   const auto& pairs = world.contacts().pairContacts();
   const std::size_t particlePairs = world.contacts().particleContacts().size();
   for (std::size_t e = firstEvent; e < events_.size(); ++e) events_[e].fragmentSpringEnergy = 0.0;

@@ -899,6 +899,20 @@ void World<D>::setBookedEnergy(const EnergyLedger& booked) {
 }
 
 template <int D>
+double World<D>::runFragmentSprings(ParticleId parent) const {
+  const auto it = std::lower_bound(runFragmentSprings_.begin(), runFragmentSprings_.end(),
+                                   std::pair<ParticleId, double>{parent, -std::numeric_limits<double>::infinity()});
+  return it != runFragmentSprings_.end() && it->first == parent ? it->second
+                                                                 : std::numeric_limits<double>::quiet_NaN();
+}
+
+template <int D>
+void World<D>::setRunFragmentSprings(std::vector<std::pair<ParticleId, double>> springs) {
+  std::sort(springs.begin(), springs.end());
+  runFragmentSprings_ = std::move(springs);
+}
+
+template <int D>
 void World<D>::resetLedger() {
   setBookedEnergy({});
   evaluatedElastic_ = 0.0;

@@ -683,6 +683,14 @@ std::uint64_t DistributedWorld<D>::allocateIds(std::span<const dynamics::SplitRe
     const auto it = std::lower_bound(runBatch.begin(), runBatch.end(), r, byParent);
     ids.push_back(first[std::size_t(it - runBatch.begin())]);
   }
+  // (Whose fragments are whose, for particlesReplaced.)
+  batchParents_.clear();
+  batchFirstChild_.clear();
+  for (std::size_t k = 0; k < runBatch.size(); ++k) {
+    batchParents_.push_back(runBatch[k].parent);
+    batchFirstChild_.push_back(first[k].firstChild);
+  }
+  batchEnd_ = child;
   return std::uint64_t(total);
 }
 
@@ -720,6 +728,29 @@ void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornPartic
   // checked against the run's energy scale.
   refreshStaleContacts();
   world_.setRunEnergyScale(energy().scale());
+  // The springs of each split's fragments on the new set (the energy check's
+  // fragmentSpringEnergy), summed over the ranks: each counts the pairs whose
+  // lower-id particle it owns, a pair once for each split it touches, as one
+  // world counts them (Breakage).
+  const auto splitOf = [&](ParticleId id) -> std::ptrdiff_t {
+    if (batchFirstChild_.empty() || id < batchFirstChild_.front() || id >= batchEnd_) return -1;
+    return std::upper_bound(batchFirstChild_.begin(), batchFirstChild_.end(), id) - batchFirstChild_.begin() - 1;
+  };
+  const dynamics::Particles<D>& p = world_.particles();
+  const auto records = world_.contacts().pairContacts();
+  const std::size_t particlePairs = world_.contacts().particleContacts().size();
+  std::vector<double> springs(batchParents_.size(), 0.0);
+  for (std::size_t k = 0; k < records.size(); ++k) {
+    if (world_.isGhost(records[k].a)) continue;
+    const std::ptrdiff_t sa = splitOf(p.id[records[k].a]);
+    const std::ptrdiff_t sb = k < particlePairs ? splitOf(p.id[records[k].b]) : -1;
+    if (sa >= 0) springs[std::size_t(sa)] += records[k].elasticEnergy;
+    if (sb >= 0 && sb != sa) springs[std::size_t(sb)] += records[k].elasticEnergy;
+  }
+  check(MPI_Allreduce(MPI_IN_PLACE, springs.data(), int(springs.size()), MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
+  std::vector<std::pair<ParticleId, double>> byParent;
+  for (std::size_t k = 0; k < springs.size(); ++k) byParent.emplace_back(batchParents_[k], springs[k]);
+  world_.setRunFragmentSprings(std::move(byParent));
 }
 
 template <int D>

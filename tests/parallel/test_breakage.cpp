@@ -160,6 +160,10 @@ Counts expectEqualToSerial(const io::SceneDef<D>& scene, std::uint64_t steps, st
     EXPECT_EQ(events[e].criterionValue, ref[e].criterionValue) << "event " << e;
     EXPECT_EQ(events[e].planeNormal, ref[e].planeNormal) << "event " << e;
     EXPECT_EQ(events[e].planeOffset, ref[e].planeOffset) << "event " << e;
+    // The fragments' springs, summed over the ranks.
+    EXPECT_NEAR(events[e].fragmentSpringEnergy, ref[e].fragmentSpringEnergy,
+                1e-12 * std::abs(ref[e].fragmentSpringEnergy) + 1e-300)
+        << "event " << e;
   }
 
   // Fines: the same records; their mass summed in the serial order is the

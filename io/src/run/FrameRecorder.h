@@ -28,8 +28,8 @@ class FrameRecorder final : public Recorder<D> {
   void usePieces(int ranks) { pieces_ = ranks; }
   /// The number of the frame the next record() writes (the writing process).
   std::size_t nextFrame() const { return writer_ ? writer_->nextFrame() : 0; }
-  /// This rank's piece of frame `number`, of the world it steps (collective
-  /// in spirit: every rank writes its piece of the same frame).
+  /// This rank's piece of frame `number`, of the world it steps (every rank
+  /// writes its piece of the frame before the writing process's record()).
   void writePiece(const World& part, std::size_t number, int rank);
 
  private:

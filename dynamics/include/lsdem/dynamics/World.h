@@ -482,6 +482,13 @@ class World {
   double energyScale() const { return coordinator_ ? runEnergyScale_ : energy().scale(); }
   /// @brief Sets energyScale() of a part of a distributed run (its coordinator, after each split).
   void setRunEnergyScale(double joules) { runEnergyScale_ = joules; }
+  /// @brief A part of a distributed run: the energy of the springs of split
+  /// `parent`'s fragments on the new set, J, summed over the run (what
+  /// breakage's energy check counts as a split's fragment springs); NaN for
+  /// a parent not in the last batch of splits.
+  double runFragmentSprings(ParticleId parent) const;
+  /// @brief Sets runFragmentSprings, by parent id (its coordinator, after each batch of splits).
+  void setRunFragmentSprings(std::vector<std::pair<ParticleId, double>> springs);
   /// @brief The terms of energy() booked as the run goes (work, losses,
   /// energy removed and added, splitRelease, initial), with the kinetic and
   /// elastic energy 0: what the parts of a distributed run sum.
@@ -632,6 +639,7 @@ class World {
   // re-evaluation between steps books splitRelease from.
   double evaluatedElastic_ = 0.0;
   double runEnergyScale_ = 0.0;  // setRunEnergyScale
+  std::vector<std::pair<ParticleId, double>> runFragmentSprings_;  // setRunFragmentSprings, by parent id
   // With ghosts: the loads of this world's own particles on planes and
   // tools (scratch of bookClosing).
   BoundaryLoads<D> ownLoads_;

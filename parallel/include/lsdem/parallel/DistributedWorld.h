@@ -67,8 +67,8 @@
 /// The energy ledger: each rank's world books the terms of its own
 /// particles and of the pairs whose lower-id particle is its own
 /// (World::setGhost); the run's budget is their sum (energy(), and a view's
-/// ledger). A breakage event's fragment springs (its energy check) count
-/// only the contacts on the fragment's rank.
+/// ledger). A breakage event's fragment springs (its energy check) are
+/// summed over the ranks by the same rule after each batch of splits.
 
 #include "lsdem/breakage/Breakage.h"
 #include "lsdem/dynamics/World.h"
@@ -241,6 +241,10 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   bool loadsReduced_ = false;        // the world's loads are the run's for its contacts now
   bool coordinated_ = false;         // the world changes its particle set (breakage, outflow, feeds): world_.setCoordinator(this)
   dynamics::ParticleId nextId_ = 0;  // the run's next free global id (coordinated runs)
+  // The last batch of splits (allocateIds), in ascending parent id: each
+  // split's parent and first child id; its children end at batchEnd_.
+  std::vector<dynamics::ParticleId> batchParents_, batchFirstChild_;
+  dynamics::ParticleId batchEnd_ = 0;
   // Shapes by content hash, and the hash of each shape this rank holds.
   std::unordered_map<std::uint64_t, std::shared_ptr<const geometry::Shape<D>>> shapes_;
   // By the shape's address, valid only while `alive` (breakage frees shapes,
