@@ -502,15 +502,9 @@ void Breakage<D>::fragmentSprings(const World<D>& world, std::size_t firstEvent)
     }
     return;
   }
-  const auto& pairs = world.contacts().pairContacts();
-  const std::size_t particlePairs = world.contacts().particleContacts().size();
-  for (std::size_t e = firstEvent; e < events_.size(); ++e) events_[e].fragmentSpringEnergy = 0.0;
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    const std::int64_t ea = eventOf_[pairs[k].a];
-    const std::int64_t eb = k < particlePairs ? eventOf_[pairs[k].b] : -1;
-    if (ea >= 0) events_[std::size_t(ea)].fragmentSpringEnergy += pairs[k].elasticEnergy;
-    if (eb >= 0 && eb != ea) events_[std::size_t(eb)].fragmentSpringEnergy += pairs[k].elasticEnergy;
-  }
+  std::vector<double> springs(events_.size(), 0.0);
+  world.contacts().addSpringsByGroup(eventOf_, {}, springs);
+  for (std::size_t e = firstEvent; e < events_.size(); ++e) events_[e].fragmentSpringEnergy = springs[e];
 }
 
 template <int D>

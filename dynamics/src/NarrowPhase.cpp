@@ -1679,6 +1679,19 @@ const BoundaryLoads<D>& ContactSolver<D>::boundaryLoadsOf(const std::vector<std:
 }
 
 template <int D>
+void ContactSolver<D>::addSpringsByGroup(std::span<const std::int64_t> groupOf, const std::vector<std::uint8_t>& skipA,
+                                         std::span<double> sums) const {
+  for (std::size_t k = 0; k < pairs_.size(); ++k) {
+    const PairContact<D>& rec = pairs_[k];
+    if (!skipA.empty() && skipA[rec.a]) continue;
+    const std::int64_t ga = groupOf[rec.a];
+    const std::int64_t gb = k < particlePairCount_ ? groupOf[rec.b] : -1;
+    if (ga >= 0) sums[std::size_t(ga)] += rec.elasticEnergy;
+    if (gb >= 0 && gb != ga) sums[std::size_t(gb)] += rec.elasticEnergy;
+  }
+}
+
+template <int D>
 void ContactSolver<D>::saveState(StateWriter& out) const {
   out.putTag("contacts 4");  // 2: with the pair dashpots; 3: pair records without padding; 4: rest overlaps
   out.putVector(pairs_);

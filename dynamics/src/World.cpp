@@ -478,6 +478,7 @@ void World<D>::setGhost(std::size_t index, bool ghost) {
   }
   if (ghost_[index] != std::uint8_t(ghost)) forcesValid_ = false;
   ghost_[index] = std::uint8_t(ghost);
+  energyCurrent_ = false;  // (this world's share of the kinetic energy)
 }
 
 template <int D>
@@ -847,20 +848,20 @@ void World<D>::bookClosing(double dtClosing) {
   lastPower_ = {dampingPower, boundaryPower};
 
   // The closing half kick: velocities go from v(n+1/2) on by dt/2 a.
-  if (dtClosing > 0.0) bookHalfKick(0.5 * dtClosing, 0.25 * dtClosing);
+  if (dtClosing > 0.0) bookHalfKick(0.5 * dtClosing, 0.25 * dtClosing, energy_);
 }
 
 template <int D>
-void World<D>::bookHalfKick(double halfDt, double lead) {
-  energy_.dampingLoss += halfDt * lastPower_[0];
-  energy_.boundaryWork += halfDt * lastPower_[1];
+void World<D>::bookHalfKick(double halfDt, double lead, EnergyLedger& into) const {
+  into.dampingLoss += halfDt * lastPower_[0];
+  into.boundaryWork += halfDt * lastPower_[1];
   // Contact dashpots, exactly: over a half kick a dashpot force does its
   // force times the mean velocity of that half kick, the velocity `lead`
   // seconds of the current forces ahead (a quarter step). Booking the sampled
   // c v^2 dt instead overstates the loss by about c dt / (2 m) of it, which for
   // small or slender bodies (whose effective mass at a contact is a fraction
   // of their mass) showed as energy from nothing.
-  if (def_.contact.hasDamping) energy_.contactLoss += halfDt * dashpotLoss(particles_, contacts_, lead, ghost_);
+  if (def_.contact.hasDamping) into.contactLoss += halfDt * dashpotLoss(particles_, contacts_, lead, ghost_);
 }
 
 template <int D>
@@ -879,8 +880,10 @@ void World<D>::refreshContacts() {
 
 template <int D>
 void World<D>::keepForces() {
+  if (!forcesValid_) throw std::logic_error("World::keepForces: the forces are not those of the particles now");
   keepForces_ = true;
-  if (def_.energyLedger && forcesValid_) bookHalfKick(0.5 * dt_, 0.25 * dt_);
+  keptOpening_ = EnergyLedger{};
+  if (def_.energyLedger) bookHalfKick(0.5 * dt_, 0.25 * dt_, keptOpening_);
 }
 
 template <int D>
@@ -916,6 +919,7 @@ template <int D>
 void World<D>::resetLedger() {
   setBookedEnergy({});
   evaluatedElastic_ = 0.0;
+  keptOpening_ = EnergyLedger{};
 }
 
 template <int D>
@@ -1005,14 +1009,18 @@ void World<D>::beginStep() {
     throw std::logic_error("no time step: give dt, or add particles so the automatic step can be estimated");
   }
   // Forces of the current state, once, before the first step or after changes.
-  // (Kept forces: keepForces booked this half kick.)
   const bool keptForces = keepForces_;
   if (!keptForces) refreshContacts();
   keepForces_ = false;
 
-  // The opening half kick books the work of the forces it applies.
+  // The opening half kick books the work of the forces it applies (kept
+  // forces: as keepForces worked it out).
   auto t0 = Clock::now();
-  if (def_.energyLedger && !keptForces) bookHalfKick(0.5 * dt_, 0.25 * dt_);
+  if (keptForces) {
+    energy_.add(keptOpening_);
+  } else if (def_.energyLedger) {
+    bookHalfKick(0.5 * dt_, 0.25 * dt_, energy_);
+  }
   stageSeconds_[std::size_t(Stage::Energy)] += secondsSince(t0);
 
   // Half kick and drift.

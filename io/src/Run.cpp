@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <map>
 
 #ifdef LSDEM_HAVE_OPENMP
@@ -141,7 +142,8 @@ class Runner {
       bool due = checkpoint;
       for (auto& r : recorders_) due = due || r->schedule().due(t);
       if (due) updateView();
-      if (frames_) writeFramePieces(frames_->schedule().due(t));
+      // (Every process keeps the schedules: they agree.)
+      if (frames_ && frames_->schedule().due(t)) writeFramePieces(true);
       if (writes_) {
         for (auto& r : recorders_) {
           if (r->schedule().due(t)) r->record(*sw_.world, t);
@@ -223,15 +225,25 @@ class Runner {
   }
   // A distributed run whose frames are per-rank pieces, when the writing
   // process writes a frame now (`due` there): every process writes its piece
-  // of the world it steps first (collective). Without pieces: nothing.
+  // of the world it steps first (collective: every process calls it when a
+  // frame may be due). Without pieces: nothing.
   void writeFramePieces(bool due) {
     if (!frames_) return;
     constexpr std::uint64_t kNone = ~std::uint64_t(0);
     const std::uint64_t number = engine_->fromWriter(writes_ && due ? frames_->nextFrame() : kNone);
     if (number == kNone) return;
-    frames_->writePiece(*stepped().world, number, options_.engine->rank);
-    // The frame's index names every piece: written once they all are.
-    engine_->barrier();
+    std::exception_ptr failed;
+    try {
+      frames_->writePiece(*stepped().world, number, options_.engine->rank);
+    } catch (...) {
+      failed = std::current_exception();
+    }
+    // The frame's index names every piece: written once they all are, and
+    // never when one is missing (every process stops alike).
+    if (engine_->any(failed != nullptr)) {
+      if (failed) std::rethrow_exception(failed);
+      throw std::runtime_error("frame " + std::to_string(number) + ": another process could not write its piece");
+    }
   }
   void advanceSchedules() {
     const Instant t = now();

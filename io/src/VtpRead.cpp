@@ -558,6 +558,7 @@ VtpPiece readVtp(const std::filesystem::path& file) {
       if (tag->closing || tag->name != "Piece") continue;
       const auto source = tag->attribute("Source");
       if (!source || source->empty()) scan.fail(tag->begin, "Piece.Source", "missing");
+      if (source->ends_with(".pvtp")) scan.fail(tag->begin, "Piece.Source", "'" + *source + "' is an index, not a piece");
       pieces.push_back(readVtp(file.parent_path() / *source));
     }
     if (pieces.empty()) scan.fail(root->begin, "PPolyData", "names no piece");

@@ -56,8 +56,10 @@ class DistributedEngine final : public io::RunEngine<D> {
     viewRemoved_ = removed.size();
   }
 
-  bool anyStop(bool stop) override {
-    int flag = stop ? 1 : 0;
+  bool anyStop(bool stop) override { return any(stop); }
+
+  bool any(bool here) override {
+    int flag = here ? 1 : 0;
     if (MPI_Allreduce(MPI_IN_PLACE, &flag, 1, MPI_INT, MPI_MAX, comm_) != MPI_SUCCESS) {
       throw std::runtime_error("MPI: Allreduce failed");
     }
@@ -67,10 +69,6 @@ class DistributedEngine final : public io::RunEngine<D> {
   std::uint64_t fromWriter(std::uint64_t value) override {
     if (MPI_Bcast(&value, 1, MPI_UINT64_T, kRoot, comm_) != MPI_SUCCESS) throw std::runtime_error("MPI: Bcast failed");
     return value;
-  }
-
-  void barrier() override {
-    if (MPI_Barrier(comm_) != MPI_SUCCESS) throw std::runtime_error("MPI: Barrier failed");
   }
 
  private:

@@ -732,21 +732,18 @@ void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornPartic
   // fragmentSpringEnergy), summed over the ranks: each counts the pairs whose
   // lower-id particle it owns, a pair once for each split it touches, as one
   // world counts them (Breakage).
-  const auto splitOf = [&](ParticleId id) -> std::ptrdiff_t {
-    if (batchFirstChild_.empty() || id < batchFirstChild_.front() || id >= batchEnd_) return -1;
-    return std::upper_bound(batchFirstChild_.begin(), batchFirstChild_.end(), id) - batchFirstChild_.begin() - 1;
-  };
   const dynamics::Particles<D>& p = world_.particles();
-  const auto records = world_.contacts().pairContacts();
-  const std::size_t particlePairs = world_.contacts().particleContacts().size();
-  std::vector<double> springs(batchParents_.size(), 0.0);
-  for (std::size_t k = 0; k < records.size(); ++k) {
-    if (world_.isGhost(records[k].a)) continue;
-    const std::ptrdiff_t sa = splitOf(p.id[records[k].a]);
-    const std::ptrdiff_t sb = k < particlePairs ? splitOf(p.id[records[k].b]) : -1;
-    if (sa >= 0) springs[std::size_t(sa)] += records[k].elasticEnergy;
-    if (sb >= 0 && sb != sa) springs[std::size_t(sb)] += records[k].elasticEnergy;
+  std::vector<std::int64_t> splitOf(p.size(), -1);
+  std::vector<std::uint8_t> ghost(p.size(), 0);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    ghost[i] = world_.isGhost(i);
+    if (!batchFirstChild_.empty() && p.id[i] >= batchFirstChild_.front() && p.id[i] < batchEnd_) {
+      splitOf[i] = std::upper_bound(batchFirstChild_.begin(), batchFirstChild_.end(), p.id[i]) -
+                   batchFirstChild_.begin() - 1;
+    }
   }
+  std::vector<double> springs(batchParents_.size(), 0.0);
+  world_.contacts().addSpringsByGroup(splitOf, ghost, springs);
   check(MPI_Allreduce(MPI_IN_PLACE, springs.data(), int(springs.size()), MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
   std::vector<std::pair<ParticleId, double>> byParent;
   for (std::size_t k = 0; k < springs.size(); ++k) byParent.emplace_back(batchParents_[k], springs[k]);

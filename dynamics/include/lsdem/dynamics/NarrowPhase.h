@@ -355,6 +355,15 @@ class ContactSolver {
   /// accumulate() sums them, into `out`, which it returns. A part of a
   /// distributed run: the loads of its own particles (skip: its ghosts).
   const BoundaryLoads<D>& boundaryLoadsOf(const std::vector<std::uint8_t>& skip, BoundaryLoads<D>& out) const;
+  /// @brief Adds the spring energy of each pair of the last compute() (J) to
+  /// the groups of its particles, once per group: `groupOf[i]` is particle
+  /// i's group (an index into `sums`), < 0 for none; a plane's or tool's
+  /// pair counts for its particle. Pairs whose particle a is flagged in
+  /// `skipA` (all counted when it is empty) are left out: a part of a
+  /// distributed run counts the pairs whose lower-id particle it owns.
+  /// Breakage's fragment springs per split.
+  void addSpringsByGroup(std::span<const std::int64_t> groupOf, const std::vector<std::uint8_t>& skipA,
+                         std::span<double> sums) const;
 
   /// @brief Touching pairs of the last compute(), in order: particle pairs (in
   /// candidate order), then particle-plane contacts (by particle, then plane),

@@ -213,8 +213,10 @@ class World {
 
   // ---- building ----
   /// @brief Adds a particle; re-checks the time step. Returns its index.
-  /// In a distributed run a particle without an id (an effect's: a feed's)
-  /// takes the run's next free id (ParticleSetCoordinator::takeId).
+  /// In a distributed run a particle without an id (an effect's: a feed's,
+  /// added in its afterStep) takes the run's next free id
+  /// (ParticleSetCoordinator::takeId), and the world that keeps it as its
+  /// own books the energy it brings once the worlds agree (after the effect).
   std::size_t addParticle(const ParticleDef<D>& def);
   /// @brief Adds a copy of a particle another world holds (a distributed
   /// run's mirror, a particle handed over, a view's copy), with its owner's
@@ -254,8 +256,9 @@ class World {
   /// @brief Marks particle `index` as a ghost (or not): a mirror of a
   /// particle another rank of a distributed run owns and moves. Pairs of two
   /// ghosts are not computed (no force they give acts on a particle this
-  /// world owns); everything else treats ghosts like the other particles,
-  /// but the energy ledger: it books the terms of this world's own particles
+  /// world owns), and neither are a ghost's field forces (Effect::
+  /// applyForces) nor its frames (io/Vtk.h: its owner's piece); the energy
+  /// ledger books the terms of this world's own particles
   /// (their work, damping, kinetic energy, their half of a pair's dashpot
   /// work) and of the pairs whose lower-id particle is its own (springs,
   /// friction), so that the ledgers of a run's parts sum to the run's.
@@ -349,9 +352,10 @@ class World {
   /// (detachParticle, setGhost): a distributed run spread from a checkpoint,
   /// whose parts step on with the forces the whole run evaluated, as the run
   /// would have. Call it while the contacts are current, before those
-  /// changes: the ledger books the opening half kick's work now, from the
-  /// contact records that still describe the particles (the step books
-  /// none). The records then stay stale until the step evaluates them.
+  /// changes: the opening half kick's work is worked out now, from the
+  /// contact records that still describe the particles, and booked by the
+  /// step. The records then stay stale until the step evaluates them.
+  /// @note Throws std::logic_error when the contacts are not current.
   void keepForces();
   /// One particle of a run that a world shows (showRunOf), as the run's last
   /// force evaluation left it.
@@ -471,7 +475,8 @@ class World {
   /// @brief The energy budget. Its kinetic and elastic energy are those of
   /// the state now, worked out at the first read after a change (a step, a
   /// change of the particles); the other terms are booked as the steps go.
-  /// Without the ledger (WorldDef::energyLedger) those are 0.
+  /// Without the ledger (WorldDef::energyLedger) those are 0. A part of a
+  /// distributed run holds its share of the run's budget (setGhost).
   const EnergyLedger& energy() const {
     if (!energyCurrent_) refreshEnergy();
     return energy_;
@@ -479,7 +484,7 @@ class World {
   /// @brief The run's energy scale (EnergyLedger::scale), J, against which
   /// breakage checks a split's energy: this world's; a part of a distributed
   /// run holds the whole run's as of its last split (setRunEnergyScale).
-  double energyScale() const { return coordinator_ ? runEnergyScale_ : energy().scale(); }
+  double energyScale() const { return coordinator_ && runEnergyScale_ > 0.0 ? runEnergyScale_ : energy().scale(); }
   /// @brief Sets energyScale() of a part of a distributed run (its coordinator, after each split).
   void setRunEnergyScale(double joules) { runEnergyScale_ = joules; }
   /// @brief A part of a distributed run: the energy of the springs of split
@@ -643,7 +648,10 @@ class World {
   // With ghosts: the loads of this world's own particles on planes and
   // tools (scratch of bookClosing).
   BoundaryLoads<D> ownLoads_;
-  void bookHalfKick(double halfDt, double lead);
+  // Books a half kick's work into `into` (energy_, or keptOpening_).
+  void bookHalfKick(double halfDt, double lead, EnergyLedger& into) const;
+  // keepForces: the opening half kick's work, booked by the next beginStep.
+  EnergyLedger keptOpening_;
   // The closing half of the ledger's booking after a force evaluation.
   void bookClosing(double dtClosing);
   std::vector<RemovedParticle> removed_;

@@ -46,8 +46,9 @@ class RunEngine {
   virtual bool anyStop(bool stop) = 0;
   /// @brief The writing process's `value`, on every process (collective).
   virtual std::uint64_t fromWriter(std::uint64_t value) = 0;
-  /// @brief Returns once every process called it (collective).
-  virtual void barrier() = 0;
+  /// @brief Whether `here` holds on any process (collective: returns once
+  /// every process asked).
+  virtual bool any(bool here) = 0;
 };
 
 /// @brief Makes a run's engine for the world each process built alike,

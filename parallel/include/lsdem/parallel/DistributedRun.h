@@ -5,17 +5,18 @@
 ///
 /// Every rank reads the scene and builds the world alike (or restores it from
 /// the checkpoint alike), and a DistributedWorld spreads it: each rank steps
-/// its own particles and their ghosts. Rank 0 writes every output, from a
+/// its own particles and their ghosts. Rank 0 writes the outputs, from a
 /// view of the whole run: a second world built from the scene, which nothing
 /// steps, brought up to the run (DistributedWorld::updateView, the breakage
-/// log and the removal records gathered) at the instants an output or a
-/// checkpoint is due. The checkpoint is the whole run's, in the one-process
-/// format: a run resumes from it on any number of ranks, one included.
+/// log, the removal records and the energy ledger's shares gathered) at the
+/// instants an output or a checkpoint is due; with `[output] frame_pieces =
+/// "ranks"` every rank writes its own particles' piece of each frame and
+/// rank 0 the frame's index. The checkpoint is the whole run's, in the
+/// one-process format: a run resumes from it on any number of ranks, one
+/// included.
 ///
 /// A scene needs no change, within what DistributedWorld distributes (its
-/// constructor refuses the rest, naming it). The energy budget's terms are
-/// not summed over the ranks yet: history.csv leaves them empty and
-/// summary.json gives the energy now only, as without `energy_ledger`.
+/// constructor refuses the rest, naming it).
 
 #include "lsdem/io/Run.h"
 #include "lsdem/parallel/DistributedWorld.h"

@@ -124,6 +124,10 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   /// effects), or restored alike from the same checkpoint (a resumed run:
   /// any rank count can resume any run's checkpoint); each keeps its own
   /// particles and their ghosts and drops the rest. The world must outlive this object and be stepped only through it.
+  /// The energy ledger of a world that had run (a resumed one) stays rank
+  /// 0's, the other ranks' start from nothing (World::resetLedger); a
+  /// resumed world's first step opens with the forces it holds
+  /// (World::keepForces).
   /// @note Throws std::invalid_argument when the worlds differ between ranks
   /// or the scene uses what is not distributed yet (see the file comment).
   DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, const DistributedDef& def = {});
