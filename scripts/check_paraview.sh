@@ -68,7 +68,7 @@ copies=()
 # "ranks", docs/parallel.md): the 2D scene of the 2d-binary run on 2 ranks,
 # outside $work (its files are .pvtp indices and their pieces).
 pieces=""
-if command -v mpirun >/dev/null && ldd "$lsdem" | grep -q libmpi; then
+if command -v mpirun >/dev/null && [[ $(ldd "$lsdem") == *libmpi* ]]; then
   pieces=$work.pieces
   mkdir -p "$pieces"
   awk '{ print } /^\[output\][[:space:]]*$/ { print "vtk_format = \"binary\""; print "frame_pieces = \"ranks\"" }' \
@@ -79,7 +79,11 @@ fi
 echo "check_paraview: runs done ($((SECONDS - start)) s)"
 
 status=0
-"$pvpython" - "$work" "$pieces" >"$work/read.log" 2>&1 <<'PY' || status=$?
+# pvpython refuses an empty argument (it cannot decode it), so the pieces
+# folder is passed only when there is one.
+read_args=("$work")
+[[ -n $pieces ]] && read_args+=("$pieces")
+"$pvpython" - "${read_args[@]}" >"$work/read.log" 2>&1 <<'PY' || status=$?
 import glob, os, re, sys
 from paraview import servermanager as sm
 import paraview.simple as pv
@@ -207,7 +211,7 @@ for dim in ("2d", "3d"):
 
 # Frames in per-rank pieces: each .pvd lists .pvtp indices of 2 pieces, and
 # ParaView reads them as the frames of the same run written whole (2d-binary).
-if len(sys.argv) > 2 and sys.argv[2]:
+if len(sys.argv) > 2:
     folder = os.path.join(sys.argv[2], "2d-pieces")
     whole = os.path.join(work, "2d-binary")
     for series in ("particles", "surfaces", "contacts"):

@@ -19,7 +19,7 @@ mkdir -p docs/images
 # The bucket forces (history.csv columns <tool>_force_*_N: the force of the
 # wall pieces on each bucket) against time: $out/plots/bucket_forces.png.
 terminal=png
-if gnuplot -e 'set terminal' 2>&1 | grep -q pngcairo; then terminal=pngcairo; fi
+if [[ $(gnuplot -e 'set terminal' 2>&1) == *pngcairo* ]]; then terminal=pngcairo; fi
 gnuplot <<GNUPLOT
 set terminal $terminal size 900,560
 set output '$out/plots/bucket_forces.png'
