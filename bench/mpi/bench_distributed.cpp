@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
     oneGhost += g == 1;
     twoGhosts += g == 2;
   }
-  double row[10] = {1e3 * seconds / steps,
+  double row[11] = {1e3 * seconds / steps,
                    double(dist.ownedCount()),
                    double(ghosts),
                    (after.seconds - before.seconds) / seconds,
@@ -77,8 +77,9 @@ int main(int argc, char** argv) {
                    double(after.migrations - before.migrations) / steps,
                    pairs,
                    oneGhost,
-                   twoGhosts};
-  constexpr int kColumns = 10;
+                   twoGhosts,
+                   double(after.neighbours)};
+  constexpr int kColumns = 11;
   std::vector<double> all(std::size_t(kColumns * ranks));
   MPI_Gather(row, kColumns, MPI_DOUBLE, all.data(), kColumns, MPI_DOUBLE, 0, MPI_COMM_WORLD);
   const std::uint64_t total = dist.globalCount();
@@ -87,12 +88,12 @@ int main(int argc, char** argv) {
                 (unsigned long long)total, ranks, steps, settle, world.dt());
     std::printf(
         "rank  ms/step  owned  ghosts  exchange  bytes/step  messages/step  migrations/step  contacts  one-ghost  "
-        "two-ghost\n");
+        "two-ghost  neighbours\n");
     double slowest = 0.0;
     for (int r = 0; r < ranks; ++r) {
       const double* v = &all[std::size_t(kColumns * r)];
-      std::printf("%4d  %7.2f  %5.0f  %6.0f  %7.1f%%  %10.0f  %13.1f  %15.2f  %8.0f  %9.0f  %9.0f\n", r, v[0], v[1], v[2],
-                  100.0 * v[3], v[4], v[5], v[6], v[7], v[8], v[9]);
+      std::printf("%4d  %7.2f  %5.0f  %6.0f  %7.1f%%  %10.0f  %13.1f  %15.2f  %8.0f  %9.0f  %9.0f  %10.0f\n", r, v[0],
+                  v[1], v[2], 100.0 * v[3], v[4], v[5], v[6], v[7], v[8], v[9], v[10]);
       slowest = std::max(slowest, v[0]);
     }
     std::printf("slowest rank: %.2f ms/step\n", slowest);

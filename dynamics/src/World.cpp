@@ -238,35 +238,41 @@ TimeStepLimit World<D>::limitOf(std::size_t i) const {
 template <int D>
 void World<D>::updateTimeStep(bool lastAddedOnly) {
   const double zeta = def_.contact.hasDamping ? def_.contact.dampingRatio : 0.0;
-  // The particle with the largest omega^2 = k / m sets the step; the minimum
-  // over particles of criticalTimeStep is that particle's.
-  const auto criticalOf = [&](std::size_t i) {
-    return criticalTimeStep({particles_.mass[i]}, {stiffness_[i].stiffness}, zeta);
+  // The particle with the largest omega^2 = k / m (of equals, the lowest id:
+  // setsStepBefore) sets the step; the minimum over particles of
+  // criticalTimeStep is that particle's.
+  const auto omega2Of = [&](std::size_t i) { return stiffness_[i].stiffness / particles_.mass[i]; };
+  const auto setLimit = [&](std::size_t i) {
+    dtCritical_ = criticalTimeStep({particles_.mass[i]}, {stiffness_[i].stiffness}, zeta);
+    limit_ = limitOf(i);
+    limit_.criticalDt = dtCritical_;
   };
   if (lastAddedOnly) {
     // One particle more: the minimum over particles takes one more term (O(1)
     // per add, so building a world of N particles stays O(N)).
     const std::size_t i = particles_.size() - 1;
-    const double last = criticalOf(i);
-    if (last < dtCritical_) {
-      dtCritical_ = last;
-      limit_ = limitOf(i);
-      limit_.criticalDt = last;
-    }
+    const double w2 = std::isfinite(dtCritical_) ? limit_.omega2() : 0.0;
+    if (setsStepBefore(omega2Of(i), particles_.id[i], w2, limit_.id)) setLimit(i);
   } else {
+    // A distributed part counts its own particles only: a mirror's owner
+    // counts it (finishCoordination takes the run's minimum), and a mirror
+    // may be of a parent that has split on its owner and not left here yet.
     std::size_t stiffest = particles_.size();
     double omega2 = 0.0;
+    std::uint64_t stiffestId = kNoParent;
     for (std::size_t i = 0; i < particles_.size(); ++i) {
-      const double w2 = stiffness_[i].stiffness / particles_.mass[i];
-      if (w2 > omega2) {
+      if (!ghost_.empty() && ghost_[i]) continue;
+      const double w2 = omega2Of(i);
+      if (setsStepBefore(w2, particles_.id[i], omega2, stiffestId)) {
         omega2 = w2;
         stiffest = i;
+        stiffestId = particles_.id[i];
       }
     }
-    dtCritical_ = stiffest < particles_.size() ? criticalOf(stiffest) : std::numeric_limits<double>::infinity();
     if (stiffest < particles_.size()) {
-      limit_ = limitOf(stiffest);
-      limit_.criticalDt = dtCritical_;
+      setLimit(stiffest);
+    } else {
+      dtCritical_ = std::numeric_limits<double>::infinity();
     }
   }
   stepFromCritical();
@@ -649,14 +655,18 @@ void World<D>::finishCoordination(std::size_t dtChangesBefore, double dtBefore) 
   // particles after a replacement).
   if (def_.densityScaling) scaleNewFragments();
   updateTimeStep(false);
-  // Each part saw its own particles and mirrors; the run's step is the
-  // smallest, and every part keeps the run's critical step and what sets it
-  // (a mirror that arrives later cannot lower it: it was counted).
-  // (A part that holds no particle offers none: its limit_ is an old one.)
-  TimeStepLimit runLimit = particles_.empty() ? TimeStepLimit{} : limit_;
+  // Each part saw its own particles; the run's step is the smallest, and
+  // every part keeps the run's critical step and what sets it (a mirror that
+  // arrives later cannot lower it: its owner counted it).
+  // (A part that owns no particle offers none: its limit_ is an old one. A
+  // run with no particle left keeps an infinite critical step and its last
+  // limit, as one world does.)
+  TimeStepLimit runLimit = std::isfinite(dtCritical_) ? limit_ : TimeStepLimit{};
   dt_ = coordinator_->agreeTimeStep(dt_, runLimit);
-  dtCritical_ = runLimit.criticalDt;
-  limit_ = runLimit;
+  if (runLimit.criticalDt > 0.0) {
+    dtCritical_ = runLimit.criticalDt;
+    limit_ = runLimit;
+  }
   dtChanges_.resize(dtChangesBefore);
   if (dt_ != dtBefore) dtChanges_.push_back({time_, dt_, runLimit});
   // One world re-evaluates all its contacts after a replacement; so does

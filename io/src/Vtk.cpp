@@ -1175,18 +1175,21 @@ void FrameWriter<D>::updateNextFrame() {
   }
 }
 
+template <int D>
+void frameStresses(const dynamics::World<D>& world, std::vector<geometry::Mat<D>>& out) {
+  out.clear();
+  if (world.contactsCurrent()) breakage::grainStresses(world.particles(), world.contacts(), out);
+  if (out.size() != world.particles().size()) out.assign(world.particles().size(), geometry::Mat<D>::Zero());
+}
+
 namespace {
 
-// `stress` when it holds one tensor per particle; else the grains' stress
-// tensors (eq. 5) into `scratch` while the contact records describe the
-// particles (zeros otherwise).
+// `stress` when it holds one tensor per particle; else frameStresses into `scratch`.
 template <int D>
 std::span<const geometry::Mat<D>> stressesOf(const dynamics::World<D>& world, std::span<const geometry::Mat<D>> stress,
                                              std::vector<geometry::Mat<D>>& scratch) {
   if (stress.size() == world.particles().size()) return stress;
-  scratch.clear();
-  if (world.contactsCurrent()) breakage::grainStresses(world.particles(), world.contacts(), scratch);
-  if (scratch.size() != world.particles().size()) scratch.assign(world.particles().size(), geometry::Mat<D>::Zero());
+  frameStresses(world, scratch);
   return scratch;
 }
 
@@ -1366,6 +1369,8 @@ template void writeBoundaryFrame<3>(const std::filesystem::path&, const dynamics
                                     const geometry::Box<3>&, VtkEncoding);
 template VtpPiece writeContactFrame<2>(const std::filesystem::path&, const dynamics::World<2>&, VtkEncoding);
 template VtpPiece writeContactFrame<3>(const std::filesystem::path&, const dynamics::World<3>&, VtkEncoding);
+template void frameStresses<2>(const dynamics::World<2>&, std::vector<geometry::Mat<2>>&);
+template void frameStresses<3>(const dynamics::World<3>&, std::vector<geometry::Mat<3>>&);
 template std::array<VtpPiece, 3> writeFramePieces<2>(const FrameWriterDef<2>&, std::size_t, int,
                                                        const dynamics::World<2>&, SurfaceCache<2>&,
                                                        std::span<const double>, std::span<const geometry::Mat<2>>);

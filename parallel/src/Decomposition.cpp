@@ -121,6 +121,18 @@ double Decomposition<D>::distance(const Vec<D>& x, int p) const {
   return std::sqrt(d2);
 }
 
+template <int D>
+double Decomposition<D>::distance(int p, int q) const {
+  const geometry::Box<D>& a = box(p);
+  const geometry::Box<D>& b = box(q);
+  double d2 = 0.0;
+  for (int k = 0; k < D; ++k) {
+    const double gap = std::max({b.lower[k] - a.upper[k], a.lower[k] - b.upper[k], 0.0});
+    d2 += gap * gap;
+  }
+  return std::sqrt(d2);
+}
+
 template class Decomposition<2>;
 template class Decomposition<3>;
 

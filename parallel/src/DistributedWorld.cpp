@@ -368,16 +368,35 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
   // (owner, id, shape, mass and motion, strength), with the contact history
   // of the particles it takes over, then how the contacts of the particles
   // just born start (their births).
+  //
+  // A particle is tested against the neighbouring subdomains only while
+  // every subdomain in its reach is a neighbour: for a point x at distance d
+  // from this subdomain A and any other B, dist(x, B) >= dist(A, B) - d, so
+  // a subdomain farther than the neighbours' range R is out of reach when
+  // d + reach < R. Else (a particle well out of A: after a rebalance) it is
+  // tested against every rank, and when it goes to one that is not a
+  // neighbour the whole run exchanges with an all-to-all this time.
+  updateNeighbours();
   std::vector<StateWriter> out(static_cast<std::size_t>(ranks_));
   std::vector<std::vector<std::size_t>> sent(static_cast<std::size_t>(ranks_));
   std::vector<int> newOwner(n, rank_);
+  bool beyondNeighbours = false;
   for (std::size_t i = 0; i < n; ++i) {
     if (world_.isGhost(i)) continue;
     newOwner[i] = decomposition_.owner(p.position[i]);
     const double r = reach(i);
-    for (int q = 0; q < ranks_; ++q) {
-      if (q == rank_) continue;
-      if (q == newOwner[i] || decomposition_.distance(p.position[i], q) < r) sent[std::size_t(q)].push_back(i);
+    const auto consider = [&](int q) {
+      if (q == newOwner[i] || decomposition_.distance(p.position[i], q) < r) {
+        sent[std::size_t(q)].push_back(i);
+        beyondNeighbours = beyondNeighbours || !isNeighbour_[std::size_t(q)];
+      }
+    };
+    if (decomposition_.distance(p.position[i], rank_) + r < neighbourRange_ * (1.0 - 1e-12)) {
+      for (const int q : neighbours_) consider(q);
+    } else {
+      for (int q = 0; q < ranks_; ++q) {
+        if (q != rank_) consider(q);
+      }
     }
   }
   for (int q = 0; q < ranks_; ++q) {
@@ -420,7 +439,9 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
     stats_.bytesSent += w.bytes().size();
     ++stats_.messagesSent;
   }
-  const std::vector<std::vector<char>> in = allToAll(comm_, out);
+  const bool global = ranks_ > 1 && anyRank(beyondNeighbours);
+  const std::vector<std::vector<char>> in = global ? allToAll(comm_, out) : neighbourExchange(out);
+  ++(global ? stats_.globalExchanges : stats_.neighbourExchanges);
 
   // What stays: our own particles, and those just given away while in reach
   // of our subdomain (as ghosts); the other ghosts stay if refreshed below.
@@ -494,6 +515,50 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
 }
 
 template <int D>
+void DistributedWorld<D>::updateNeighbours() {
+  const double range = 2.0 * (largestRadius_ + skin_);
+  if (range == neighbourRange_ && !decompositionChanged_) return;
+  neighbourRange_ = range;
+  decompositionChanged_ = false;
+  neighbours_.clear();
+  isNeighbour_.assign(static_cast<std::size_t>(ranks_), 0);
+  for (int q = 0; q < ranks_; ++q) {
+    if (q == rank_ || !(decomposition_.distance(rank_, q) < range)) continue;
+    neighbours_.push_back(q);
+    isNeighbour_[std::size_t(q)] = 1;
+  }
+  stats_.neighbours = neighbours_.size();
+}
+
+template <int D>
+std::vector<std::vector<char>> DistributedWorld<D>::neighbourExchange(const std::vector<StateWriter>& out) {
+  // One message to each neighbour (maybe empty), and one from each: its
+  // size from the probe. (Messages between two ranks arrive in order, and a
+  // collective separates two exchanges.)
+  constexpr int kTag = 7301;
+  std::vector<MPI_Request> sends(neighbours_.size());
+  for (std::size_t k = 0; k < neighbours_.size(); ++k) {
+    const auto& bytes = out[std::size_t(neighbours_[k])].bytes();
+    if (bytes.size() > std::size_t(std::numeric_limits<int>::max())) {
+      throw std::runtime_error("MPI exchange of more than 2 GiB to one rank in one step");
+    }
+    check(MPI_Isend(bytes.data(), int(bytes.size()), MPI_CHAR, neighbours_[k], kTag, comm_, &sends[k]), "Isend");
+  }
+  std::vector<std::vector<char>> in(static_cast<std::size_t>(ranks_));
+  for (const int q : neighbours_) {
+    MPI_Status status;
+    check(MPI_Probe(q, kTag, comm_, &status), "Probe");
+    int count = 0;
+    check(MPI_Get_count(&status, MPI_CHAR, &count), "Get_count");
+    std::vector<char>& bytes = in[std::size_t(q)];
+    bytes.resize(std::size_t(count));
+    check(MPI_Recv(bytes.data(), count, MPI_CHAR, q, kTag, comm_, MPI_STATUS_IGNORE), "Recv");
+  }
+  check(MPI_Waitall(int(sends.size()), sends.data(), MPI_STATUSES_IGNORE), "Waitall");
+  return in;
+}
+
+template <int D>
 void DistributedWorld<D>::rebalance() {
   const dynamics::Particles<D>& p = world_.particles();
   double own = 0.0;
@@ -531,6 +596,7 @@ void DistributedWorld<D>::rebalance() {
     weights.push_back(all[k + D]);
   }
   decomposition_ = Decomposition<D>::build(points, weights, ranks_);
+  decompositionChanged_ = true;
   ++stats_.rebalances;
   // The particles move to their new owners at the next exchange.
 }
@@ -638,9 +704,13 @@ std::vector<typename DistributedWorld<D>::ParticleState> DistributedWorld<D>::ga
 template <int D>
 std::uint64_t DistributedWorld<D>::allocateIds(std::span<const dynamics::SplitRequest> batch,
                                                std::vector<dynamics::SplitIds>& ids) {
-  // Every rank's split count, then, when some rank split, every split.
+  // The run's split count (every step: one all-reduce), then, when some
+  // rank split, every rank's count and every split.
   ids.clear();
   const int mine = int(batch.size());
+  int splits = mine;
+  check(MPI_Allreduce(MPI_IN_PLACE, &splits, 1, MPI_INT, MPI_SUM, comm_), "Allreduce");
+  if (splits == 0) return 0;
   std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
   check(MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_), "Allgather");
   int total = 0;
@@ -706,15 +776,25 @@ double DistributedWorld<D>::agreeTimeStep(double dt, dynamics::TimeStepLimit& li
   double v[2] = {dt, -largest};
   check(MPI_Allreduce(MPI_IN_PLACE, v, 2, MPI_DOUBLE, MPI_MIN, comm_), "Allreduce");
   largestRadius_ = std::max(largestRadius_, -v[1]);
-  // What sets the run's step: the limit with the smallest critical step (the
-  // lowest rank of equals), as every rank sees it.
-  struct {
-    double criticalDt;
-    int rank;
-  } mine{limit.criticalDt > 0.0 ? limit.criticalDt : std::numeric_limits<double>::infinity(), rank_}, run{};
-  check(MPI_Allreduce(&mine, &run, 1, MPI_DOUBLE_INT, MPI_MINLOC, comm_), "Allreduce");
+  // What sets the run's step: the rank's limit that sets it first in one
+  // world's order (the largest omega^2, of equals the lowest id:
+  // dynamics::setsStepBefore), as every rank sees it.
+  struct Offer {
+    double omega2;
+    std::uint64_t id;
+  };
+  const Offer mine{limit.omega2(), limit.id};
+  std::vector<Offer> offers(static_cast<std::size_t>(ranks_));
+  check(MPI_Allgather(&mine, int(sizeof mine), MPI_BYTE, offers.data(), int(sizeof mine), MPI_BYTE, comm_),
+        "Allgather");
+  int setter = 0;
+  for (int r = 1; r < ranks_; ++r) {
+    const Offer& o = offers[std::size_t(r)];
+    const Offer& best = offers[std::size_t(setter)];
+    if (dynamics::setsStepBefore(o.omega2, o.id, best.omega2, best.id)) setter = r;
+  }
   static_assert(std::is_trivially_copyable_v<dynamics::TimeStepLimit>);
-  check(MPI_Bcast(&limit, int(sizeof limit), MPI_BYTE, run.rank, comm_), "Bcast");
+  check(MPI_Bcast(&limit, int(sizeof limit), MPI_BYTE, setter, comm_), "Bcast");
   return v[0];
 }
 

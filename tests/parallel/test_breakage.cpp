@@ -67,7 +67,7 @@ Counts expectEqualToSerial(const io::SceneDef<D>& scene, std::uint64_t steps, st
   DistributedWorld<D> dist(comm, *local.world);
   // Step by step: every rank takes the serial time step at every step.
   double serialSeconds = 0.0, distSeconds = 0.0;
-  std::uint64_t firstOtherDt = 0;
+  std::uint64_t firstOtherDt = 0, firstOtherCritical = 0;
   for (std::uint64_t s = 1; s <= steps; ++s) {
     const auto t0 = std::chrono::steady_clock::now();
     serial.world->step();
@@ -76,8 +76,16 @@ Counts expectEqualToSerial(const io::SceneDef<D>& scene, std::uint64_t steps, st
     serialSeconds += std::chrono::duration<double>(t1 - t0).count();
     distSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     if (firstOtherDt == 0 && local.world->dt() != serial.world->dt()) firstOtherDt = s;
+    // The critical step (history's critical_dt_s) and what sets it: the
+    // run's, not that of what this rank holds.
+    if (firstOtherCritical == 0 && (local.world->criticalDt() != serial.world->criticalDt() ||
+                                    local.world->timeStepLimit().id != serial.world->timeStepLimit().id)) {
+      firstOtherCritical = s;
+    }
   }
   EXPECT_EQ(firstOtherDt, 0u) << "rank " << rankOf(comm) << ": another time step from step " << firstOtherDt;
+  EXPECT_EQ(firstOtherCritical, 0u) << "rank " << rankOf(comm) << ": another critical step from step "
+                                    << firstOtherCritical;
   EXPECT_EQ(local.world->time(), serial.world->time());
   const std::uint64_t count = dist.globalCount();
   EXPECT_EQ(count, serial.world->particles().size());
@@ -87,6 +95,12 @@ Counts expectEqualToSerial(const io::SceneDef<D>& scene, std::uint64_t steps, st
   const auto removed = dist.gatherRemoved(0);
   const double mass = dist.particleMass();
   const dynamics::EnergyLedger ledger = dist.energy();
+  // The view of the whole run (as `lsdem run` builds it: the scene without
+  // its particles), brought up to now on rank 0.
+  io::SceneDef<D> viewDef = scene;
+  std::erase_if(viewDef.groups, [](const io::ParticleGroupDef<D>& g) { return g.placement != io::Placement::Feed; });
+  io::SceneWorld<D> view = io::buildWorld(viewDef);
+  dist.updateView(*view.world, 0);
   // Where the splits happened: a run on several ranks breaks grains on more than one.
   std::uint64_t mine = local.breakage->breakages(), ranksThatBroke = mine > 0 ? 1 : 0;
   MPI_Allreduce(MPI_IN_PLACE, &ranksThatBroke, 1, MPI_UINT64_T, MPI_SUM, comm);
@@ -123,6 +137,15 @@ Counts expectEqualToSerial(const io::SceneDef<D>& scene, std::uint64_t steps, st
               "t = %.3g s, serial %.2f s, distributed %.2f s\n",
               D, ranks, (unsigned long long)steps, c.breakages, (unsigned long long)ranksThatBroke, c.particles,
               c.fines, (unsigned long long)migrations, serial.world->time(), serialSeconds, distSeconds);
+
+  // The view: the run's particles, its next free id (past fragments gone as
+  // fines: a checkpoint written from the view resumes with the serial ids)
+  // and what sets its step.
+  EXPECT_EQ(view.world->particles().size(), serial.world->particles().size());
+  EXPECT_EQ(view.world->particles().nextId(), serial.world->particles().nextId());
+  EXPECT_EQ(view.world->criticalDt(), serial.world->criticalDt());
+  EXPECT_EQ(view.world->timeStepLimit().id, serial.world->timeStepLimit().id);
+  EXPECT_EQ(view.world->dt(), serial.world->dt());
 
   // Every particle: the same ids, and the same motion bit for bit.
   const dynamics::Particles<D>& p = serial.world->particles();

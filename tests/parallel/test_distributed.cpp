@@ -65,15 +65,15 @@ enum class Extra {
   Flow,   // no wall at x = 0: grains that pass it by a diameter leave (outflow); a feed drops grains at the far end
 };
 
-// A box of planes (floor at height 0, walls at 0 and `width` across every
-// other axis) and a lattice of grains above the floor with random offsets,
+// A box of planes (floor at height 0, walls at 0 and `boxWidth`, default
+// the lattice's width, across every other axis) and a lattice of grains above the floor with random offsets,
 // orientations and velocities (the same on every rank: a fixed seed), with
 // `extra`. Returns the feed (Extra::Flow), else null.
 template <int D>
-const dynamics::Feed<D>* build(World<D>& w, int perSide, int layers, Extra extra = Extra::None) {
+const dynamics::Feed<D>* build(World<D>& w, int perSide, int layers, Extra extra = Extra::None, double boxWidth = 0.0) {
   const double d = 0.01;
   const double pitch = 1.1 * d;
-  const double width = perSide * pitch;
+  const double width = boxWidth > 0.0 ? boxWidth : perSide * pitch;
   const int up = 1;  // the vertical axis
   PlaneDef<D> floor;
   floor.name = "floor";
@@ -176,14 +176,16 @@ WorldDef<D> worldDef(Extra extra = Extra::Flow) {
 }
 
 // Runs `steps` steps serially and distributed; every rank checks that the
-// gathered state equals the serial one bit for bit.
+// gathered state equals the serial one bit for bit; `stats` (if given) gets
+// this rank's exchange counts.
 template <int D>
-void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra extra = Extra::None) {
+void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra extra = Extra::None,
+                         parallel::ExchangeStats* stats = nullptr, double boxWidth = 0.0) {
   MPI_Comm comm = MPI_COMM_WORLD;
   World<D> serial(worldDef<D>(extra));
-  const dynamics::Feed<D>* serialFeed = build(serial, perSide, layers, extra);
+  const dynamics::Feed<D>* serialFeed = build(serial, perSide, layers, extra, boxWidth);
   World<D> local(worldDef<D>(extra));
-  const dynamics::Feed<D>* localFeed = build(local, perSide, layers, extra);
+  const dynamics::Feed<D>* localFeed = build(local, perSide, layers, extra, boxWidth);
   parallel::DistributedDef def;
   def.rebalanceEvery = 100;
   def.rebalanceImbalance = 1.05;
@@ -192,6 +194,7 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra ext
 
   serial.run(steps);
   dist.run(steps);
+  if (stats) *stats = dist.stats();
   EXPECT_EQ(local.dt(), serial.dt());
   EXPECT_EQ(local.time(), serial.time());
   // The energy budget, summed over the ranks (each books its own particles
@@ -328,6 +331,56 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra ext
 }
 
 TEST(DistributedWorld, TwoDimensionalPileEqualsSerialBitForBit) { expectEqualToSerial<2>(12, 8, 2000); }
+
+// A long, low bed (40 grains by 3 layers): on 3 or more ranks the cuts are
+// slabs across it, and a rank exchanges with the subdomains near it only (no
+// message to the others, and no all-to-all but after a rebalance); the run
+// equals one world bit for bit.
+TEST(DistributedWorld, LongBedExchangesWithNeighboursOnly) {
+  parallel::ExchangeStats stats;
+  expectEqualToSerial<2>(40, 3, 2000, Extra::None, &stats);
+  MPI_Comm comm = MPI_COMM_WORLD;
+  int ranks = 1;
+  MPI_Comm_size(comm, &ranks);
+  if (ranks == 1) return;
+  EXPECT_GT(stats.neighbourExchanges, 0u);
+  EXPECT_GE(stats.neighbours, 1u);
+  std::uint64_t neighbours = stats.neighbours, global = stats.globalExchanges, rebalances = stats.rebalances;
+  MPI_Allreduce(MPI_IN_PLACE, &neighbours, 1, MPI_UINT64_T, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &global, 1, MPI_UINT64_T, MPI_MAX, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &rebalances, 1, MPI_UINT64_T, MPI_MAX, comm);
+  // Slabs across the bed (as the cuts are after the rebalances): some ranks
+  // are not neighbours.
+  if (ranks >= 3) {
+    EXPECT_LT(neighbours, std::uint64_t(ranks * (ranks - 1)));
+  }
+  // An all-to-all only after a rebalance (the cuts moved past some particles).
+  EXPECT_LE(global, rebalances);
+  if (rankOf(comm) == 0) {
+    std::printf("[ %d ranks ] %llu neighbours in all, %llu exchanges with neighbours, %llu all-to-all, %llu rebalances\n",
+                ranks, (unsigned long long)neighbours, (unsigned long long)stats.neighbourExchanges,
+                (unsigned long long)global, (unsigned long long)rebalances);
+  }
+}
+
+// A tall column (3 grains by 24) thrown into the wall of a wide box
+// collapses across it: the cuts, first across the column's height, come to
+// cut across its run-out at a rebalance, and on 4 ranks some particles then
+// go to owners that are not neighbours of their old ones (that exchange is
+// an all-to-all). The run equals one world bit for bit.
+TEST(DistributedWorld, CollapsingColumnEqualsSerialThroughFarRebalances) {
+  parallel::ExchangeStats stats;
+  expectEqualToSerial<2>(3, 24, 3000, Extra::None, &stats, 0.44);
+  MPI_Comm comm = MPI_COMM_WORLD;
+  int ranks = 1;
+  MPI_Comm_size(comm, &ranks);
+  std::uint64_t global = stats.globalExchanges;
+  MPI_Allreduce(MPI_IN_PLACE, &global, 1, MPI_UINT64_T, MPI_MAX, comm);
+  EXPECT_LE(global, stats.rebalances);
+  if (ranks == 4) {
+    EXPECT_GE(global, 1u);
+  }
+}
 
 TEST(DistributedWorld, ThreeDimensionalPileEqualsSerialBitForBit) { expectEqualToSerial<3>(5, 4, 2000); }
 

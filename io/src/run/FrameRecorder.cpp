@@ -79,9 +79,7 @@ void FrameRecorder<D>::measure(const World& w) {
   // Contacts are read only while they describe the particles: not right
   // after a breakage or removal, when the frame shows zero stresses.
   const auto& p = w.particles();
-  stress_.clear();
-  if (w.contactsCurrent()) breakage::grainStresses(p, w.contacts(), stress_);
-  stress_.resize(p.size(), geometry::Mat<D>::Zero());
+  frameStresses(w, stress_);
   stressMeasure_.assign(p.size(), 0.0);
   for (std::size_t i = 0; w.contactsCurrent() && i < p.size(); ++i) {
     stressMeasure_[i] = criterion_->characteristicStress(breakage::principalStressTriple<D>(stress_[i]));

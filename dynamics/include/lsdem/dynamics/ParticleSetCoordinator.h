@@ -79,7 +79,8 @@ class ParticleSetCoordinator {
   virtual std::uint64_t allocateIds(std::span<const SplitRequest> batch, std::vector<SplitIds>& ids) = 0;
   /// @brief Collective, after a step whose run batch was not empty: the run's
   /// time step, the smallest of the worlds' `dt` (s), and in `limit` what
-  /// sets it (each world passes its own: what sets its critical step).
+  /// sets it (each world passes what sets the critical step of the particles
+  /// it owns; the run's is the one first in setsStepBefore's order).
   virtual double agreeTimeStep(double dt, TimeStepLimit& limit) = 0;
   /// @brief Collective, after agreeTimeStep: brings every world's mirrors up
   /// to the new set (particles that left leave, `born` and their births

@@ -93,7 +93,19 @@ struct TimeStepLimit {
   std::int32_t boundary = -1;
   double densityScale = 1.0;     ///< its density scaling factor (1: none)
   double criticalDt = 0.0;       ///< the critical step it gives, s
+
+  /// @brief omega^2 = k / m of the particle, 1/s^2 (0: no limit yet).
+  double omega2() const { return criticalDt > 0.0 ? stiffness / mass : 0.0; }
 };
+
+/// @brief Whether a particle of `omega2` = k / m and id `id` sets the step
+/// before one of `thanOmega2` and `thanId`: the larger omega^2, and of equals
+/// the lower id. (An order that does not depend on where the particles are
+/// stored: one world and every part of a distributed run name the same
+/// particle. A particle of omega^2 = 0 sets nothing.)
+inline bool setsStepBefore(double omega2, std::uint64_t id, double thanOmega2, std::uint64_t thanId) {
+  return omega2 > thanOmega2 || (omega2 == thanOmega2 && omega2 > 0.0 && id < thanId);
+}
 
 /// One change of the time step during a run.
 struct TimeStepChange {

@@ -342,6 +342,13 @@ struct FrameWriterDef {
   int pieces = 0;
 };
 
+/// @brief The stresses a frame shows: the grains' average stress tensors
+/// (eq. 5, breakage::grainStresses) of `world` into `out`, one per particle,
+/// while its contact records describe the particles; zeros otherwise (right
+/// after a breakage or removal).
+template <int D>
+void frameStresses(const dynamics::World<D>& world, std::vector<geometry::Mat<D>>& out);
+
 /// @brief Rank `rank`'s piece of frame `number` of a distributed run
 /// (FrameWriterDef::pieces): the particle, surface and contact frames of the
 /// series `def` enables, of `world`'s own particles (writeParticleFrame), to

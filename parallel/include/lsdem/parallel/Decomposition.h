@@ -44,6 +44,8 @@ class Decomposition {
   const geometry::Box<D>& box(int p) const { return boxes_.at(std::size_t(p)); }
   /// @brief Distance from x to part p's subdomain (0 inside).
   double distance(const Vec<D>& x, int p) const;
+  /// @brief Distance between parts p's and q's subdomains (0 where they touch).
+  double distance(int p, int q) const;
 
  private:
   struct Node {

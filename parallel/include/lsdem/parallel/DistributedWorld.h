@@ -101,6 +101,12 @@ struct ExchangeStats {
   std::uint64_t shapesSent = 0;
   std::uint64_t bytesSent = 0;
   std::uint64_t messagesSent = 0;    ///< non-empty messages to other ranks
+  /// Exchanges with the neighbouring subdomains only (point to point), and
+  /// those that needed every rank (an all-to-all: after a rebalance, or a
+  /// particle out of its subdomain by more than a neighbour's range).
+  std::uint64_t neighbourExchanges = 0;
+  std::uint64_t globalExchanges = 0;
+  std::uint64_t neighbours = 0;      ///< the neighbouring subdomains now
   std::uint64_t rebalances = 0;
   double seconds = 0.0;              ///< wall time in the exchanges
 };
@@ -216,6 +222,12 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   // The shape of hash `hash` (particle `id` from rank `from`), received or built here.
   std::shared_ptr<const geometry::Shape<D>> receivedShape(std::uint64_t hash, ParticleId id, int from) const;
   void checkSameWorldEverywhere() const;
+  // The neighbours of this subdomain: those within 2 (r_max + skin), the
+  // same on every rank (decomposition_ and r_max are the run's).
+  void updateNeighbours();
+  // Sends each neighbour its bytes (every neighbour gets one message, maybe
+  // empty) and returns what each neighbour sent here (empty for the others).
+  std::vector<std::vector<char>> neighbourExchange(const std::vector<dynamics::StateWriter>& out);
   std::uint64_t shapeHash(const std::shared_ptr<const geometry::Shape<D>>& shape);
   double reach(std::size_t index) const;
   // Local particle `index`'s bounding radius (the tricubic one when larger).
@@ -239,6 +251,13 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   DistributedDef def_;
   int rank_ = 0, ranks_ = 1;
   Decomposition<D> decomposition_;
+  // The subdomains within neighbourRange_ of this one (ascending; flags by
+  // rank), for decomposition_ and the range they were found for
+  // (updateNeighbours).
+  std::vector<int> neighbours_;
+  std::vector<std::uint8_t> isNeighbour_;
+  double neighbourRange_ = -1.0;
+  bool decompositionChanged_ = true;
   double largestRadius_ = 0.0;       // r_max
   double skin_ = 0.0;
   bool servo_ = false;               // a tool is a servo platen: its load is the run's (reduceLoads)
