@@ -18,6 +18,19 @@ geometry::Box<D> everywhere() {
   return b;
 }
 
+// The distance between two boxes (0 where they touch or overlap; a point is
+// a box of no size). Finite with infinite sides: a gap is only ever a
+// finite side minus another, or -inf.
+template <int D>
+double boxDistance(const geometry::Box<D>& a, const geometry::Box<D>& b) {
+  double d2 = 0.0;
+  for (int k = 0; k < D; ++k) {
+    const double gap = std::max({b.lower[k] - a.upper[k], a.lower[k] - b.upper[k], 0.0});
+    d2 += gap * gap;
+  }
+  return std::sqrt(d2);
+}
+
 }  // namespace
 
 template <int D>
@@ -112,25 +125,12 @@ int Decomposition<D>::owner(const Vec<D>& x) const {
 
 template <int D>
 double Decomposition<D>::distance(const Vec<D>& x, int p) const {
-  const geometry::Box<D>& b = box(p);
-  double d2 = 0.0;
-  for (int a = 0; a < D; ++a) {
-    const double out = std::max({b.lower[a] - x[a], 0.0, x[a] - b.upper[a]});
-    d2 += out * out;
-  }
-  return std::sqrt(d2);
+  return boxDistance<D>({x, x}, box(p));
 }
 
 template <int D>
 double Decomposition<D>::distance(int p, int q) const {
-  const geometry::Box<D>& a = box(p);
-  const geometry::Box<D>& b = box(q);
-  double d2 = 0.0;
-  for (int k = 0; k < D; ++k) {
-    const double gap = std::max({b.lower[k] - a.upper[k], a.lower[k] - b.upper[k], 0.0});
-    d2 += gap * gap;
-  }
-  return std::sqrt(d2);
+  return boxDistance<D>(box(p), box(q));
 }
 
 template class Decomposition<2>;

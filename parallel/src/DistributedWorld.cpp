@@ -3,6 +3,7 @@
 #include "lsdem/io/GrainFile.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -144,38 +145,31 @@ typename dynamics::ContactSolver<D>::ParticleHistory getHistory(StateReader& r) 
 
 template <int D>
 DistributedWorld<D>::DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, const DistributedDef& def)
-    : comm_(comm), world_(world), def_(def) {
+    : ownComm_(comm), comm_(ownComm_.comm), world_(world), def_(def) {
   check(MPI_Comm_rank(comm_, &rank_), "Comm_rank");
   check(MPI_Comm_size(comm_, &ranks_), "Comm_size");
-  const dynamics::WorldDef<D>& wd = world_.def();
-  bool breaks = false;
-  for (const std::string& name : world_.effectNames()) {
-    if (name == "breakage" || name == "outflow" || name == "feed") {
-      // Effects that change the particle set: the world agrees with the others through this object.
-      coordinated_ = true;
-      breaks = breaks || name == "breakage";
-      continue;
+  // The effects: each must declare that it runs on every rank alike
+  // (Effect::distributable); one that changes the particle set makes the
+  // world agree with the others through this object.
+  for (const auto& effect : world_.effects()) {
+    if (!effect->distributable()) {
+      throw std::invalid_argument("a distributed run does not support the effect '" + effect->name() +
+                                  "' (it does not declare Effect::distributable; docs/parallel.md); run it on one rank");
     }
-    if (name != "gravity" && name != "global_damping" && name != "local_damping") {
-      throw std::invalid_argument("a distributed run does not support the effect '" + name +
-                                  "' yet (docs/parallel.md); run it on one rank");
-    }
+    coordinated_ = coordinated_ || effect->replacesParticles() || effect->changesParticles();
+    breaks_ = breaks_ || effect->replacesParticles();
   }
   for (const auto& tool : world_.tools()) {
     servo_ = servo_ || std::holds_alternative<dynamics::ServoPlaten<D>>(tool.motion);
   }
 
   const dynamics::Particles<D>& p = world_.particles();
-  double spacing = 0.0;  // the coarsest grid
   for (std::size_t i = 0; i < p.size(); ++i) {
     largestRadius_ = std::max(largestRadius_, radius(i));
-    spacing = std::max(spacing, p.shape[i]->grid().spacing());
+    coarsestSpacing_ = std::max(coarsestSpacing_, p.shape[i]->grid().spacing());
     shapeHash(p.shape[i]);  // registers the shape under its hash
   }
-  skin_ = wd.broadPhase.skin > 0.0 ? wd.broadPhase.skin : 0.1 * largestRadius_;
-  // A split looks at the bodies within 4 of its grain's cells
-  // (Breakage::clearanceAround): they must be here.
-  if (breaks) skin_ = std::max(skin_, 4.0 * spacing);
+  updateSkin();
   nextId_ = p.nextId();
   checkSameWorldEverywhere();
   shapesAt_.assign(std::size_t(ranks_), {});
@@ -230,10 +224,23 @@ DistributedWorld<D>::~DistributedWorld() {
 }
 
 template <int D>
+DistributedWorld<D>::OwnComm::OwnComm(MPI_Comm from) {
+  check(MPI_Comm_dup(from, &comm), "Comm_dup");
+}
+
+template <int D>
+DistributedWorld<D>::OwnComm::~OwnComm() {
+  int finalized = 0;
+  MPI_Finalized(&finalized);  // (a program may end MPI before this object)
+  if (!finalized && comm != MPI_COMM_NULL) MPI_Comm_free(&comm);
+}
+
+template <int D>
 void DistributedWorld<D>::checkSameWorldEverywhere() const {
   // A digest of the particle count, ids and shape hashes, in index order: equal on every rank.
   const dynamics::Particles<D>& p = world_.particles();
   std::uint64_t digest = p.size() * 1099511628211ull ^ p.nextId();
+  digest = digest * 1099511628211ull ^ std::bit_cast<std::uint64_t>(skin_);  // (from the world's broad-phase skin)
   for (std::size_t i = 0; i < p.size(); ++i) {
     digest = digest * 1099511628211ull ^ p.id[i];
     digest = digest * 1099511628211ull ^ hashOf_.at(p.shape[i].get()).hash;
@@ -310,6 +317,15 @@ double DistributedWorld<D>::radius(std::size_t index) const {
 }
 
 template <int D>
+void DistributedWorld<D>::updateSkin() {
+  const double user = world_.def().broadPhase.skin;
+  skin_ = std::max(skin_, user > 0.0 ? user : 0.1 * largestRadius_);
+  // A split looks at the bodies within 4 of its grain's cells
+  // (Breakage::clearanceAround): they must be here.
+  if (breaks_) skin_ = std::max(skin_, 4.0 * coarsestSpacing_);
+}
+
+template <int D>
 double DistributedWorld<D>::reach(std::size_t index) const {
   return radius(index) + largestRadius_ + skin_;
 }
@@ -373,9 +389,10 @@ void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born)
   // every subdomain in its reach is a neighbour: for a point x at distance d
   // from this subdomain A and any other B, dist(x, B) >= dist(A, B) - d, so
   // a subdomain farther than the neighbours' range R is out of reach when
-  // d + reach < R. Else (a particle well out of A: after a rebalance) it is
-  // tested against every rank, and when it goes to one that is not a
-  // neighbour the whole run exchanges with an all-to-all this time.
+  // d + reach < R. Else (a particle well out of A: after a rebalance, or a
+  // fragment born far from its parent's centroid) it is tested against
+  // every rank, and when it goes to one that is not a neighbour the whole
+  // run exchanges with an all-to-all this time.
   updateNeighbours();
   std::vector<StateWriter> out(static_cast<std::size_t>(ranks_));
   std::vector<std::vector<std::size_t>> sent(static_cast<std::size_t>(ranks_));
@@ -536,12 +553,14 @@ std::vector<std::vector<char>> DistributedWorld<D>::neighbourExchange(const std:
   // size from the probe. (Messages between two ranks arrive in order, and a
   // collective separates two exchanges.)
   constexpr int kTag = 7301;
+  for (const int q : neighbours_) {
+    if (out[std::size_t(q)].bytes().size() > std::size_t(std::numeric_limits<int>::max())) {
+      throw std::runtime_error("MPI exchange of more than 2 GiB to one rank in one step");
+    }
+  }
   std::vector<MPI_Request> sends(neighbours_.size());
   for (std::size_t k = 0; k < neighbours_.size(); ++k) {
     const auto& bytes = out[std::size_t(neighbours_[k])].bytes();
-    if (bytes.size() > std::size_t(std::numeric_limits<int>::max())) {
-      throw std::runtime_error("MPI exchange of more than 2 GiB to one rank in one step");
-    }
     check(MPI_Isend(bytes.data(), int(bytes.size()), MPI_CHAR, neighbours_[k], kTag, comm_, &sends[k]), "Isend");
   }
   std::vector<std::vector<char>> in(static_cast<std::size_t>(ranks_));
@@ -719,7 +738,6 @@ std::uint64_t DistributedWorld<D>::allocateIds(std::span<const dynamics::SplitRe
     total += counts[std::size_t(q)];
     counts[std::size_t(q)] *= 3;
   }
-  if (total == 0) return 0;
   std::vector<std::uint64_t> send;
   send.reserve(3 * batch.size());
   for (const dynamics::SplitRequest& r : batch) send.insert(send.end(), {r.parent, r.fines, r.children});
@@ -776,6 +794,7 @@ double DistributedWorld<D>::agreeTimeStep(double dt, dynamics::TimeStepLimit& li
   double v[2] = {dt, -largest};
   check(MPI_Allreduce(MPI_IN_PLACE, v, 2, MPI_DOUBLE, MPI_MIN, comm_), "Allreduce");
   largestRadius_ = std::max(largestRadius_, -v[1]);
+  updateSkin();
   // What sets the run's step: the rank's limit that sets it first in one
   // world's order (the largest omega^2, of equals the lowest id:
   // dynamics::setsStepBefore), as every rank sees it.
@@ -859,6 +878,8 @@ bool DistributedWorld<D>::effectChangedParticles(bool changed, std::span<const s
     const std::uint64_t h = shapeHash(p.shape[i]);
     for (auto& held : shapesAt_) held.insert(h);
     largestRadius_ = std::max(largestRadius_, radius(i));
+    coarsestSpacing_ = std::max(coarsestSpacing_, p.shape[i]->grid().spacing());
+    updateSkin();
     place(i);
   }
   // A change anywhere: the mirrors follow at once (particles that left are

@@ -26,11 +26,14 @@ class Buoyancy final : public Effect<D> {
   Buoyancy(double fluidDensity, const Vec<D>& gravity, double surface)
       : rho_(fluidDensity), g_(gravity), surface_(surface) {}
   std::string name() const override { return "buoyancy"; }
+  // Each particle's force from its own state: it runs on N ranks too.
+  bool distributable() const override { return true; }
   void applyForces(World<D>& world, double dt) override {
     const Particles<D>& p = world.particles();  // read-only
     const std::span<Vec<D>> force = world.forces();  // effects add to these
     double power = 0.0;
     for (std::size_t i = 0; i < p.size(); ++i) {
+      if (world.isGhost(i)) continue;  // another rank's particle (mpirun)
       if (p.position[i][D - 1] > surface_) continue;
       const Vec<D> f = -rho_ * p.shape[i]->volume() * g_;
       force[i] += f;

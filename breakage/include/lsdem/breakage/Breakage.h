@@ -242,6 +242,7 @@ class Breakage final : public dynamics::Effect<D> {
   /// @brief The stresses and fracture planes come from the contact records.
   bool readsContacts() const override { return true; }
   bool replacesParticles() const override { return true; }
+  bool distributable() const override { return true; }
   /// @brief Writes the log, totals and which manual breaks are done (checkpoints).
   void saveState(dynamics::StateWriter& out) const override;
   void loadState(dynamics::StateReader& in) override;

@@ -66,6 +66,15 @@ class Effect {
   /// effect must change the particle set alike in every world (a decision
   /// taken from the whole run's particles goes through World::anyWorld).
   virtual bool changesParticles() const { return false; }
+  /// @brief True when a distributed run (parallel::DistributedWorld) may run
+  /// the effect on every rank alike: applyForces acts on each particle a
+  /// rank owns from that particle's own state (leaving ghosts alone, as
+  /// above), and afterStep changes the particle set only as
+  /// replacesParticles and changesParticles declare. False (the default):
+  /// a distributed run refuses the effect, since one that reads other
+  /// particles, or keeps state of the whole set, would compute something
+  /// else on N ranks.
+  virtual bool distributable() const { return false; }
   /// @brief Writes the effect's state (a checkpoint); stateless effects write nothing.
   virtual void saveState(StateWriter& out) const { (void)out; }
   /// @brief Reads back what saveState wrote, into an effect built from the same definition.
@@ -78,6 +87,7 @@ class Gravity final : public Effect<D> {
  public:
   explicit Gravity(const Vec<D>& g) : g_(g) {}
   std::string name() const override { return "gravity"; }
+  bool distributable() const override { return true; }
   void applyForces(World<D>& world, double dt) override;
   const Vec<D>& acceleration() const { return g_; }
 
@@ -92,6 +102,7 @@ class GlobalDamping final : public Effect<D> {
  public:
   explicit GlobalDamping(double coefficient);
   std::string name() const override { return "global_damping"; }
+  bool distributable() const override { return true; }
   void applyForces(World<D>& world, double dt) override;
   double dampingPower() const override { return power_; }
 
@@ -108,6 +119,7 @@ class LocalDamping final : public Effect<D> {
  public:
   explicit LocalDamping(double alpha);
   std::string name() const override { return "local_damping"; }
+  bool distributable() const override { return true; }
   void applyForces(World<D>& world, double dt) override;
   double dampingPower() const override { return power_; }
 
@@ -128,6 +140,7 @@ class Outflow final : public Effect<D> {
   explicit Outflow(const geometry::Box<D>& keep, std::optional<geometry::Box<D>> discharge = std::nullopt)
       : keep_(keep), discharge_(std::move(discharge)) {}
   std::string name() const override { return "outflow"; }
+  bool distributable() const override { return true; }
   /// Removes in ascending id order (the removal records' order).
   void afterStep(World<D>& world) override;
   bool changesParticles() const override { return true; }
@@ -167,6 +180,7 @@ class Feed final : public Effect<D> {
   /// <= 0, interval < 0, or interval = 0 without a clearance > 0.
   explicit Feed(FeedDef<D> def);
   std::string name() const override { return "feed"; }
+  bool distributable() const override { return true; }
   void afterStep(World<D>& world) override;
   bool changesParticles() const override { return true; }
   void saveState(StateWriter& out) const override;

@@ -524,6 +524,8 @@ class World {
   const std::vector<RemovedParticle>& removed() const { return removed_; }
   /// @brief Names of the effects that run, in order.
   std::vector<std::string> effectNames() const;
+  /// @brief The effects, in the order they were added.
+  std::span<const std::unique_ptr<Effect<D>>> effects() const { return effects_; }
   /// @brief Wall-clock seconds spent in each stage so far; effects are also
   /// reported one by one in effectSeconds().
   const std::array<double, std::size_t(Stage::Count)>& stageSeconds() const { return stageSeconds_; }

@@ -225,6 +225,10 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   // The neighbours of this subdomain: those within 2 (r_max + skin), the
   // same on every rank (decomposition_ and r_max are the run's).
   void updateNeighbours();
+  // skin_ from the world's broad-phase skin (or 0.1 r_max), at least 4 of
+  // the coarsest cells in a run that splits; the same on every rank (r_max
+  // and the coarsest grid are the run's).
+  void updateSkin();
   // Sends each neighbour its bytes (every neighbour gets one message, maybe
   // empty) and returns what each neighbour sent here (empty for the others).
   std::vector<std::vector<char>> neighbourExchange(const std::vector<dynamics::StateWriter>& out);
@@ -246,6 +250,17 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   // Local particle `index`'s cost in the decomposition: its surface nodes (at least 1).
   double weight(std::size_t index) const;
 
+  // A duplicate of the caller's communicator, this object's own (so the
+  // exchange's point-to-point messages never meet the caller's), freed with
+  // it, also when the constructor throws.
+  struct OwnComm {
+    MPI_Comm comm = MPI_COMM_NULL;
+    explicit OwnComm(MPI_Comm from);
+    ~OwnComm();
+    OwnComm(const OwnComm&) = delete;
+    OwnComm& operator=(const OwnComm&) = delete;
+  };
+  OwnComm ownComm_;
   MPI_Comm comm_;
   dynamics::World<D>& world_;
   DistributedDef def_;
@@ -259,7 +274,9 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   double neighbourRange_ = -1.0;
   bool decompositionChanged_ = true;
   double largestRadius_ = 0.0;       // r_max
-  double skin_ = 0.0;
+  double skin_ = 0.0;                // grows with r_max and the coarsest grid (updateSkin), never shrinks
+  double coarsestSpacing_ = 0.0;     // the coarsest grid spacing in the run so far
+  bool breaks_ = false;              // an effect splits particles (the skin covers 4 of the coarsest cells)
   bool servo_ = false;               // a tool is a servo platen: its load is the run's (reduceLoads)
   bool loadsReduced_ = false;        // the world's loads are the run's for its contacts now
   bool coordinated_ = false;         // the world changes its particle set (breakage, outflow, feeds): world_.setCoordinator(this)
