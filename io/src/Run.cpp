@@ -139,8 +139,14 @@ class Runner {
       }
       const Instant t = now();
       const bool checkpoint = checkpoints_.due(t);
+      // A distributed run's view is brought up to date when a record needs
+      // it: not for the removal and breakage logs (due every step) while the
+      // particle set has not changed since the last view.
+      const bool changed = engine_ && engine_->particleSetChanges() != changesAtView_;
       bool due = checkpoint;
-      for (auto& r : recorders_) due = due || r->schedule().due(t);
+      for (auto& r : recorders_) {
+        due = due || (r->schedule().due(t) && (!engine_ || !r->recordsChangesOnly() || changed));
+      }
       if (due) updateView();
       // (Every process keeps the schedules: they agree.)
       if (frames_ && frames_->schedule().due(t)) writeFramePieces(true);
@@ -221,7 +227,9 @@ class Runner {
   }
   // A distributed run: the view of the whole run brought up to now (collective).
   void updateView() {
-    if (engine_) engine_->updateView(sw_);
+    if (!engine_) return;
+    changesAtView_ = engine_->particleSetChanges();
+    engine_->updateView(sw_);
   }
   // A distributed run whose frames are per-rank pieces, when the writing
   // process writes a frame now (`due` there): every process writes its piece
@@ -344,6 +352,7 @@ class Runner {
   SceneWorld<D> part_;    // a distributed run's writing process: the world it steps (its part of the run)
   bool writes_ = true;    // this process writes the outputs
   std::unique_ptr<RunEngine<D>> engine_;  // a distributed run's; null: steps here
+  std::uint64_t changesAtView_ = 0;       // engine_->particleSetChanges() at the last view
   FrameRecorder<D>* frames_ = nullptr;    // a distributed run's frames in per-rank pieces (in recorders_)
   RunContext<D> context_;
   RunEnd end_;

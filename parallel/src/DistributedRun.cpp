@@ -57,6 +57,7 @@ class DistributedEngine final : public io::RunEngine<D> {
   }
 
   bool anyStop(bool stop) override { return any(stop); }
+  std::uint64_t particleSetChanges() override { return world_.particleSetChanges(); }
 
   bool any(bool here) override {
     int flag = here ? 1 : 0;

@@ -730,6 +730,7 @@ std::uint64_t DistributedWorld<D>::allocateIds(std::span<const dynamics::SplitRe
   int splits = mine;
   check(MPI_Allreduce(MPI_IN_PLACE, &splits, 1, MPI_INT, MPI_SUM, comm_), "Allreduce");
   if (splits == 0) return 0;
+  ++particleSetChanges_;
   std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
   check(MPI_Allgather(&mine, 1, MPI_INT, counts.data(), 1, MPI_INT, comm_), "Allgather");
   int total = 0;
@@ -886,6 +887,7 @@ bool DistributedWorld<D>::effectChangedParticles(bool changed, std::span<const s
   // gone from every rank already, each removed by the same test), and every
   // rank evaluates its contacts again, as one world does.
   if (!anyRank(changed)) return false;
+  ++particleSetChanges_;
   forceVelocity_.clear();
   forceSpin_.clear();
   exchange();

@@ -13,6 +13,7 @@ class BreakageLogRecorder final : public Recorder<D> {
  public:
   using typename Recorder<D>::World;
   explicit BreakageLogRecorder(const RunContext<D>& context);
+  bool recordsChangesOnly() const override { return true; }
 
  private:
   void write(const World& world) override;

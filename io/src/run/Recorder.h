@@ -87,6 +87,10 @@ class Recorder {
   void finish(const World& world, const Instant& now);
   /// Whether finish(world, now) records.
   bool recordsAtFinish(const Instant& now) const { return lastClock_ != now.clock; }
+  /// Whether it records only what the world's removal or breakage records
+  /// gained (a step in which the particle set did not change gives it
+  /// nothing: a distributed run then needs no view for it).
+  virtual bool recordsChangesOnly() const { return false; }
 
  protected:
   Recorder(std::string name, Schedule schedule, const RunContext<D>& context);

@@ -12,6 +12,7 @@ class RemovedLog final : public Recorder<D> {
  public:
   using typename Recorder<D>::World;
   explicit RemovedLog(const RunContext<D>& context);
+  bool recordsChangesOnly() const override { return true; }
 
  private:
   void write(const World& world) override;

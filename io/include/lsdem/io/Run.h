@@ -49,6 +49,10 @@ class RunEngine {
   /// @brief Whether `here` holds on any process (collective: returns once
   /// every process asked).
   virtual bool any(bool here) = 0;
+  /// @brief How many times the run's particle set changed so far (a batch of
+  /// splits, a removal or an addition anywhere), the same on every process:
+  /// a view for the removal and breakage logs is needed only after a change.
+  virtual std::uint64_t particleSetChanges() = 0;
 };
 
 /// @brief Makes a run's engine for the world each process built alike,

@@ -157,6 +157,10 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   std::uint64_t globalCount() const;
   const Decomposition<D>& decomposition() const { return decomposition_; }
   const ExchangeStats& stats() const { return stats_; }
+  /// @brief How many times the run's particle set changed so far (a batch of
+  /// splits, or a removal or an addition by an effect, on any rank): the same
+  /// on every rank.
+  std::uint64_t particleSetChanges() const { return particleSetChanges_; }
   /// @brief The loads of the particles on planes and tools of the whole run
   /// (collective): the same numbers on every rank, summed in the order one
   /// world sums them while its particles are in id order (bit for bit the
@@ -276,7 +280,8 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   double largestRadius_ = 0.0;       // r_max
   double skin_ = 0.0;                // grows with r_max and the coarsest grid (updateSkin), never shrinks
   double coarsestSpacing_ = 0.0;     // the coarsest grid spacing in the run so far
-  bool breaks_ = false;              // an effect splits particles (the skin covers 4 of the coarsest cells)
+  bool breaks_ = false;
+  std::uint64_t particleSetChanges_ = 0;  // particleSetChanges()              // an effect splits particles (the skin covers 4 of the coarsest cells)
   bool servo_ = false;               // a tool is a servo platen: its load is the run's (reduceLoads)
   bool loadsReduced_ = false;        // the world's loads are the run's for its contacts now
   bool coordinated_ = false;         // the world changes its particle set (breakage, outflow, feeds): world_.setCoordinator(this)
