@@ -14,7 +14,9 @@
 ///     exchange()               owners send poses and velocities to the ranks
 ///                              in reach (ghosts), and particles that left
 ///                              their subdomain to their new owner with their
-///                              contact history
+///                              contact history: one message to and from each
+///                              neighbouring subdomain (an all-to-all only when
+///                              a particle must go farther, after a rebalance)
 ///     world.finishStep()       forces, closing half kick, clock
 ///
 /// A pair with a ghost is computed on both ranks; each keeps the force on
@@ -33,8 +35,9 @@
 /// own particles only (their grain stresses come from contacts it computes
 /// whole). The rank's world is coordinated through this object
 /// (dynamics::ParticleSetCoordinator): once per step every rank joins one
-/// all-gather of its splits (parent id, fines, children), so fragment and
-/// fines ids are those one world would give (ascending parent id, fines
+/// all-reduce of its split count and, when any rank split, an all-gather of
+/// the splits (parent id, fines, children), so fragment and fines ids are
+/// those one world would give (ascending parent id, fines
 /// first); after a step with splits anywhere, the ranks take the smallest
 /// time step and exchange at once (an extra exchange between steps), so
 /// parents' mirrors leave, fragments' mirrors arrive (shapes once by hash)
@@ -59,6 +62,9 @@
 /// the run's next id, and it stays with its owner and where it is in reach.
 /// After a change anywhere every rank exchanges at once and evaluates its
 /// contacts again, as one world does.
+///
+/// Effects: a world's effects must declare Effect::distributable() (the
+/// built-in ones do); the constructor refuses another, naming it.
 ///
 /// Density scaling: after a batch of splits every rank takes the run's
 /// reference (one all-reduce), scales its own new small fragments, and a
@@ -135,7 +141,7 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   /// resumed world's first step opens with the forces it holds
   /// (World::keepForces).
   /// @note Throws std::invalid_argument when the worlds differ between ranks
-  /// or the scene uses what is not distributed yet (see the file comment).
+  /// or an effect does not declare Effect::distributable() (see the file comment).
   DistributedWorld(MPI_Comm comm, dynamics::World<D>& world, const DistributedDef& def = {});
   ~DistributedWorld() override;
   DistributedWorld(const DistributedWorld&) = delete;
