@@ -66,6 +66,35 @@ enum class Extra {
   None,
   Servo,  // a plate above the bed, as wide as the box, pressed down by a servo to a force it reaches within the run
   Flow,   // no wall at x = 0: grains that pass it by a diameter leave (outflow); a feed drops grains at the far end
+  Lift,   // a user's own effect (Lift, declared distributable)
+};
+
+// A user's own effect: an upward pull on each particle above a height,
+// from the particle's own state (its work booked like gravity's). Declared
+// distributable, it runs on N ranks; not declared, it is refused, whatever
+// its name.
+template <int D>
+class Lift final : public dynamics::Effect<D> {
+ public:
+  Lift(bool distributable, std::string name) : distributable_(distributable), name_(std::move(name)) {}
+  std::string name() const override { return name_; }
+  bool distributable() const override { return distributable_; }
+  void applyForces(World<D>& world, double dt) override {
+    const dynamics::Particles<D>& p = world.particles();
+    const std::span<Vec<D>> force = world.forces();
+    double power = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (world.isGhost(i) || p.position[i][1] < 0.03) continue;
+      const Vec<D> f = 3.0 * p.mass[i] * Vec<D>::Unit(1);
+      force[i] += f;
+      power += f.dot(p.velocity[i]);
+    }
+    world.addGravityWork(power * dt);
+  }
+
+ private:
+  bool distributable_;
+  std::string name_;
 };
 
 // A box of planes (floor at height 0, walls at 0 and `boxWidth`, default
@@ -115,6 +144,7 @@ const dynamics::Feed<D>* build(World<D>& w, int perSide, int layers, Extra extra
     fed = effect.get();
     w.addEffect(std::move(effect));
   }
+  if (extra == Extra::Lift) w.addEffect(std::make_unique<Lift<D>>(true, "lift"));
   if (extra == Extra::Servo) {
     geometry::ShapeDef<D> plate;
     plate.kind = geometry::ShapeKind::Box;
@@ -173,7 +203,7 @@ WorldDef<D> worldDef(Extra extra = Extra::Flow) {
   def.contact.ks = 1.6e5;
   def.contact.friction = 0.5;
   def.contact.dampingRatio = 0.3;
-  if (extra == Extra::None) def.localDamping = 0.05;
+  if (extra == Extra::None || extra == Extra::Lift) def.localDamping = 0.05;
   if (extra == Extra::Servo) def.globalDamping = 0.5;
   return def;
 }
@@ -468,64 +498,13 @@ TEST(Decomposition, DistanceBetweenPartsBoundsThatOfTheirPoints) {
   }
 }
 
-// A user's own effect: an upward pull on each particle above a height,
-// from the particle's own state (its work booked like gravity's). Declared
-// distributable, it runs on N ranks; not declared, it is refused, whatever
-// its name.
-template <int D>
-class Lift final : public dynamics::Effect<D> {
- public:
-  Lift(bool distributable, std::string name) : distributable_(distributable), name_(std::move(name)) {}
-  std::string name() const override { return name_; }
-  bool distributable() const override { return distributable_; }
-  void applyForces(World<D>& world, double dt) override {
-    const dynamics::Particles<D>& p = world.particles();
-    const std::span<Vec<D>> force = world.forces();
-    double power = 0.0;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (world.isGhost(i) || p.position[i][1] < 0.03) continue;
-      const Vec<D> f = 3.0 * p.mass[i] * Vec<D>::Unit(1);
-      force[i] += f;
-      power += f.dot(p.velocity[i]);
-    }
-    world.addGravityWork(power * dt);
-  }
-
- private:
-  bool distributable_;
-  std::string name_;
-};
-
 TEST(DistributedWorld, RunsAUsersDistributableEffectAndRefusesOthers) {
-  MPI_Comm comm = MPI_COMM_WORLD;
-  World<2> serial(worldDef<2>());
-  build(serial, 12, 8);
-  serial.addEffect(std::make_unique<Lift<2>>(true, "lift"));
-  World<2> local(worldDef<2>());
-  build(local, 12, 8);
-  local.addEffect(std::make_unique<Lift<2>>(true, "lift"));
-  DistributedWorld<2> dist(comm, local);
-  serial.run(1000);
-  dist.run(1000);
-  test::expectSameLedger(dist.energy(), serial.energy());
-  const auto states = dist.gather(0);
-  if (rankOf(comm) == 0) {
-    const dynamics::Particles<2>& p = serial.particles();
-    ASSERT_EQ(states.size(), p.size());
-    for (const auto& st : states) {
-      const std::size_t i = std::size_t(std::find(p.id.begin(), p.id.end(), st.id) - p.id.begin());
-      ASSERT_LT(i, p.size());
-      EXPECT_EQ(st.position[0], p.position[i][0]) << "id " << st.id;
-      EXPECT_EQ(st.position[1], p.position[i][1]) << "id " << st.id;
-      EXPECT_EQ(st.velocity[0], p.velocity[i][0]) << "id " << st.id;
-      EXPECT_EQ(st.velocity[1], p.velocity[i][1]) << "id " << st.id;
-    }
-  }
+  expectEqualToSerial<2>(12, 8, 2000, Extra::Lift);
   // Not declared distributable: refused on every rank, even named "gravity".
   World<2> other(worldDef<2>());
   build(other, 4, 1);
   other.addEffect(std::make_unique<Lift<2>>(false, "gravity"));
-  EXPECT_THROW(DistributedWorld<2>(comm, other), std::invalid_argument);
+  EXPECT_THROW(DistributedWorld<2>(MPI_COMM_WORLD, other), std::invalid_argument);
 }
 
 // A world that is not the same on every rank is refused with the reason.

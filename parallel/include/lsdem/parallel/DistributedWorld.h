@@ -286,8 +286,8 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   double largestRadius_ = 0.0;       // r_max
   double skin_ = 0.0;                // grows with r_max and the coarsest grid (updateSkin), never shrinks
   double coarsestSpacing_ = 0.0;     // the coarsest grid spacing in the run so far
-  bool breaks_ = false;
-  std::uint64_t particleSetChanges_ = 0;  // particleSetChanges()              // an effect splits particles (the skin covers 4 of the coarsest cells)
+  bool breaks_ = false;              // an effect splits particles (the skin covers 4 of the coarsest cells)
+  std::uint64_t particleSetChanges_ = 0;  // particleSetChanges()
   bool servo_ = false;               // a tool is a servo platen: its load is the run's (reduceLoads)
   bool loadsReduced_ = false;        // the world's loads are the run's for its contacts now
   bool coordinated_ = false;         // the world changes its particle set (breakage, outflow, feeds): world_.setCoordinator(this)
