@@ -792,6 +792,11 @@ class SceneReader {
     if (!t) return;
     TomlReader r(*t, file_, "parallel");
     ParallelDef& p = scene_.parallel;
+    if (r.has("balance")) {
+      const std::string balance = r.string("balance");
+      if (balance != "nodes" && balance != "time") r.fail("balance", "unknown choice '" + balance + "' (nodes, time)");
+      p.balanceByTime = balance == "time";
+    }
     p.rebalanceImbalance = r.number("rebalance_imbalance", p.rebalanceImbalance);
     if (!(p.rebalanceImbalance == 0.0 || p.rebalanceImbalance >= 1.0) || !std::isfinite(p.rebalanceImbalance)) {
       r.fail("rebalance_imbalance", "must be >= 1 (or 0: never rebalance), got " + std::to_string(p.rebalanceImbalance));

@@ -21,6 +21,7 @@ void copyState(const Effect& from, Effect& to) {
 
 DistributedDef distributedDef(const io::ParallelDef& p) {
   DistributedDef def;
+  def.balance = p.balanceByTime ? DistributedDef::Balance::Time : DistributedDef::Balance::Nodes;
   def.rebalanceImbalance = p.rebalanceImbalance;
   def.rebalanceEvery = p.rebalanceEvery;
   return def;

@@ -345,7 +345,21 @@ std::uint64_t DistributedWorld<D>::globalCount() const {
 }
 
 template <int D>
+DistributedWorld<D>::Waiting::Waiting(DistributedWorld& w) : world_(w), start_(std::chrono::steady_clock::now()) {
+  ++world_.waitingDepth_;
+}
+
+template <int D>
+DistributedWorld<D>::Waiting::~Waiting() {
+  if (--world_.waitingDepth_ == 0) {
+    world_.waitedSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+}
+
+template <int D>
 void DistributedWorld<D>::step() {
+  const auto start = std::chrono::steady_clock::now();
+  const double waitedBefore = waitedSeconds_;
   // A servo platen moves by the load of the whole run (boundaryLoads), read
   // at the opening of the step from the contacts of its state.
   if (servo_ && !loadsReduced_) reduceLoads();
@@ -359,6 +373,8 @@ void DistributedWorld<D>::step() {
   world_.finishStep();
   if (servo_) reduceLoads();
   ++stats_.steps;
+  stats_.workSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
+                        (waitedSeconds_ - waitedBefore);
   if (def_.rebalanceImbalance > 0.0 && def_.rebalanceEvery > 0 && stats_.steps % def_.rebalanceEvery == 0) rebalance();
 }
 
@@ -369,6 +385,7 @@ void DistributedWorld<D>::run(std::uint64_t n) {
 
 template <int D>
 void DistributedWorld<D>::exchange(std::span<const dynamics::BornParticle> born) {
+  const Waiting waiting(*this);
   const auto t0 = std::chrono::steady_clock::now();
   const dynamics::Particles<D>& p = world_.particles();
   const std::size_t n = p.size();
@@ -580,10 +597,23 @@ std::vector<std::vector<char>> DistributedWorld<D>::neighbourExchange(const std:
 template <int D>
 void DistributedWorld<D>::rebalance() {
   const dynamics::Particles<D>& p = world_.particles();
-  double own = 0.0;
+  double nodes = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    if (!world_.isGhost(i)) own += weight(i);
+    if (!world_.isGhost(i)) nodes += weight(i);
   }
+  // A particle's load: its nodes, times (Balance::Time) its rank's seconds
+  // of work per node since the last check (a rank that owned nothing, or a
+  // run not timed yet: the run's mean), so a rank's load is its work time.
+  double scale = 1.0;
+  if (def_.balance == DistributedDef::Balance::Time) {
+    const double work = stats_.workSeconds - workAtCheck_;
+    double sums[2] = {work, nodes};
+    check(MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
+    const double mean = sums[1] > 0.0 ? sums[0] / sums[1] : 0.0;
+    if (mean > 0.0) scale = (nodes > 0.0 && work > 0.0 ? work / nodes : mean) / mean;
+  }
+  workAtCheck_ = stats_.workSeconds;
+  const double own = nodes * scale;
   double largest = own, total = own;
   check(MPI_Allreduce(MPI_IN_PLACE, &largest, 1, MPI_DOUBLE, MPI_MAX, comm_), "Allreduce");
   check(MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
@@ -593,7 +623,7 @@ void DistributedWorld<D>::rebalance() {
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (world_.isGhost(i)) continue;
     for (int a = 0; a < D; ++a) mine.push_back(p.position[i][a]);
-    mine.push_back(weight(i));
+    mine.push_back(weight(i) * scale);
   }
   int count = int(mine.size());
   std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
@@ -687,6 +717,7 @@ template <int D>
 void DistributedWorld<D>::reduceLoads() {
   // The loads are those of the contacts now.
   refreshStaleContacts();
+  const Waiting waiting(*this);
   world_.setBoundaryLoads(boundaryLoads());
   loadsReduced_ = true;
 }
@@ -725,6 +756,7 @@ std::uint64_t DistributedWorld<D>::allocateIds(std::span<const dynamics::SplitRe
                                                std::vector<dynamics::SplitIds>& ids) {
   // The run's split count (every step: one all-reduce), then, when some
   // rank split, every rank's count and every split.
+  const Waiting waiting(*this);
   ids.clear();
   const int mine = int(batch.size());
   int splits = mine;
@@ -787,6 +819,7 @@ template <int D>
 double DistributedWorld<D>::agreeTimeStep(double dt, dynamics::TimeStepLimit& limit) {
   // The smallest step, and the largest radius: a fragment can reach farther
   // from its own centroid than its parent did, and r_max bounds every radius.
+  const Waiting waiting(*this);
   const dynamics::Particles<D>& p = world_.particles();
   double largest = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -852,6 +885,7 @@ void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornPartic
 
 template <int D>
 double DistributedWorld<D>::largest(double here) {
+  const Waiting waiting(*this);
   check(MPI_Allreduce(MPI_IN_PLACE, &here, 1, MPI_DOUBLE, MPI_MAX, comm_), "Allreduce");
   return here;
 }

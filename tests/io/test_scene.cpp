@@ -94,11 +94,14 @@ TEST(Scene, ParallelSettings) {
   const auto base = as<2>(io::readScene(writeScene("parallel_default", kBase).string()));
   EXPECT_EQ(base.parallel.rebalanceImbalance, 1.25);
   EXPECT_EQ(base.parallel.rebalanceEvery, 200u);
+  EXPECT_FALSE(base.parallel.balanceByTime);
   const auto set = as<2>(io::readScene(
-      writeScene("parallel_set", std::string(kBase) + "[parallel]\nrebalance_imbalance = 0\nrebalance_every = 50\n")
+      writeScene("parallel_set", std::string(kBase) +
+                                     "[parallel]\nbalance = \"time\"\nrebalance_imbalance = 0\nrebalance_every = 50\n")
           .string()));
   EXPECT_EQ(set.parallel.rebalanceImbalance, 0.0);
   EXPECT_EQ(set.parallel.rebalanceEvery, 50u);
+  EXPECT_TRUE(set.parallel.balanceByTime);
   // Frames: gathered by default, or in per-rank pieces.
   EXPECT_FALSE(base.output.framePiecesPerRank);
   const auto pieces =
@@ -148,6 +151,8 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "parallel.rebalance_imbalance", "must be >= 1 (or 0"},
       {"zero_rebalance_every", std::string(kBase) + "[parallel]\nrebalance_every = 0\n", 22,
        "parallel.rebalance_every", "must be >= 1 step"},
+      {"unknown_balance", std::string(kBase) + "[parallel]\nbalance = \"atoms\"\n", 22, "parallel.balance",
+       "unknown choice 'atoms' (nodes, time)"},
       {"unknown_parallel_key", std::string(kBase) + "[parallel]\nranks = 4\n", 22, "parallel.ranks", "unknown key"},
       {"text_surface_match", std::string(kBase) + "[effects.breakage]\nmatch_enclosed_volume = \"yes\"\n", 22,
        "effects.breakage.match_enclosed_volume", "expected true or false"},

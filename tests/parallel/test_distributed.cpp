@@ -11,6 +11,7 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -19,6 +20,7 @@
 #include <random>
 #include <span>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -67,6 +69,7 @@ enum class Extra {
   Servo,  // a plate above the bed, as wide as the box, pressed down by a servo to a force it reaches within the run
   Flow,   // no wall at x = 0: grains that pass it by a diameter leave (outflow); a feed drops grains at the far end
   Lift,   // a user's own effect (Lift, declared distributable)
+  SlowRank0,  // rank 0 takes 1 ms more per step (Delay), and the run balances by time
 };
 
 // A user's own effect: an upward pull on each particle above a height,
@@ -95,6 +98,22 @@ class Lift final : public dynamics::Effect<D> {
  private:
   bool distributable_;
   std::string name_;
+};
+
+// An effect that only takes time: 1 ms per step where `sleeps` (the
+// distributed world on rank 0), nothing to the motion.
+template <int D>
+class Delay final : public dynamics::Effect<D> {
+ public:
+  explicit Delay(bool sleeps) : sleeps_(sleeps) {}
+  std::string name() const override { return "delay"; }
+  bool distributable() const override { return true; }
+  void applyForces(World<D>&, double) override {
+    if (sleeps_) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+
+ private:
+  bool sleeps_;
 };
 
 // A box of planes (floor at height 0, walls at 0 and `boxWidth`, default
@@ -203,7 +222,7 @@ WorldDef<D> worldDef(Extra extra = Extra::Flow) {
   def.contact.ks = 1.6e5;
   def.contact.friction = 0.5;
   def.contact.dampingRatio = 0.3;
-  if (extra == Extra::None || extra == Extra::Lift) def.localDamping = 0.05;
+  if (extra == Extra::None || extra == Extra::Lift || extra == Extra::SlowRank0) def.localDamping = 0.05;
   if (extra == Extra::Servo) def.globalDamping = 0.5;
   return def;
 }
@@ -222,6 +241,10 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra ext
   parallel::DistributedDef def;
   def.rebalanceEvery = 100;
   def.rebalanceImbalance = 1.05;
+  if (extra == Extra::SlowRank0) {
+    local.addEffect(std::make_unique<Delay<D>>(rankOf(comm) == 0));
+    def.balance = parallel::DistributedDef::Balance::Time;
+  }
   DistributedWorld<D> dist(comm, local, def);
   ASSERT_EQ(dist.globalCount(), serial.particles().size());
 
@@ -315,6 +338,19 @@ void expectEqualToSerial(int perSide, int layers, std::uint64_t steps, Extra ext
   if (dist.ranks() > 1) {
     EXPECT_GT(migrations, 0u);
     EXPECT_GT(rebalances, 0u);
+  }
+  if (extra == Extra::SlowRank0 && dist.ranks() > 1) {
+    // Rank 0, the slow one, holds well under the others' nodes (by nodes
+    // alone, each rank would hold about the mean).
+    EXPECT_GT(dist.stats().workSeconds, 0.0);
+    double nodes = 0.0;
+    for (std::size_t i = 0; i < local.particles().size(); ++i) {
+      if (!local.isGhost(i)) nodes += double(local.particles().shape[i]->nodes().size());
+    }
+    std::vector<double> all(static_cast<std::size_t>(dist.ranks()));
+    MPI_Allgather(&nodes, 1, MPI_DOUBLE, all.data(), 1, MPI_DOUBLE, comm);
+    const double others = std::accumulate(all.begin() + 1, all.end(), 0.0) / double(dist.ranks() - 1);
+    EXPECT_LT(all[0], 0.6 * others) << "rank 0 holds " << all[0] << " nodes, the others " << others << " each";
   }
 
   // The boundary loads of the whole run, on every rank, are the serial ones
@@ -497,6 +533,12 @@ TEST(Decomposition, DistanceBetweenPartsBoundsThatOfTheirPoints) {
     }
   }
 }
+
+// Balance by time: rank 0 sleeps 1 ms in every step (about as long as the
+// whole pile's step), so its seconds per node are the run's highest, and
+// the rebalances hand its nodes to the others; the results stay those of
+// one world, bit for bit.
+TEST(DistributedWorld, BalanceByTimeMovesWorkOffASlowRank) { expectEqualToSerial<2>(12, 8, 2000, Extra::SlowRank0); }
 
 TEST(DistributedWorld, RunsAUsersDistributableEffectAndRefusesOthers) {
   expectEqualToSerial<2>(12, 8, 2000, Extra::Lift);

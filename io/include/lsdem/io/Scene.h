@@ -93,8 +93,11 @@ struct SpecimenDef {
 /// How a run spread over MPI ranks keeps its work balanced (`[parallel]`,
 /// docs/scenes.md; docs/parallel.md). A one-process run ignores it.
 struct ParallelDef {
-  /// Rebuild the decomposition when the most loaded rank's surface nodes
-  /// exceed this times the mean; 0: never.
+  /// A rank's load (`balance`): its particles' surface nodes, or (true) the
+  /// wall time of its own work, spread over its particles by their nodes.
+  bool balanceByTime = false;
+  /// Rebuild the decomposition when the most loaded rank's load exceeds
+  /// this times the mean; 0: never.
   double rebalanceImbalance = 1.25;
   std::uint64_t rebalanceEvery = 200;  ///< steps between two checks of the imbalance
 };

@@ -66,6 +66,11 @@
 /// Effects: a world's effects must declare Effect::distributable() (the
 /// built-in ones do); the constructor refuses another, naming it.
 ///
+/// Balance: the cuts are rebuilt when the most loaded rank's load passes
+/// DistributedDef::rebalanceImbalance times the mean, the load being its
+/// particles' surface nodes, or (Balance::Time) the wall time of its own
+/// work (ExchangeStats::workSeconds). The cuts never change the motion.
+///
 /// Density scaling: after a batch of splits every rank takes the run's
 /// reference (one all-reduce), scales its own new small fragments, and a
 /// fragment's factor travels with it in every particle record.
@@ -82,6 +87,7 @@
 
 #include <mpi.h>
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -92,8 +98,21 @@
 namespace lsdem::parallel {
 
 struct DistributedDef {
-  /// Rebuild the decomposition when the most loaded rank's weight (surface
-  /// nodes) exceeds this times the mean; 0: never.
+  /// What a rank's load is, for the decomposition.
+  enum class Balance {
+    /// The surface nodes of the particles it owns (the same cuts in every
+    /// run of a scene).
+    Nodes,
+    /// The wall time of its own work since the last check (the step less
+    /// the time it waited for other ranks and exchanged), spread over its
+    /// particles by their nodes: a rank on a slower core, or with a denser
+    /// part of the bed, gets fewer nodes at the next rebalance. The cuts
+    /// then differ from run to run; the results do not (docs/parallel.md).
+    Time,
+  };
+  Balance balance = Balance::Nodes;
+  /// Rebuild the decomposition when the most loaded rank's load exceeds
+  /// this times the mean; 0: never.
   double rebalanceImbalance = 1.25;
   /// Steps between two checks of the imbalance.
   std::uint64_t rebalanceEvery = 200;
@@ -115,6 +134,10 @@ struct ExchangeStats {
   std::uint64_t neighbours = 0;      ///< the neighbouring subdomains now
   std::uint64_t rebalances = 0;
   double seconds = 0.0;              ///< wall time in the exchanges
+  /// Wall time of this rank's own work in its steps: the steps less the
+  /// time in the exchanges and the other collectives of a step (where a
+  /// rank waits for the others).
+  double workSeconds = 0.0;
 };
 
 template <int D>
@@ -259,6 +282,20 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   std::vector<std::vector<char>> gatherBytes(const std::vector<char>& bytes, int root) const;
   // Local particle `index`'s cost in the decomposition: its surface nodes (at least 1).
   double weight(std::size_t index) const;
+  // Counts the wall time of its scope, a collective of the step, as waited
+  // (not this rank's work, ExchangeStats::workSeconds); one inside another
+  // counts once.
+  class Waiting {
+   public:
+    explicit Waiting(DistributedWorld& w);
+    ~Waiting();
+    Waiting(const Waiting&) = delete;
+    Waiting& operator=(const Waiting&) = delete;
+
+   private:
+    DistributedWorld& world_;
+    std::chrono::steady_clock::time_point start_;
+  };
 
   // A duplicate of the caller's communicator, this object's own (so the
   // exchange's point-to-point messages never meet the caller's), freed with
@@ -288,6 +325,9 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   double coarsestSpacing_ = 0.0;     // the coarsest grid spacing in the run so far
   bool breaks_ = false;              // an effect splits particles (the skin covers 4 of the coarsest cells)
   std::uint64_t particleSetChanges_ = 0;  // particleSetChanges()
+  double waitedSeconds_ = 0.0;       // in the step's collectives so far (Waiting)
+  int waitingDepth_ = 0;             // Waiting scopes open now
+  double workAtCheck_ = 0.0;         // stats_.workSeconds at the last check of the balance
   bool servo_ = false;               // a tool is a servo platen: its load is the run's (reduceLoads)
   bool loadsReduced_ = false;        // the world's loads are the run's for its contacts now
   bool coordinated_ = false;         // the world changes its particle set (breakage, outflow, feeds): world_.setCoordinator(this)
