@@ -17,6 +17,7 @@
 #include <array>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 using namespace lsdem;
@@ -221,6 +222,111 @@ void BM_LookupAtCells(benchmark::State& state) {
 }
 BENCHMARK(BM_LookupAtCells<3>)->Arg(0)->Arg(1);
 BENCHMARK(BM_LookupAtCells<2>)->Arg(0)->Arg(1);
+
+// The grid layout for the trilinear look-up (issue: "one cache line per
+// cell's corners"): a cell's 8 corner values in one 32-byte aligned block
+// (8x the memory of the grid's node values), against the grid's own
+// layout, where a cell's corners lie in 4 rows (2-4 cache lines).
+struct alignas(32) CellCorners {
+  float v[8];  // (x, y, z) = (0,0,0), (1,0,0), (0,1,0), (1,1,0), (0,0,1), (1,0,1), (0,1,1), (1,1,1)
+};
+struct CellCornerGrid {
+  geometry::Index<3> cells;
+  std::vector<CellCorners> blocks;
+  explicit CellCornerGrid(const geometry::Grid<3>& g) {
+    const geometry::Index<3>& n = g.dims();
+    for (int a = 0; a < 3; ++a) cells[a] = n[a] - 1;
+    blocks.resize(std::size_t(cells[0]) * std::size_t(cells[1]) * std::size_t(cells[2]));
+    for (int z = 0; z < cells[2]; ++z) {
+      for (int y = 0; y < cells[1]; ++y) {
+        for (int x = 0; x < cells[0]; ++x) {
+          CellCorners& b = blocks[(std::size_t(z) * std::size_t(cells[1]) + std::size_t(y)) * std::size_t(cells[0]) +
+                                  std::size_t(x)];
+          for (int k = 0; k < 8; ++k) b.v[k] = g.at(geometry::Index<3>(x + (k & 1), y + ((k >> 1) & 1), z + (k >> 2)));
+        }
+      }
+    }
+  }
+  // Grid::valueAtCellsGradientBelow's arithmetic on a cell's block.
+  [[gnu::always_inline]] double valueAtCellsGradientBelow(const Vec<3>& g, double threshold, Vec<3>& grad) const {
+    int c[3];
+    Vec<3> t;
+    for (int a = 0; a < 3; ++a) {
+      c[a] = std::clamp(int(g[a]), 0, cells[a] - 1);
+      t[a] = g[a] - double(c[a]);
+    }
+    const float* v = blocks[(std::size_t(c[2]) * std::size_t(cells[1]) + std::size_t(c[1])) * std::size_t(cells[0]) +
+                            std::size_t(c[0])].v;
+    const double v000 = v[0], v100 = v[1], v010 = v[2], v110 = v[3];
+    const double v001 = v[4], v101 = v[5], v011 = v[6], v111 = v[7];
+    const double x00 = v000 + t[0] * (v100 - v000), x10 = v010 + t[0] * (v110 - v010);
+    const double x01 = v001 + t[0] * (v101 - v001), x11 = v011 + t[0] * (v111 - v011);
+    const double y0 = x00 + t[1] * (x10 - x00), y1 = x01 + t[1] * (x11 - x01);
+    const double value = y0 + t[2] * (y1 - y0);
+    if (value < threshold) {
+      const double d00 = v100 - v000, d10 = v110 - v010, d01 = v101 - v001, d11 = v111 - v011;
+      const double dy0 = d00 + t[1] * (d10 - d00), dy1 = d01 + t[1] * (d11 - d01);
+      grad[0] = dy0 + t[2] * (dy1 - dy0);
+      grad[1] = (x10 - x00) + t[2] * ((x11 - x01) - (x10 - x00));
+      grad[2] = y1 - y0;
+    }
+    return value;
+  }
+};
+
+// Argument 0: cells across the sphere (10: the beds' grains, 7 KB of
+// values; 60: a fine grain, 1 MB); 1: distinct grids looked up in turn
+// (1, or 256 as in a bed of many fragment shapes); 2: the layout (0: the
+// grid's, 1: cell blocks). 2^16 points within a cell of the surface,
+// visited grid by grid in turns of 16 (a pair's nodes are close
+// together). Items = look-ups; the label says if both layouts agree.
+void BM_LookupLayout(benchmark::State& state) {
+  const double cells = double(state.range(0));
+  const std::size_t count = std::size_t(state.range(1));
+  const bool blocks = state.range(2) == 1;
+  std::vector<geometry::Grid<3>> grids;
+  std::vector<CellCornerGrid> cornerGrids;
+  for (std::size_t k = 0; k < count; ++k) {
+    // Spheres of slightly different radii: each grid its own values.
+    grids.push_back(geometry::sphereGrid<3>(0.5 * (1.0 + 1e-3 * double(k)), 1.0 / cells));
+    if (blocks) cornerGrids.emplace_back(grids.back());
+  }
+  std::vector<Vec<3>> points = lookupPoints(grids.front(), true);
+  for (Vec<3>& x : points) x = grids.front().toGrid(x);
+  double sum = 0.0;
+  Vec<3> grad = Vec<3>::Zero();
+  constexpr std::size_t kRun = 16;
+  for (auto _ : state) {
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const std::size_t k = (i / kRun) % count;
+      sum += blocks ? cornerGrids[k].valueAtCellsGradientBelow(points[i], 0.0, grad)
+                    : grids[k].valueAtCellsGradientBelow(points[i], 0.0, grad);
+    }
+    benchmark::DoNotOptimize(sum);
+    benchmark::DoNotOptimize(grad);
+  }
+  bool same = true;
+  if (blocks) {
+    Vec<3> g1 = Vec<3>::Zero(), g2 = Vec<3>::Zero();
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const std::size_t k = (i / kRun) % count;
+      same = same && cornerGrids[k].valueAtCellsGradientBelow(points[i], 0.0, g1) ==
+                         grids[k].valueAtCellsGradientBelow(points[i], 0.0, g2) && g1 == g2;
+    }
+  }
+  std::size_t bytes = 0;
+  for (const auto& g : grids) bytes += blocks ? (g.values().size() * 8 * sizeof(float)) : g.bytes();
+  state.SetItemsProcessed(state.iterations() * std::int64_t(points.size()));
+  state.counters["MB"] = double(bytes) / 1e6;
+  state.SetLabel(std::string(blocks ? "cell blocks" : "grid") + (same ? "" : ", DIFFERENT VALUES"));
+}
+BENCHMARK(BM_LookupLayout)
+    ->Args({10, 1, 0})
+    ->Args({10, 1, 1})
+    ->Args({10, 256, 0})
+    ->Args({10, 256, 1})
+    ->Args({60, 1, 0})
+    ->Args({60, 1, 1});
 
 // compute() as BM_NarrowPhase with the trilinear (argument 3 = 0) or
 // tricubic (1) look-up; items = node checks.
