@@ -274,8 +274,8 @@ struct CellCornerGrid {
   }
 };
 
-// Argument 0: cells across the sphere (10: the beds' grains, 7 KB of
-// values; 60: a fine grain, 1 MB); 1: distinct grids looked up in turn
+// Argument 0: cells across the sphere (10: the beds' grains, 27 KB of
+// values with the padding; 60: a fine grain, 1.3 MB); 1: distinct grids looked up in turn
 // (1, or 256 as in a bed of many fragment shapes); 2: the layout (0: the
 // grid's, 1: cell blocks). 2^16 points within a cell of the surface,
 // visited grid by grid in turns of 16 (a pair's nodes are close
@@ -287,8 +287,9 @@ void BM_LookupLayout(benchmark::State& state) {
   std::vector<geometry::Grid<3>> grids;
   std::vector<CellCornerGrid> cornerGrids;
   for (std::size_t k = 0; k < count; ++k) {
-    // Spheres of slightly different radii: each grid its own values.
-    grids.push_back(geometry::sphereGrid<3>(0.5 * (1.0 + 1e-3 * double(k)), 1.0 / cells));
+    // Spheres of slightly different radii (under 0.3 % apart, so the points
+    // stay within about a cell of every surface): each grid its own values.
+    grids.push_back(geometry::sphereGrid<3>(0.5 * (1.0 + 1e-5 * double(k)), 1.0 / cells));
     if (blocks) cornerGrids.emplace_back(grids.back());
   }
   std::vector<Vec<3>> points = lookupPoints(grids.front(), true);
@@ -315,7 +316,11 @@ void BM_LookupLayout(benchmark::State& state) {
     }
   }
   std::size_t bytes = 0;
-  for (const auto& g : grids) bytes += blocks ? (g.values().size() * 8 * sizeof(float)) : g.bytes();
+  for (const auto& g : grids) bytes += g.bytes();
+  if (blocks) {
+    bytes = 0;
+    for (const auto& g : cornerGrids) bytes += g.blocks.size() * sizeof(CellCorners);
+  }
   state.SetItemsProcessed(state.iterations() * std::int64_t(points.size()));
   state.counters["MB"] = double(bytes) / 1e6;
   state.SetLabel(std::string(blocks ? "cell blocks" : "grid") + (same ? "" : ", DIFFERENT VALUES"));

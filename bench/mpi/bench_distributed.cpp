@@ -43,7 +43,9 @@ int main(int argc, char** argv) {
   const int settle = 300;
   const std::string balance = argc > 3 ? argv[3] : "nodes";
   if (balance != "nodes" && balance != "time") {
-    if (rank == 0) std::fprintf(stderr, "lsdem_bench_distributed: balance must be nodes or time, got '%s'\n", argv[3]);
+    if (rank == 0) {
+      std::fprintf(stderr, "lsdem_bench_distributed: balance must be nodes or time, got '%s'\n", argv[3]);
+    }
     MPI_Finalize();
     return 2;
   }
@@ -117,7 +119,8 @@ int main(int argc, char** argv) {
                 grains, (unsigned long long)total, ranks, steps, settle, world.dt(), balance.c_str(),
                 (unsigned long long)after.rebalances);
     std::printf(
-        "rank  ms/step  work ms/step  owned  ghosts  exchange  bytes/step  messages/step  migrations/step  contacts  one-ghost  "
+        "rank  ms/step  work ms/step  owned  ghosts  exchange  bytes/step  messages/step  migrations/step  contacts  "
+        "one-ghost  "
         "two-ghost  neighbours\n");
     double slowest = 0.0, slowestSetUp = 0.0, slowestSettling = 0.0;
     for (int r = 0; r < ranks; ++r) {

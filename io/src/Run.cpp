@@ -42,7 +42,7 @@ class Runner {
   Runner(SceneDef<D> scene, std::string sceneText, const RunOptions& options, const fs::path& out,
          std::unique_ptr<OutputLock> lock)
       : scene_(std::move(scene)), sceneText_(std::move(sceneText)), options_(options), lock_(std::move(lock)),
-        context_{scene_, sw_, out, {}, Clock::now(), false, options.note} {}
+        context_{scene_, sw_, out, {}, Clock::now(), false, options.note, {}} {}
 
   RunResult run(bool resume) {
     if (options_.check) {
@@ -230,6 +230,7 @@ class Runner {
     if (!engine_) return;
     changesAtView_ = engine_->particleSetChanges();
     engine_->updateView(sw_);
+    context_.ranks = engine_->ranksSummary();
   }
   // A distributed run whose frames are per-rank pieces, when the writing
   // process writes a frame now (`due` there): every process writes its piece

@@ -37,12 +37,30 @@ template <int D>
 Decomposition<D>::Decomposition() : nodes_(1), boxes_{everywhere<D>()} {}
 
 template <int D>
-Decomposition<D> Decomposition<D>::build(std::span<const Vec<D>> points, std::span<const double> weights, int parts) {
+Decomposition<D> Decomposition<D>::build(std::span<const Vec<D>> points, std::span<const double> weights, int parts,
+                                         std::span<const double> capacities) {
   if (parts < 1) throw std::invalid_argument("decomposition: parts must be >= 1, got " + std::to_string(parts));
   if (points.size() != weights.size()) {
     throw std::invalid_argument("decomposition: " + std::to_string(points.size()) + " points but " +
                                 std::to_string(weights.size()) + " weights");
   }
+  if (!capacities.empty() && capacities.size() != std::size_t(parts)) {
+    throw std::invalid_argument("decomposition: " + std::to_string(parts) + " parts but " +
+                                std::to_string(capacities.size()) + " capacities");
+  }
+  for (const double c : capacities) {
+    if (!(c > 0.0) || !std::isfinite(c)) {
+      throw std::invalid_argument("decomposition: a part's capacity must be positive and finite, got " +
+                                  std::to_string(c));
+    }
+  }
+  // The capacity of parts [first, first + count).
+  const auto capacity = [&](int first, int count) {
+    if (capacities.empty()) return double(count);
+    double c = 0.0;
+    for (int p = first; p < first + count; ++p) c += capacities[std::size_t(p)];
+    return c;
+  };
   Decomposition d;
   d.parts_ = parts;
   d.nodes_.clear();
@@ -79,7 +97,7 @@ Decomposition<D> Decomposition<D>::build(std::span<const Vec<D>> points, std::sp
     const int lowerCount = count / 2;
     double total = 0.0;
     for (std::size_t k = begin; k < end; ++k) total += weights[order[k]];
-    const double share = total * double(lowerCount) / double(count);
+    const double share = total * capacity(first, lowerCount) / capacity(first, count);
     // The first point whose cumulative weight passes the share starts the upper side.
     std::size_t mid = begin;
     double sum = 0.0;

@@ -31,7 +31,7 @@ template <int D>
 class DistributedEngine final : public io::RunEngine<D> {
  public:
   DistributedEngine(MPI_Comm comm, io::SceneWorld<D>& part, const DistributedDef& def)
-      : part_(part), world_(comm, *part.world, def), comm_(comm) {
+      : part_(part), world_(comm, *part.world, def), comm_(comm), def_(def) {
     // What every rank held at the start (a resumed run: the checkpoint's
     // log and removals): the view has it already; the ranks send what follows.
     removedFrom_ = part.world->removed().size();
@@ -57,6 +57,32 @@ class DistributedEngine final : public io::RunEngine<D> {
     viewRemoved_ = removed.size();
   }
 
+  io::RanksSummary ranksSummary() override {
+    const ExchangeStats& s = world_.stats();
+    const double owned = double(world_.ownedCount());
+    const double wait = s.stepSeconds > 0.0 ? (s.stepSeconds - s.workSeconds) / s.stepSeconds : 0.0;
+    // Sums, then maxima (of -owned: the least; the counts every rank keeps alike).
+    double sums[3] = {double(s.migrations), double(s.bytesSent), s.workSeconds};
+    double maxima[6] = {owned, -owned, s.workSeconds, wait, double(s.rebalances), double(s.globalExchanges)};
+    if (MPI_Allreduce(MPI_IN_PLACE, sums, 3, MPI_DOUBLE, MPI_SUM, comm_) != MPI_SUCCESS ||
+        MPI_Allreduce(MPI_IN_PLACE, maxima, 6, MPI_DOUBLE, MPI_MAX, comm_) != MPI_SUCCESS) {
+      throw std::runtime_error("MPI: Allreduce failed");
+    }
+    io::RanksSummary r;
+    r.ranks = world_.ranks();
+    r.balanceByTime = def_.balance == DistributedDef::Balance::Time;
+    r.rebalances = std::uint64_t(maxima[4]);
+    r.migrations = std::uint64_t(sums[0]);
+    r.allToAllExchanges = std::uint64_t(maxima[5]);
+    r.bytesPerStep = s.steps > 0 ? sums[1] / double(s.steps) : 0.0;
+    r.ownedMax = std::uint64_t(maxima[0]);
+    r.ownedMin = std::uint64_t(-maxima[1]);
+    const double meanWork = sums[2] / r.ranks;
+    r.workImbalance = meanWork > 0.0 ? maxima[2] / meanWork : 1.0;
+    r.largestWaitShare = maxima[3];
+    return r;
+  }
+
   bool anyStop(bool stop) override { return any(stop); }
   std::uint64_t particleSetChanges() override { return world_.particleSetChanges(); }
 
@@ -77,6 +103,7 @@ class DistributedEngine final : public io::RunEngine<D> {
   io::SceneWorld<D>& part_;
   DistributedWorld<D> world_;
   MPI_Comm comm_;
+  DistributedDef def_;
   std::size_t removedFrom_ = 0;  // removal records every rank held at the start
   std::size_t viewRemoved_ = 0;  // records since then the view holds
   std::unique_ptr<breakage::Breakage<D>> base_;  // the breakage log at the start

@@ -237,10 +237,15 @@ DistributedWorld<D>::OwnComm::~OwnComm() {
 
 template <int D>
 void DistributedWorld<D>::checkSameWorldEverywhere() const {
-  // A digest of the particle count, ids and shape hashes, in index order: equal on every rank.
+  // A digest of the particle count, ids and shape hashes, in index order,
+  // the skin and the balance settings: equal on every rank.
   const dynamics::Particles<D>& p = world_.particles();
   std::uint64_t digest = p.size() * 1099511628211ull ^ p.nextId();
   digest = digest * 1099511628211ull ^ std::bit_cast<std::uint64_t>(skin_);  // (from the world's broad-phase skin)
+  // The balance settings: every rank takes the same rebalances.
+  digest = digest * 1099511628211ull ^ std::uint64_t(def_.balance);
+  digest = digest * 1099511628211ull ^ std::bit_cast<std::uint64_t>(def_.rebalanceImbalance);
+  digest = digest * 1099511628211ull ^ def_.rebalanceEvery;
   for (std::size_t i = 0; i < p.size(); ++i) {
     digest = digest * 1099511628211ull ^ p.id[i];
     digest = digest * 1099511628211ull ^ hashOf_.at(p.shape[i].get()).hash;
@@ -249,8 +254,10 @@ void DistributedWorld<D>::checkSameWorldEverywhere() const {
   check(MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_UINT64_T, MPI_MIN, comm_), "Allreduce");
   check(MPI_Allreduce(MPI_IN_PLACE, &hi, 1, MPI_UINT64_T, MPI_MAX, comm_), "Allreduce");
   if (lo != hi) {
-    throw std::invalid_argument("a distributed run needs the same world on every rank: rank " + std::to_string(rank_) +
-                                " has other particles or shapes (build every rank's world from the same scene)");
+    throw std::invalid_argument(
+        "a distributed run needs the same world on every rank: rank " + std::to_string(rank_) +
+        " has other particles, shapes or balance settings (build every rank's world from the same scene, with the same "
+        "DistributedDef)");
   }
 }
 
@@ -373,8 +380,9 @@ void DistributedWorld<D>::step() {
   world_.finishStep();
   if (servo_) reduceLoads();
   ++stats_.steps;
-  stats_.workSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() -
-                        (waitedSeconds_ - waitedBefore);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats_.stepSeconds += seconds;
+  stats_.workSeconds += seconds - (waitedSeconds_ - waitedBefore);
   if (def_.rebalanceImbalance > 0.0 && def_.rebalanceEvery > 0 && stats_.steps % def_.rebalanceEvery == 0) rebalance();
 }
 
@@ -601,19 +609,31 @@ void DistributedWorld<D>::rebalance() {
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (!world_.isGhost(i)) nodes += weight(i);
   }
-  // A particle's load: its nodes, times (Balance::Time) its rank's seconds
-  // of work per node since the last check (a rank that owned nothing, or a
-  // run not timed yet: the run's mean), so a rank's load is its work time.
-  double scale = 1.0;
+  // Balance::Time: a rank's load is its work since the last check, and the
+  // cuts give each rank a share of the nodes in proportion to its speed
+  // (nodes per second of its own work; a rank that had no nodes or no work
+  // keeps its last, one never measured takes the mean of the others, all
+  // within a factor 8 of the mean: one slow interval does not starve a rank).
+  double own = nodes;
+  std::vector<double> capacities;
   if (def_.balance == DistributedDef::Balance::Time) {
     const double work = stats_.workSeconds - workAtCheck_;
-    double sums[2] = {work, nodes};
-    check(MPI_Allreduce(MPI_IN_PLACE, sums, 2, MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
-    const double mean = sums[1] > 0.0 ? sums[0] / sums[1] : 0.0;
-    if (mean > 0.0) scale = (nodes > 0.0 && work > 0.0 ? work / nodes : mean) / mean;
+    if (nodes > 0.0 && work > 0.0) speed_ = nodes / work;
+    own = work;
+    capacities.assign(static_cast<std::size_t>(ranks_), 0.0);
+    check(MPI_Allgather(&speed_, 1, MPI_DOUBLE, capacities.data(), 1, MPI_DOUBLE, comm_), "Allgather");
+    double known = 0.0;
+    int measured = 0;
+    for (const double c : capacities) {
+      if (c > 0.0) {
+        known += c;
+        ++measured;
+      }
+    }
+    const double mean = measured > 0 ? known / measured : 1.0;
+    for (double& c : capacities) c = c > 0.0 ? std::clamp(c, mean / 8.0, 8.0 * mean) : mean;
   }
   workAtCheck_ = stats_.workSeconds;
-  const double own = nodes * scale;
   double largest = own, total = own;
   check(MPI_Allreduce(MPI_IN_PLACE, &largest, 1, MPI_DOUBLE, MPI_MAX, comm_), "Allreduce");
   check(MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
@@ -623,7 +643,7 @@ void DistributedWorld<D>::rebalance() {
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (world_.isGhost(i)) continue;
     for (int a = 0; a < D; ++a) mine.push_back(p.position[i][a]);
-    mine.push_back(weight(i) * scale);
+    mine.push_back(weight(i));
   }
   int count = int(mine.size());
   std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
@@ -644,7 +664,7 @@ void DistributedWorld<D>::rebalance() {
     points.push_back(x);
     weights.push_back(all[k + D]);
   }
-  decomposition_ = Decomposition<D>::build(points, weights, ranks_);
+  decomposition_ = Decomposition<D>::build(points, weights, ranks_, capacities);
   decompositionChanged_ = true;
   ++stats_.rebalances;
   // The particles move to their new owners at the next exchange.
@@ -860,7 +880,10 @@ void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornPartic
   // after a batch (Breakage's energy check), and the split's energy is
   // checked against the run's energy scale.
   refreshStaleContacts();
-  world_.setRunEnergyScale(energy().scale());
+  {
+    const Waiting waiting(*this);
+    world_.setRunEnergyScale(energy().scale());
+  }
   // The springs of each split's fragments on the new set (the energy check's
   // fragmentSpringEnergy), summed over the ranks: each counts the pairs whose
   // lower-id particle it owns, a pair once for each split it touches, as one
@@ -877,7 +900,10 @@ void DistributedWorld<D>::particlesReplaced(std::span<const dynamics::BornPartic
   }
   std::vector<double> springs(batchParents_.size(), 0.0);
   world_.contacts().addSpringsByGroup(splitOf, ghost, springs);
-  check(MPI_Allreduce(MPI_IN_PLACE, springs.data(), int(springs.size()), MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
+  {
+    const Waiting waiting(*this);
+    check(MPI_Allreduce(MPI_IN_PLACE, springs.data(), int(springs.size()), MPI_DOUBLE, MPI_SUM, comm_), "Allreduce");
+  }
   std::vector<std::pair<ParticleId, double>> byParent;
   for (std::size_t k = 0; k < springs.size(); ++k) byParent.emplace_back(batchParents_[k], springs[k]);
   world_.setRunFragmentSprings(std::move(byParent));

@@ -69,7 +69,7 @@ enum class Extra {
   Servo,  // a plate above the bed, as wide as the box, pressed down by a servo to a force it reaches within the run
   Flow,   // no wall at x = 0: grains that pass it by a diameter leave (outflow); a feed drops grains at the far end
   Lift,   // a user's own effect (Lift, declared distributable)
-  SlowRank0,  // rank 0 takes 1 ms more per step (Delay), and the run balances by time
+  SlowRank0,  // rank 0 is several times slower per node (Delay), and the run balances by time
 };
 
 // A user's own effect: an upward pull on each particle above a height,
@@ -100,16 +100,23 @@ class Lift final : public dynamics::Effect<D> {
   std::string name_;
 };
 
-// An effect that only takes time: 1 ms per step where `sleeps` (the
-// distributed world on rank 0), nothing to the motion.
+// An effect that only takes time where `sleeps` (the distributed world on
+// rank 0): 0.3 us per surface node of the particles it owns in every step,
+// about 6x what a node's contacts cost, as on a core several times slower.
+// Nothing to the motion.
 template <int D>
 class Delay final : public dynamics::Effect<D> {
  public:
   explicit Delay(bool sleeps) : sleeps_(sleeps) {}
   std::string name() const override { return "delay"; }
   bool distributable() const override { return true; }
-  void applyForces(World<D>&, double) override {
-    if (sleeps_) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  void applyForces(World<D>& world, double) override {
+    if (!sleeps_) return;
+    std::size_t nodes = 0;
+    for (std::size_t i = 0; i < world.particles().size(); ++i) {
+      if (!world.isGhost(i)) nodes += world.particles().shape[i]->nodes().size();
+    }
+    std::this_thread::sleep_for(std::chrono::nanoseconds(300 * nodes));
   }
 
  private:
@@ -494,6 +501,36 @@ TEST(Decomposition, BalancesWeightAndOwnsByBox) {
   }
 }
 
+// Parts with capacities (Balance::Time: the ranks' speeds) get the weight
+// in proportion to them; a capacity that is not positive is refused.
+TEST(Decomposition, SharesWeightByCapacity) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec<2>> points(4000);
+  std::vector<double> weights(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    points[k] = Vec<2>(3.0 * u(rng), u(rng));
+    weights[k] = 1.0 + double(k % 4);
+  }
+  const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
+  for (const std::vector<double>& capacities :
+       {std::vector<double>{1.0, 3.0}, std::vector<double>{2.0, 1.0, 1.0}, std::vector<double>{0.5, 4.0, 1.0, 2.5}}) {
+    const int parts = int(capacities.size());
+    const auto d = parallel::Decomposition<2>::build(points, weights, parts, capacities);
+    std::vector<double> load(capacities.size(), 0.0);
+    for (std::size_t k = 0; k < points.size(); ++k) load[std::size_t(d.owner(points[k]))] += weights[k];
+    const double all = std::accumulate(capacities.begin(), capacities.end(), 0.0);
+    for (int q = 0; q < parts; ++q) {
+      EXPECT_NEAR(load[std::size_t(q)], total * capacities[std::size_t(q)] / all, 4.0 + 0.002 * total)
+          << parts << " parts, part " << q;
+    }
+  }
+  const std::vector<double> bad{1.0, 0.0};
+  EXPECT_THROW(parallel::Decomposition<2>::build(points, weights, 2, bad), std::invalid_argument);
+  const std::vector<double> short_{1.0};
+  EXPECT_THROW(parallel::Decomposition<2>::build(points, weights, 2, short_), std::invalid_argument);
+}
+
 // The distance between two subdomains (the neighbours' test): symmetric, 0
 // for a part and itself and for parts that share a cut, finite with the
 // outer boxes' infinite sides, and never more than a point of one part is
@@ -534,10 +571,9 @@ TEST(Decomposition, DistanceBetweenPartsBoundsThatOfTheirPoints) {
   }
 }
 
-// Balance by time: rank 0 sleeps 1 ms in every step (about as long as the
-// whole pile's step), so its seconds per node are the run's highest, and
-// the rebalances hand its nodes to the others; the results stay those of
-// one world, bit for bit.
+// Balance by time: rank 0 takes several times longer per node (Delay), so
+// the rebalances give it fewer nodes than the others (by nodes it would
+// hold the mean); the results stay those of one world, bit for bit.
 TEST(DistributedWorld, BalanceByTimeMovesWorkOffASlowRank) { expectEqualToSerial<2>(12, 8, 2000, Extra::SlowRank0); }
 
 TEST(DistributedWorld, RunsAUsersDistributableEffectAndRefusesOthers) {
@@ -549,7 +585,7 @@ TEST(DistributedWorld, RunsAUsersDistributableEffectAndRefusesOthers) {
   EXPECT_THROW(DistributedWorld<2>(MPI_COMM_WORLD, other), std::invalid_argument);
 }
 
-// A world that is not the same on every rank is refused with the reason.
+// A world that is not the same on every rank, or a DistributedDef, is refused with the reason.
 TEST(DistributedWorld, RefusesWorldsThatDifferBetweenRanks) {
   int ranks = 1;
   MPI_Comm_size(MPI_COMM_WORLD, &ranks);
@@ -557,6 +593,16 @@ TEST(DistributedWorld, RefusesWorldsThatDifferBetweenRanks) {
   World<2> w(worldDef<2>());
   build(w, 4, 1 + rankOf(MPI_COMM_WORLD));
   EXPECT_THROW(DistributedWorld<2>(MPI_COMM_WORLD, w), std::invalid_argument);
+  // The same world, but rank 1 would balance by time: refused too (the
+  // ranks would take different rebalances).
+  World<2> same(worldDef<2>());
+  build(same, 4, 1);
+  parallel::DistributedDef def;
+  if (rankOf(MPI_COMM_WORLD) == 1) def.balance = parallel::DistributedDef::Balance::Time;
+  EXPECT_THROW(DistributedWorld<2>(MPI_COMM_WORLD, same, def), std::invalid_argument);
+  World<2> alike(worldDef<2>());
+  build(alike, 4, 1);
+  EXPECT_NO_THROW(DistributedWorld<2>(MPI_COMM_WORLD, alike, parallel::DistributedDef{}));
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
@@ -199,6 +200,29 @@ TEST(DistributedRun, OutputsEqualThoseOfOneProcess) {
   const io::RunResult serial = expectSameAsOneProcess(writeScene(dir), dir);
   if (rankOf(MPI_COMM_WORLD) != 0) return;
   EXPECT_GE(serial.breakages, 10u) << "the scene must break grains for this test to mean anything";
+  // summary.json says how the ranks shared the run; one process's has no such block.
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  EXPECT_EQ(test::readFile(dir / "serial" / "summary.json").find("\"parallel\""), std::string::npos);
+  const std::string summary = test::readFile(dir / "spread" / "summary.json");
+  if (ranks == 1) {
+    EXPECT_EQ(summary.find("\"parallel\""), std::string::npos);
+    return;
+  }
+  EXPECT_NE(summary.find("\"parallel\""), std::string::npos);
+  EXPECT_NE(summary.find("\"ranks\": " + std::to_string(ranks) + ","), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"balance\": \"nodes\""), std::string::npos);
+  const auto number = [&](const std::string& key) {
+    const std::size_t at = summary.find("\"" + key + "\": ");
+    if (at == std::string::npos) return -1.0;
+    return std::stod(summary.substr(at + key.size() + 4));
+  };
+  EXPECT_GE(number("owned_min"), 0.0);
+  EXPECT_GE(number("owned_max"), std::max(1.0, number("owned_min")));
+  EXPECT_GE(number("work_imbalance"), 1.0);
+  EXPECT_GT(number("bytes_sent_per_step"), 0.0);
+  EXPECT_GE(number("largest_wait_share"), 0.0);
+  EXPECT_LT(number("largest_wait_share"), 1.0);
 }
 
 // The scene with a servo platen (a tool) in place of the moving plane: the

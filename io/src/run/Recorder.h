@@ -18,6 +18,7 @@
 
 #include "lsdem/dynamics/State.h"
 #include "lsdem/dynamics/World.h"
+#include "lsdem/io/Run.h"
 #include "lsdem/io/Scene.h"
 
 #include <chrono>
@@ -48,6 +49,7 @@ struct RunContext {
   std::chrono::steady_clock::time_point started;      ///< when this process started the run
   bool stopped = false;                               ///< stopped early (known at the end)
   std::function<void(const std::string&)> note;       ///< what a resume repaired, for the user
+  RanksSummary ranks;                                 ///< a distributed run's, at its last view
 
   /// kg that entered the run: the initial particles and what feeds dropped.
   double massIn() const;

@@ -107,6 +107,21 @@ void SummaryRecorder<D>::writeSummary(const World& w, bool final) const {
       j.endArray().endObject();
       if (final) writeFragmentDensity(w, c.scene.output.shapeMinCells, j);
     }
+    if (c.ranks.ranks > 1) {
+      const RanksSummary& r = c.ranks;
+      j.key("parallel").beginObject()
+          .field("ranks", r.ranks)
+          .field("balance", std::string(r.balanceByTime ? "time" : "nodes"))
+          .field("rebalances", static_cast<long long>(r.rebalances))
+          .field("migrations", static_cast<long long>(r.migrations))
+          .field("all_to_all_exchanges", static_cast<long long>(r.allToAllExchanges))
+          .field("bytes_sent_per_step", r.bytesPerStep)
+          .field("owned_min", static_cast<long long>(r.ownedMin))
+          .field("owned_max", static_cast<long long>(r.ownedMax))
+          .field("work_imbalance", r.workImbalance)
+          .field("largest_wait_share", r.largestWaitShare)
+          .endObject();
+    }
   });
   writeFileAtomically(c.out / outputs::kSummary, s.str());
 }

@@ -24,6 +24,23 @@ template <int D>
 struct SceneWorld;
 struct ParallelDef;
 
+/// What the ranks of a distributed run did so far (summary.json
+/// "parallel"), taken over every rank at each view of the run.
+struct RanksSummary {
+  int ranks = 1;                       ///< processes in the run (1: not distributed, not written)
+  bool balanceByTime = false;          ///< `[parallel] balance = "time"`
+  std::uint64_t rebalances = 0;        ///< decompositions rebuilt
+  std::uint64_t migrations = 0;        ///< particles handed to another owner, all ranks
+  std::uint64_t allToAllExchanges = 0; ///< exchanges that needed every rank (after a rebalance)
+  double bytesPerStep = 0.0;           ///< bytes sent per step, all ranks
+  std::uint64_t ownedMin = 0, ownedMax = 0;  ///< particles a rank owns now, least and most
+  /// The busiest rank's own work over the mean (1: even), and the largest
+  /// share of a rank's steps spent in the exchanges and collectives (the
+  /// wait for the others included), since the start of this process.
+  double workImbalance = 1.0;
+  double largestWaitShare = 0.0;
+};
+
 /// @brief How a run steps its world. Without one (RunOptions::engine null)
 /// the run steps its world in this process. A distributed run
 /// (lsdem::parallel, `mpirun -np N lsdem run`) runs runScene in every
@@ -53,6 +70,8 @@ class RunEngine {
   /// splits, a removal or an addition anywhere), the same on every process:
   /// a view for the removal and breakage logs is needed only after a change.
   virtual std::uint64_t particleSetChanges() = 0;
+  /// @brief What the ranks did so far, on the writing process (collective).
+  virtual RanksSummary ranksSummary() = 0;
 };
 
 /// @brief Makes a run's engine for the world each process built alike,

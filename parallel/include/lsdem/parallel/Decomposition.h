@@ -33,9 +33,12 @@ class Decomposition {
   /// @brief One part: the whole space.
   Decomposition();
   /// @brief The RCB of `points` with `weights` (> 0 each, same length) into
-  /// `parts` >= 1 subdomains, numbered 0 .. parts-1.
-  /// @note Throws std::invalid_argument for parts < 1 or mismatched sizes.
-  static Decomposition build(std::span<const Vec<D>> points, std::span<const double> weights, int parts);
+  /// `parts` >= 1 subdomains, numbered 0 .. parts-1; part p gets the share
+  /// capacities[p] / sum of them of the weight (empty: equal shares).
+  /// @note Throws std::invalid_argument for parts < 1, mismatched sizes or a
+  /// capacity that is not positive and finite.
+  static Decomposition build(std::span<const Vec<D>> points, std::span<const double> weights, int parts,
+                             std::span<const double> capacities = {});
 
   int parts() const { return parts_; }
   /// @brief The part that owns a centroid at x (a point on a cut belongs to the upper side).

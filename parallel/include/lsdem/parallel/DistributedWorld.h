@@ -138,6 +138,7 @@ struct ExchangeStats {
   /// time in the exchanges and the other collectives of a step (where a
   /// rank waits for the others).
   double workSeconds = 0.0;
+  double stepSeconds = 0.0;          ///< wall time of the steps
 };
 
 template <int D>
@@ -328,6 +329,7 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
   double waitedSeconds_ = 0.0;       // in the step's collectives so far (Waiting)
   int waitingDepth_ = 0;             // Waiting scopes open now
   double workAtCheck_ = 0.0;         // stats_.workSeconds at the last check of the balance
+  double speed_ = 0.0;               // Balance::Time: nodes per second of own work, last measured (0: never)
   bool servo_ = false;               // a tool is a servo platen: its load is the run's (reduceLoads)
   bool loadsReduced_ = false;        // the world's loads are the run's for its contacts now
   bool coordinated_ = false;         // the world changes its particle set (breakage, outflow, feeds): world_.setCoordinator(this)
