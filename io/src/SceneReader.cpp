@@ -792,11 +792,7 @@ class SceneReader {
     if (!t) return;
     TomlReader r(*t, file_, "parallel");
     ParallelDef& p = scene_.parallel;
-    if (r.has("balance")) {
-      const std::string balance = r.string("balance");
-      if (balance != "nodes" && balance != "time") r.fail("balance", "unknown choice '" + balance + "' (nodes, time)");
-      p.balanceByTime = balance == "time";
-    }
+    p.balanceByTime = r.choice("balance", {"nodes", "time"}, p.balanceByTime ? "time" : "nodes") == "time";
     p.rebalanceImbalance = r.number("rebalance_imbalance", p.rebalanceImbalance);
     if (!(p.rebalanceImbalance == 0.0 || p.rebalanceImbalance >= 1.0) || !std::isfinite(p.rebalanceImbalance)) {
       r.fail("rebalance_imbalance", "must be >= 1 (or 0: never rebalance), got " + std::to_string(p.rebalanceImbalance));
@@ -838,13 +834,8 @@ class SceneReader {
     } else if (r.boolean("ascii", false)) {
       o.vtkFormat = VtkEncoding::Ascii;  // the older key
     }
-    if (r.has("frame_pieces")) {
-      const std::string pieces = r.string("frame_pieces");
-      if (pieces != "gathered" && pieces != "ranks") {
-        r.fail("frame_pieces", "unknown choice '" + pieces + "' (gathered, ranks)");
-      }
-      o.framePiecesPerRank = pieces == "ranks";
-    }
+    o.framePiecesPerRank =
+        r.choice("frame_pieces", {"gathered", "ranks"}, o.framePiecesPerRank ? "ranks" : "gathered") == "ranks";
     o.historyRows = count("history_rows", o.historyRows);
     o.distributions = count("distributions", o.distributions);
     if (r.has("distribution_times")) {

@@ -11,10 +11,12 @@
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <optional>
 #include <set>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace lsdem::io::detail {
@@ -92,6 +94,17 @@ class TomlReader {
     return *v;
   }
   std::string string(const std::string& key, const std::string& fallback) { return optionalString(key).value_or(fallback); }
+  /// @brief A string that must be one of `choices` (`fallback` when the key is absent).
+  std::string choice(const std::string& key, std::initializer_list<std::string_view> choices,
+                     const std::string& fallback) {
+    const std::string v = string(key, fallback);
+    std::string list;
+    for (const std::string_view c : choices) {
+      if (c == v) return v;
+      list += (list.empty() ? "" : ", ") + std::string(c);
+    }
+    fail(key, "unknown choice '" + v + "' (" + list + ")");
+  }
 
   /// @brief An array of exactly `count` finite numbers (count < 0: any length >= 1).
   std::vector<double> numbers(const std::string& key, int count) {
