@@ -31,7 +31,7 @@ template <int D>
 class DistributedEngine final : public io::RunEngine<D> {
  public:
   DistributedEngine(MPI_Comm comm, io::SceneWorld<D>& part, const DistributedDef& def)
-      : part_(part), world_(comm, *part.world, def), comm_(comm), def_(def) {
+      : part_(part), world_(comm, *part.world, def), comm_(comm) {
     // What every rank held at the start (a resumed run: the checkpoint's
     // log and removals): the view has it already; the ranks send what follows.
     removedFrom_ = part.world->removed().size();
@@ -70,7 +70,7 @@ class DistributedEngine final : public io::RunEngine<D> {
     }
     io::RanksSummary r;
     r.ranks = world_.ranks();
-    r.balanceByTime = def_.balance == DistributedDef::Balance::Time;
+    r.balanceByTime = world_.def().balance == DistributedDef::Balance::Time;
     r.rebalances = std::uint64_t(maxima[4]);
     r.migrations = std::uint64_t(sums[0]);
     r.allToAllExchanges = std::uint64_t(maxima[5]);
@@ -103,7 +103,6 @@ class DistributedEngine final : public io::RunEngine<D> {
   io::SceneWorld<D>& part_;
   DistributedWorld<D> world_;
   MPI_Comm comm_;
-  DistributedDef def_;
   std::size_t removedFrom_ = 0;  // removal records every rank held at the start
   std::size_t viewRemoved_ = 0;  // records since then the view holds
   std::unique_ptr<breakage::Breakage<D>> base_;  // the breakage log at the start

@@ -2,6 +2,7 @@
 // one-line errors, and the JSON of `lsdem shape`.
 
 #include "support/Files.h"
+#include "support/Json.h"
 #include "support/Process.h"
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include <unistd.h>
 
 namespace fs = std::filesystem;
+using lsdem::test::jsonNumber;
 
 namespace {
 
@@ -30,17 +32,6 @@ std::string writeFile(const std::string& name, const std::string& text) {
   fs::create_directories(dir);
   std::ofstream(dir / name) << text;
   return (dir / name).string();
-}
-
-// The number after "key": in a JSON text (first occurrence).
-double jsonNumber(const std::string& json, const std::string& key) {
-  std::smatch m;
-  const std::regex re("\"" + key + "\": ([-0-9.eE+]+)");
-  if (!std::regex_search(json, m, re)) {
-    ADD_FAILURE() << "no key " << key << " in\n" << json;
-    return 0.0;
-  }
-  return std::stod(m[1]);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 // has nothing to plot (exit 2).
 
 #include "support/Files.h"
+#include "support/Json.h"
 #include "support/Process.h"
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/TriangleMesh.h"
@@ -17,11 +18,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <regex>
 #include <string>
 #include <sys/wait.h>
 
 namespace fs = std::filesystem;
+using lsdem::test::jsonNumber;
 using namespace lsdem;
 
 namespace {
@@ -38,17 +39,6 @@ fs::path tempDir(const std::string& name) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
-}
-
-// The number after "key": in a JSON text (first occurrence).
-double jsonNumber(const std::string& json, const std::string& key, int index = 0) {
-  std::smatch m;
-  const std::regex scalar("\"" + key + "\": ([-0-9.eE+]+)");
-  const std::regex array("\"" + key + "\": \\[\\s*([-0-9.eE+]+),\\s*([-0-9.eE+]+),\\s*([-0-9.eE+]+)");
-  if (std::regex_search(json, m, scalar) && index == 0) return std::stod(m[1]);
-  if (std::regex_search(json, m, array)) return std::stod(m[index + 1]);
-  ADD_FAILURE() << "no key " << key << " in\n" << json;
-  return 0.0;
 }
 
 // An axis-aligned box [lo, lo + size]^3 as 12 outward triangles.

@@ -9,6 +9,7 @@
 #include "lsdem/io/Run.h"
 #include "lsdem/io/VtpRead.h"
 #include "support/Files.h"
+#include "support/Json.h"
 #include "support/Mpi.h"
 
 #include <gtest/gtest.h>
@@ -212,11 +213,7 @@ TEST(DistributedRun, OutputsEqualThoseOfOneProcess) {
   EXPECT_NE(summary.find("\"parallel\""), std::string::npos);
   EXPECT_NE(summary.find("\"ranks\": " + std::to_string(ranks) + ","), std::string::npos) << summary;
   EXPECT_NE(summary.find("\"balance\": \"nodes\""), std::string::npos);
-  const auto number = [&](const std::string& key) {
-    const std::size_t at = summary.find("\"" + key + "\": ");
-    if (at == std::string::npos) return -1.0;
-    return std::stod(summary.substr(at + key.size() + 4));
-  };
+  const auto number = [&](const std::string& key) { return test::jsonNumber(summary, key); };
   EXPECT_GE(number("owned_min"), 0.0);
   EXPECT_GE(number("owned_max"), std::max(1.0, number("owned_min")));
   EXPECT_GE(number("work_imbalance"), 1.0);

@@ -177,6 +177,7 @@ class DistributedWorld : private dynamics::ParticleSetCoordinator {
 
   int rank() const { return rank_; }
   int ranks() const { return ranks_; }
+  const DistributedDef& def() const { return def_; }
   /// @brief This rank's world: its own particles and its ghosts.
   const dynamics::World<D>& world() const { return world_; }
   /// @brief Whether local particle `index` is this rank's own (else a ghost).
