@@ -58,13 +58,6 @@ double wallSeconds() {
   return 0.0;
 #endif
 }
-int threadsHere() {
-#ifdef _OPENMP
-  return omp_get_num_threads();
-#else
-  return 1;
-#endif
-}
 // Cost units of a task (ContactSolver::splitIntoBlocks) besides its tests:
 // each node record it writes, and the task itself.
 constexpr std::uint64_t kRecordCost = 16;
@@ -1255,31 +1248,69 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
                                                       std::numeric_limits<std::uint32_t>::max()));
   };
 
-  // Each thread runs whole blocks of consecutive tasks in order, so a
-  // block's records are contiguous in its thread's buffers and gather()
-  // moves them in bulk (or not at all: block 0 stays where it is).
+  // The task list is cut into parts of about equal estimated cost, one per
+  // two threads. In a part, one thread takes chunks of consecutive tasks
+  // from the front and the other from the back until they meet, so the
+  // two finish together whatever their speeds, without an estimate. Chunks
+  // keep a thread's records of consecutive tasks contiguous in its buffers,
+  // and gather() moves them in bulk (or not at all: the first thread's
+  // run from task 0 stays where it is). A thread whose part is done helps
+  // with the others (more than two threads), from its own end.
   const bool share = pairTasks > 32 || planeTasks > 256 || toolTasks > 256;
-  splitIntoBlocks(tasks_.size(), share ? threads_.size() : 1);
+  const std::size_t workers = share ? threads_.size() : 1;
+  splitIntoBlocks(tasks_.size(), (workers + 1) / 2);
   const std::size_t blockCount = blocks_.size() - 1;
-  blockSeconds_.assign(blockCount, 0.0);
-#pragma omp parallel if (blockCount > 1)
+  cursors_.resize(blockCount);
+  for (std::size_t b = 0; b < blockCount; ++b) cursors_[b].reset(std::uint32_t(blocks_[b]), std::uint32_t(blocks_[b + 1]));
+  // About 64 chunks per thread, at most 8 tasks each: a chunk is far longer
+  // than taking it, and the last one is a small part of the step.
+  const std::uint32_t chunk = std::uint32_t(std::clamp<std::size_t>(tasks_.size() / (64 * workers), 1, 8));
+  threadSeconds_.assign(threads_.size() * blockCount, 0.0);
+#pragma omp parallel if (workers > 1)
   {
-    const std::size_t step = std::size_t(threadsHere());
-    for (std::size_t b = std::size_t(threadIndex()); b < blockCount; b += step) {
-      const double start = wallSeconds();
-      for (std::size_t k = blocks_[b]; k < blocks_[b + 1]; ++k) runTask(k);
-      blockSeconds_[b] = wallSeconds() - start;
+    const std::size_t thread = std::size_t(threadIndex());
+    const bool fromBack = thread % 2 == 1;
+    for (std::size_t i = 0; i < blockCount; ++i) {
+      const std::size_t b = (thread / 2 + i) % blockCount;
+      double& seconds = threadSeconds_[thread * blockCount + b];
+      for (;;) {
+        const auto [first, last] = cursors_[b].take(chunk, fromBack);
+        if (first == last) break;
+        const double start = wallSeconds();
+        for (std::size_t k = first; k < last; ++k) runTask(k);
+        seconds += wallSeconds() - start;
+      }
     }
   }
+  blockSeconds_.assign(blockCount, 0.0);
+  for (std::size_t t = 0; t < threads_.size(); ++t) {
+    for (std::size_t b = 0; b < blockCount; ++b) blockSeconds_[b] += threadSeconds_[t * blockCount + b];
+  }
+  findRuns();
+}
+
+template <int D>
+void ContactSolver<D>::findRuns() {
+  runs_.assign(1, 0);
+  for (std::size_t k = 1; k < tasks_.size(); ++k) {
+    const TaskOutput& last = tasks_[k - 1];
+    const TaskOutput& task = tasks_[k];
+    if (task.thread != last.thread || task.firstPair != last.firstPair + last.pairCount ||
+        task.firstNode != last.firstNode + last.nodeCount) {
+      runs_.push_back(k);
+    }
+  }
+  runs_.push_back(tasks_.size());
 }
 
 template <int D>
 void ContactSolver<D>::splitIntoBlocks(std::size_t taskCount, std::size_t parts) {
-  // Runs of consecutive tasks of about equal time. A task's time is
+  // Parts of consecutive tasks of about equal time. A task's time is
   // estimated from the last step: the cost of the task at the same relative
   // place in its list (the list changes little between steps), times the
-  // seconds per unit of cost its block took then (which corrects the cost
-  // model and a thread slower than the others); 1 each before any.
+  // seconds per unit of cost its part took then, all threads' seconds on it
+  // (which corrects the cost model and a pair of threads slower than the
+  // others); 1 each before any.
   parts = std::max<std::size_t>(1, std::min(parts, taskCount));
   const std::size_t known = taskCost_.size();
   const std::size_t lastBlocks = blockSeconds_.size();
@@ -1336,32 +1367,34 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   if (tasks_.size() <= particlePairTasks) particlePairCount_ = std::size_t(pairTotal);
   if (tasks_.size() <= particlePairTasks + planeTasks) planePairCount_ = std::size_t(pairTotal) - particlePairCount_;
 
-  // The output is the blocks' records in block order. Where one thread's
-  // buffers hold exactly block 0's (the rule: a thread per block), they
-  // become the output and the other blocks are appended after them;
-  // otherwise (a thread ran several blocks) every block is appended.
+  // The output is the runs' records in task order (run(): a run is a
+  // stretch of consecutive tasks whose records lie one after the other in
+  // one thread's buffers). Where one thread's buffers hold exactly the
+  // first run's (one thread alone, or the front of the first part while it
+  // took nothing else), they become the output and the other runs are
+  // appended after them; otherwise every run is appended.
   const bool friction = frictionOn();
   bool anyPreload = false;
   for (const ThreadBuffers<D>& buf : threads_) anyPreload = anyPreload || buf.anyPreload;
   // Only what the next step reads: rest overlaps where some spring has one,
   // node keys where there is a history (friction or rest overlaps).
   const bool keys = friction || anyPreload;
-  const auto blockAt = [&](std::size_t b) {
-    TaskOutput block;
-    const std::size_t first = blocks_[b], last = blocks_[b + 1];
-    if (first == last) return block;
-    block.thread = tasks_[first].thread;
-    block.firstPair = tasks_[first].firstPair;
-    block.firstNode = tasks_[first].firstNode;
-    block.outPair = tasks_[first].outPair;
-    block.outNode = tasks_[first].outNode;
-    block.pairCount = std::uint32_t(tasks_[last - 1].outPair + tasks_[last - 1].pairCount - block.outPair);
-    block.nodeCount = std::uint32_t(tasks_[last - 1].outNode + tasks_[last - 1].nodeCount - block.outNode);
-    return block;
+  const auto runAt = [&](std::size_t b) {
+    TaskOutput run;
+    const std::size_t first = runs_[b], last = runs_[b + 1];
+    if (first == last) return run;
+    run.thread = tasks_[first].thread;
+    run.firstPair = tasks_[first].firstPair;
+    run.firstNode = tasks_[first].firstNode;
+    run.outPair = tasks_[first].outPair;
+    run.outNode = tasks_[first].outNode;
+    run.pairCount = std::uint32_t(tasks_[last - 1].outPair + tasks_[last - 1].pairCount - run.outPair);
+    run.nodeCount = std::uint32_t(tasks_[last - 1].outNode + tasks_[last - 1].nodeCount - run.outNode);
+    return run;
   };
-  std::size_t next = 0;  // the first block not yet in the output
+  std::size_t next = 0;  // the first run not yet in the output
   {
-    const TaskOutput head = blockAt(0);
+    const TaskOutput head = runAt(0);
     ThreadBuffers<D>& buf = threads_[head.thread];
     if (head.firstPair == 0 && head.firstNode == 0 && buf.pairs.size() == head.pairCount &&
         buf.nodes.size() == head.nodeCount) {
@@ -1382,9 +1415,9 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
     }
   }
   if (!friction) shear_.clear();
-  // The other blocks' records, appended: the arrays grow to their totals
+  // The other runs' records, appended: the arrays grow to their totals
   // (RecordAllocator: unwritten), then every thread copies an equal share
-  // of the records, block by block.
+  // of the records, run by run.
   const std::size_t headPairs = pairs_.size(), headNodes = nodes_.size();
   pairs_.resize(pairTotal);
   dashpots_.resize(pairTotal);
@@ -1393,18 +1426,18 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   if (keys) historyKeys_.resize(nodeTotal);
   if (friction) shear_.resize(nodeTotal);
   const std::size_t copied = (pairTotal - headPairs) + (nodeTotal - headNodes);
-  const std::size_t blockCount = blocks_.size() - 1;
+  const std::size_t runCount = runs_.size() - 1;
   const std::ptrdiff_t shares = copied > 4096 ? std::ptrdiff_t(threads_.size()) : 1;
 #pragma omp parallel for schedule(static) if (shares > 1)
   for (std::ptrdiff_t share = 0; share < shares; ++share) {
-    // This share: records [from, to) of the copied ones, counting each block's pairs, then its nodes.
+    // This share: records [from, to) of the copied ones, counting each run's pairs, then its nodes.
     const std::size_t from = copied * std::size_t(share) / std::size_t(shares);
     const std::size_t to = copied * std::size_t(share + 1) / std::size_t(shares);
-    std::size_t at = 0;  // records of the blocks before this one
-    for (std::size_t b = next; b < blockCount && at < to; ++b) {
-      const TaskOutput block = blockAt(b);
-      const ThreadBuffers<D>& buf = threads_[block.thread];
-      // The part [lo, hi) of [at, at + count) in this share, as offsets in the block.
+    std::size_t at = 0;  // records of the runs before this one
+    for (std::size_t b = next; b < runCount && at < to; ++b) {
+      const TaskOutput run = runAt(b);
+      const ThreadBuffers<D>& buf = threads_[run.thread];
+      // The part [lo, hi) of [at, at + count) in this share, as offsets in the run.
       const auto part = [&](std::size_t count) {
         const std::size_t lo = std::clamp(from, at, at + count) - at, hi = std::clamp(to, at, at + count) - at;
         at += count;
@@ -1415,17 +1448,17 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
         std::copy(source.begin() + std::ptrdiff_t(first + lo), source.begin() + std::ptrdiff_t(first + hi),
                   target.begin() + std::ptrdiff_t(out + lo));
       };
-      const auto [pairLo, pairHi] = part(block.pairCount);
-      copy(buf.pairs, block.firstPair, pairs_, block.outPair, pairLo, pairHi);
-      copy(buf.dashpots, block.firstPair, dashpots_, block.outPair, pairLo, pairHi);
-      for (std::size_t q = block.outPair + pairLo; q < block.outPair + pairHi; ++q) {
-        pairs_[q].firstNode = std::uint32_t(pairs_[q].firstNode - block.firstNode + block.outNode);
+      const auto [pairLo, pairHi] = part(run.pairCount);
+      copy(buf.pairs, run.firstPair, pairs_, run.outPair, pairLo, pairHi);
+      copy(buf.dashpots, run.firstPair, dashpots_, run.outPair, pairLo, pairHi);
+      for (std::size_t q = run.outPair + pairLo; q < run.outPair + pairHi; ++q) {
+        pairs_[q].firstNode = std::uint32_t(pairs_[q].firstNode - run.firstNode + run.outNode);
       }
-      const auto [nodeLo, nodeHi] = part(block.nodeCount);
-      copy(buf.nodes, block.firstNode, nodes_, block.outNode, nodeLo, nodeHi);
-      if (anyPreload) copy(buf.preload, block.firstNode, preload_, block.outNode, nodeLo, nodeHi);
-      if (keys) copy(buf.keys, block.firstNode, historyKeys_, block.outNode, nodeLo, nodeHi);
-      if (friction) copy(buf.shear, block.firstNode, shear_, block.outNode, nodeLo, nodeHi);
+      const auto [nodeLo, nodeHi] = part(run.nodeCount);
+      copy(buf.nodes, run.firstNode, nodes_, run.outNode, nodeLo, nodeHi);
+      if (anyPreload) copy(buf.preload, run.firstNode, preload_, run.outNode, nodeLo, nodeHi);
+      if (keys) copy(buf.keys, run.firstNode, historyKeys_, run.outNode, nodeLo, nodeHi);
+      if (friction) copy(buf.shear, run.firstNode, shear_, run.outNode, nodeLo, nodeHi);
     }
   }
   // The next step's blocks weigh tasks by what these cost.

@@ -557,6 +557,14 @@ TEST(NarrowPhase, OneAndTwoThreadsAreBitwiseIdentical) {
   const std::vector<unsigned char> one3 = clusterRun<3>(1, 64), two3 = clusterRun<3>(2, 64);
   ASSERT_EQ(one3.size(), two3.size());
   EXPECT_EQ(std::memcmp(one3.data(), two3.data(), one3.size()), 0);
+  // Three and four threads: parts shared by two threads, and by a thread
+  // alone, threads that help with another part, a first thread whose
+  // buffers are not the output (more threads than this machine's cores is
+  // fine: only the schedule changes).
+  for (const int threads : {3, 4}) {
+    EXPECT_EQ(clusterRun<2>(threads, 300), one2) << threads << " threads";
+    EXPECT_EQ(clusterRun<3>(threads, 64), one3) << threads << " threads";
+  }
   // The tricubic look-up too.
   ContactLawDef cubic;
   cubic.interpolation = LevelSetInterpolation::Tricubic;

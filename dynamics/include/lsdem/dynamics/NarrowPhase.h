@@ -58,7 +58,9 @@
 #include "lsdem/dynamics/Wall.h"
 #include "lsdem/geometry/NodeTree.h"
 
+#include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -217,6 +219,40 @@ struct TaskOutput {
   std::uint32_t firstNode = 0, nodeCount = 0;  ///< in the thread's buffer
   std::uint64_t outPair = 0, outNode = 0;      ///< in the solver's output
   std::uint32_t cost = 0;                      ///< tests made plus weighted records (ContactSolver::splitIntoBlocks)
+};
+
+/// The tasks of one part of a step's list not yet taken (internal;
+/// ContactSolver::run): two threads share a part, one taking chunks of
+/// consecutive tasks from its front, the other from its back, until they
+/// meet. Front and back (one past the last) in one word, changed by
+/// compare-and-swap.
+struct alignas(64) TaskCursor {
+  std::atomic<std::uint64_t> bounds{0};
+  TaskCursor() = default;
+  // (Scratch: a copy takes the value, so the solver stays copyable.)
+  TaskCursor(const TaskCursor& other) : bounds(other.bounds.load(std::memory_order_relaxed)) {}
+  TaskCursor& operator=(const TaskCursor& other) {
+    bounds.store(other.bounds.load(std::memory_order_relaxed), std::memory_order_relaxed);
+    return *this;
+  }
+  void reset(std::uint32_t front, std::uint32_t back) {
+    bounds.store(std::uint64_t(front) | (std::uint64_t(back) << 32), std::memory_order_relaxed);
+  }
+  /// @brief Takes up to `chunk` (>= 1) tasks from the back or the front:
+  /// their range [first, last), empty when none is left.
+  std::array<std::uint32_t, 2> take(std::uint32_t chunk, bool fromBack) {
+    std::uint64_t now = bounds.load(std::memory_order_relaxed);
+    for (;;) {
+      const std::uint32_t front = std::uint32_t(now), back = std::uint32_t(now >> 32);
+      if (front >= back) return {0, 0};
+      const std::uint32_t count = std::min(chunk, back - front);
+      const std::array<std::uint32_t, 2> range = fromBack ? std::array{back - count, back}
+                                                          : std::array{front, front + count};
+      const std::uint64_t next = fromBack ? (std::uint64_t(front) | (std::uint64_t(back - count) << 32))
+                                          : (std::uint64_t(front + count) | (std::uint64_t(back) << 32));
+      if (bounds.compare_exchange_weak(now, next, std::memory_order_relaxed, std::memory_order_relaxed)) return range;
+    }
+  }
 };
 
 /// One pair's shear history (internal): key and its node contacts in the
@@ -491,8 +527,11 @@ class ContactSolver {
   void run(const Particles<D>& particles, const std::vector<Pair>& pairs, const std::vector<Plane<D>>& planes,
            const std::vector<ToolPose<D>>& tools, double dt, double shearDt);
   void gather(const Particles<D>& particles, std::size_t particlePairTasks, std::size_t planeTasks);
-  // blocks_ = the bounds of `parts` runs of consecutive tasks of about equal estimated cost.
+  // blocks_ = the bounds of `parts` parts of consecutive tasks of about equal estimated cost.
   void splitIntoBlocks(std::size_t taskCount, std::size_t parts);
+  // runs_ = the bounds of the runs of consecutive tasks whose records lie
+  // one after the other in one thread's buffers (what gather() moves at once).
+  void findRuns();
   // The history key of record k's b (HistoryPair::other): a particle's id, or a tagged plane / tool index.
   std::uint64_t partnerKey(const Particles<D>& particles, std::size_t k) const;
 
@@ -540,9 +579,12 @@ class ContactSolver {
   std::vector<Mat<D>> rotations_;  // each particle's, this compute()
   std::vector<detail::ThreadBuffers<D>> threads_;
   std::vector<detail::TaskOutput> tasks_;
-  std::vector<std::size_t> blocks_;        // task bounds of the blocks, one thread each, this compute()
+  std::vector<std::size_t> blocks_;        // task bounds of the parts, two threads each, this compute()
+  std::vector<detail::TaskCursor> cursors_;  // per part: its tasks not yet taken
+  std::vector<std::size_t> runs_;          // task bounds of the runs of records (findRuns)
   std::vector<std::uint32_t> taskCost_;    // the last compute()'s cost per task
-  std::vector<double> blockSeconds_;       // the last compute()'s wall time per block
+  std::vector<double> blockSeconds_;       // the last compute()'s seconds of work per part (all threads)
+  std::vector<double> threadSeconds_;      // per thread and part, this compute()
   std::vector<double> blockRate_, estimate_;  // scratch of splitIntoBlocks
   BoundaryLoads<D> loads_;
 };
