@@ -316,6 +316,16 @@ std::vector<unsigned char> clusterRun(int threads, std::size_t count, const Cont
     append(c.force.data(), sizeof(Vec<D>));
     append(&c.node, sizeof(c.node));
   }
+  // The pair records (whole: no padding) and their node ranges, which
+  // follow one another from the first node contact to the last.
+  std::size_t next = 0;
+  for (const PairContact<D>& pc : solver.pairContacts()) {
+    EXPECT_EQ(pc.firstNode, next);
+    next += pc.nodeCount;
+    append(&pc, sizeof(pc));
+  }
+  EXPECT_EQ(next, solver.nodeContacts().size());
+  for (const Vec<D>& shear : solver.nodeShear()) append(shear.data(), sizeof(Vec<D>));
   const double energy[2] = {solver.elasticEnergy(), solver.dissipatedPower()};
   append(energy, sizeof(energy));
 #ifdef _OPENMP
@@ -561,7 +571,7 @@ TEST(NarrowPhase, OneAndTwoThreadsAreBitwiseIdentical) {
   // alone, threads that help with another part, a first thread whose
   // buffers are not the output (more threads than this machine's cores is
   // fine: only the schedule changes).
-  for (const int threads : {3, 4}) {
+  for (const int threads : {3, 4, 5}) {
     EXPECT_EQ(clusterRun<2>(threads, 300), one2) << threads << " threads";
     EXPECT_EQ(clusterRun<3>(threads, 64), one3) << threads << " threads";
   }
@@ -573,6 +583,41 @@ TEST(NarrowPhase, OneAndTwoThreadsAreBitwiseIdentical) {
   EXPECT_EQ(std::memcmp(oneC.data(), twoC.data(), oneC.size()), 0);
   EXPECT_NE(oneC, one3);  // a different look-up, different forces
 #endif
+}
+
+// The shared task cursor (run()): threads taking chunks from both ends of
+// a list take every task exactly once, each thread's ranges in the order
+// of its end (ascending from the front, descending from the back).
+TEST(NarrowPhase, TaskCursorHandsOutEveryTaskOnce) {
+  constexpr std::uint32_t kTasks = 20000;
+  for (const std::uint32_t chunk : {1u, 3u, 8u}) {
+    detail::TaskCursor cursor;
+    cursor.reset(7, kTasks);
+    std::vector<int> taker(kTasks, -1);
+    std::vector<int> ordered(4, 1);
+#pragma omp parallel num_threads(4)
+    {
+      int thread = 0;
+#ifdef _OPENMP
+      thread = omp_get_thread_num();
+#endif
+      const bool fromBack = thread % 2 == 1;
+      std::uint32_t last = fromBack ? kTasks + 1 : 0;
+      for (;;) {
+        const auto [first, end] = cursor.take(chunk, fromBack);
+        if (first == end) break;
+        if (end - first > chunk || (fromBack ? !(end <= last) : !(first >= last))) ordered[std::size_t(thread)] = 0;
+        last = fromBack ? first : end;
+        for (std::uint32_t k = first; k < end; ++k) {
+          if (taker[k] != -1) ordered[std::size_t(thread)] = 0;
+          taker[k] = thread;
+        }
+      }
+    }
+    for (std::uint32_t k = 0; k < kTasks; ++k) ASSERT_EQ(taker[k] == -1, k < 7) << "task " << k << ", chunk " << chunk;
+    for (int t = 0; t < 4; ++t) EXPECT_EQ(ordered[std::size_t(t)], 1) << "thread " << t << ", chunk " << chunk;
+    EXPECT_EQ(cursor.take(chunk, false)[1], 0u);  // nothing left
+  }
 }
 
 // A particle against a flat face of a large box tool: the same force as

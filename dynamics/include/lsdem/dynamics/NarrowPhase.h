@@ -160,7 +160,7 @@ struct Certificate {
 /// The allocator of the solver's record arrays (internal): a resize leaves
 /// the new records unwritten where they are plain data (doubles, integers,
 /// fixed-size Eigen vectors), because the solver resizes an array only to
-/// fill it whole at once (gather() copies the blocks of several threads in
+/// fill it whole at once (gather() copies the runs of several threads in
 /// parallel); writing zeros first would be one more pass over memory.
 template <class T>
 struct RecordAllocator : std::allocator<T> {
@@ -187,8 +187,9 @@ using Records = std::vector<T, RecordAllocator<T>>;
 
 /// Output buffers of one thread (internal); aligned so threads do not share
 /// cache lines. The per-node outputs are the solver's own arrays' layout
-/// (nodes, shear, preload, keys), so where one thread's buffers already are
-/// the output in order (every task ran on it), gather() swaps them in.
+/// (nodes, shear, preload, keys), so where one thread's buffers hold exactly
+/// the first run of the output (every task ran on it, or it took the front
+/// of the first part and nothing else), gather() swaps them in.
 template <int D>
 struct alignas(64) ThreadBuffers {
   Records<PairContact<D>> pairs;
