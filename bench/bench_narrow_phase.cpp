@@ -83,8 +83,30 @@ Cluster<D> makeCluster(int perSide, double cells, double lattice) {
   return c;
 }
 
+// 2^16 points spread over the grid's box, or only those within one cell of
+// its zero level set (fixed seed).
 template <int D>
-std::vector<Vec<D>> lookupPoints(const geometry::Grid<D>& grid, bool nearSurface);
+std::vector<Vec<D>> lookupPoints(const geometry::Grid<D>& grid, bool nearSurface) {
+  const geometry::Box<D> box = grid.bounds();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec<D>> points;
+  while (points.size() < (std::size_t(1) << 16)) {
+    Vec<D> x;
+    for (int a = 0; a < D; ++a) x[a] = box.lower[a] + u(rng) * (box.upper[a] - box.lower[a]);
+    if (nearSurface && std::abs(grid.value(x)) > grid.spacing()) continue;
+    points.push_back(x);
+  }
+  return points;
+}
+// The near-surface points of lookupPoints in grid coordinates (cells from
+// the first node), where the narrow phase's look-ups take them.
+template <int D>
+std::vector<Vec<D>> surfacePointsAtCells(const geometry::Grid<D>& grid) {
+  std::vector<Vec<D>> points = lookupPoints(grid, true);
+  for (Vec<D>& x : points) x = grid.toGrid(x);
+  return points;
+}
 
 // compute() with the paper's law (linear per node, Coulomb friction with
 // history, damping); items = node checks. Argument 4: separation
@@ -131,8 +153,7 @@ void BM_NarrowPhase(benchmark::State& state) {
   // 50 ms after the timed passes: one line prints both.
   {
     const geometry::Grid<D>& grid = p.shape[0]->grid();
-    std::vector<Vec<D>> points = lookupPoints(grid, true);
-    for (Vec<D>& x : points) x = grid.toGrid(x);
+    const std::vector<Vec<D>> points = surfacePointsAtCells(grid);
     double sum = 0.0, seconds = 0.0;
     std::size_t count = 0;
     const auto start = std::chrono::steady_clock::now();
@@ -191,23 +212,6 @@ BENCHMARK(BM_NarrowPhaseThreads<3>)->Args({10, 20, 97})->Args({10, 20, 90})->Uni
 // a neighbour's grid is in the narrow phase), points spread over the box
 // (argument 0) or within one cell of the surface (argument 1), as the
 // narrow phase's look-ups are. Items = look-ups.
-// 2^16 points spread over the grid's box, or only those within one cell of
-// its zero level set (fixed seed).
-template <int D>
-std::vector<Vec<D>> lookupPoints(const geometry::Grid<D>& grid, bool nearSurface) {
-  const geometry::Box<D> box = grid.bounds();
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::vector<Vec<D>> points;
-  while (points.size() < (std::size_t(1) << 16)) {
-    Vec<D> x;
-    for (int a = 0; a < D; ++a) x[a] = box.lower[a] + u(rng) * (box.upper[a] - box.lower[a]);
-    if (nearSurface && std::abs(grid.value(x)) > grid.spacing()) continue;
-    points.push_back(x);
-  }
-  return points;
-}
-
 template <int D>
 void BM_TrilinearLookup(benchmark::State& state) {
   const geometry::Grid<D> grid = geometry::sphereGrid<D>(0.5, 1.0 / 20.0);
@@ -230,8 +234,7 @@ template <int D>
 void BM_LookupAtCells(benchmark::State& state) {
   const geometry::Grid<D> grid = geometry::sphereGrid<D>(0.5, 1.0 / 10.0);
   const bool cubic = state.range(0) == 1;
-  std::vector<Vec<D>> points = lookupPoints(grid, true);
-  for (Vec<D>& x : points) x = grid.toGrid(x);  // grid coordinates
+  const std::vector<Vec<D>> points = surfacePointsAtCells(grid);
   double sum = 0.0;
   Vec<D> grad = Vec<D>::Zero();
   for (auto _ : state) {
@@ -318,8 +321,7 @@ void BM_LookupLayout(benchmark::State& state) {
     grids.push_back(geometry::sphereGrid<3>(0.5 * (1.0 + 1e-5 * double(k)), 1.0 / cells));
     if (blocks) cornerGrids.emplace_back(grids.back());
   }
-  std::vector<Vec<3>> points = lookupPoints(grids.front(), true);
-  for (Vec<3>& x : points) x = grids.front().toGrid(x);
+  const std::vector<Vec<3>> points = surfacePointsAtCells(grids.front());
   double sum = 0.0;
   Vec<3> grad = Vec<3>::Zero();
   constexpr std::size_t kRun = 16;
