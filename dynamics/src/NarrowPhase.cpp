@@ -164,17 +164,19 @@ void sortByNode(ThreadBuffers<D>& buf, std::size_t first) {
   }
 }
 
-// Depth-first walk over the cells of a node tree: `reject(cell)` true skips
-// the cell and everything below it; `leaf(index)` gets the index of each
-// leaf that survives. Returns the cells tested.
+// Depth-first walk over the cells of a node tree below cell `root` (the
+// tree's root: all of it): `reject(cell)` true skips the cell and
+// everything below it; `leaf(index)` gets the index of each leaf that
+// survives. Returns the cells tested.
 template <int D, class Reject, class Leaf>
-std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, const Leaf& leaf) {
+std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, const Leaf& leaf,
+                       std::uint32_t root = 0) {
   if (tree.cells.empty()) return 0;
   // Depth-first with children pushed in pairs: at most depth + 2 entries.
   constexpr int kStack = 128;
   std::array<std::uint32_t, kStack> stack;
   int top = 0;
-  stack[top++] = 0;
+  stack[top++] = root;
   std::uint64_t tested = 0;
   while (top > 0) {
     const std::uint32_t index = stack[--top];
@@ -198,6 +200,7 @@ struct CertificateKey {
   std::uint64_t owner = 0, other = 0;
   const detail::Certificate<D>* previous = nullptr;
   const detail::KeptLeaf* previousLeaves = nullptr;  // its leaves
+  const detail::RejectedCell* previousFrontier = nullptr;  // its frontier
   detail::Certificate<D>* out = nullptr;
   std::uint32_t thread = 0;  // the calling thread's index
 };
@@ -301,22 +304,17 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     const double rho = tree.cells[0].centre.norm() + tree.cells[0].radius;
     moved = (map - previous->map).norm() * rho + (shift - previous->shift).norm();
     if (moved + kCertificateSlack < previous->clearance) {
-      // Spared; its leaves move to this step's list with it.
+      // Spared; its leaves and frontier move to this step's lists with it.
       *key->out = *previous;
       key->out->leafThread = key->thread;
       key->out->leafFirst = std::uint32_t(buf.leaves.size());
+      key->out->frontierFirst = std::uint32_t(buf.frontier.size());
       buf.leaves.insert(buf.leaves.end(), key->previousLeaves, key->previousLeaves + previous->leafCount);
+      buf.frontier.insert(buf.frontier.end(), key->previousFrontier, key->previousFrontier + previous->frontierCount);
       ++buf.certifiedWalks;
       return 0;
     }
-    if (!(moved + kCertificateSlack < previous->restClearance)) previous = nullptr;
   }
-  // The walk's clearances, cells: how far any point of the owner may move
-  // before a test that rejected it could pass (the smallest margin of the
-  // rejections of tree cells, and of single nodes; 0 for a node inside
-  // without a normal).
-  double clearCells = std::numeric_limits<double>::infinity();
-  double clearNodes = std::numeric_limits<double>::infinity();
   const double perSlopeCell = certify ? 1.0 / (slope * h) : 0.0;
   [[maybe_unused]] const double perCubicSlopeCell = certify && Cubic ? 1.0 / (cubic->slope * h) : 0.0;
   std::uint64_t tested = 0;
@@ -365,16 +363,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     // (Only a leaf's is kept: KeptLeaf.)
     if (certify && cell.child == 0) clear = std::min({reach + r - std::sqrt(apart2), -outside, -above * perSlopeCell});
     return false;
-  };
-  double passed = 0.0;  // the margin of the last cell the walk kept (certificates)
-  const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
-    double clear = 0.0;
-    if (!cellRejected(cell, clear)) {
-      passed = clear;
-      return false;
-    }
-    clearCells = std::min(clearCells, clear);
-    return true;
   };
   // One node (tree position k): appends its contact, or returns its margin
   // in cells (how far it may move before the test that rejected it could
@@ -428,6 +416,10 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     return 0.0;
   };
   if (!certify) {
+    const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
+      double clear = 0.0;
+      return cellRejected(cell, clear);
+    };
     buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
       const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
       tested += cell.end - cell.begin;
@@ -436,13 +428,23 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     sortByNode(buf, first);
     return tested;
   }
-  // A certificate also keeps margins for its leaves (KeptLeaf), relative to
-  // its reference map: for each node, a lower bound of its margin there;
-  // for the leaf's cell, the same when its test rejected it, or minus the
-  // margin by which it passed (its test cannot reject it before a move that
-  // large: it is not made, the nodes are tested), or 0 (make it). What the
-  // map has not moved by as much as its margin cannot change its test's
-  // outcome now, and is not tested.
+  // A certified walk covers the tree with two lists in tree order (see
+  // Certificate): the frontier, cells rejected with their margins, and the
+  // leaves kept, with a margin per node and for the leaf's cell: the same
+  // when its test rejected it, or minus the margin by which it passed (its
+  // test cannot reject it before a move that large: it is not made, the
+  // nodes are tested), or 0 (make it). What the map has not moved by as
+  // much as its margin cannot change its test's outcome now, and is not
+  // tested. A whole walk is the case of a frontier of the root alone, with
+  // margin 0.
+  //
+  // Rebasing: a walk whose move reaches the frontier's least margin walks
+  // again the frontier cells whose margins it reaches, and the certificate
+  // is re-made at this step's map; what is not tested keeps its margin less
+  // the move (a point that moves d from here has moved at most d + moved
+  // from the old map). Otherwise (a leaf walk) the frontier stays as it is
+  // and the margins stay relative to the certificate's map: a margin m
+  // measured now bounds the one there from below by m - moved.
   constexpr std::uint32_t kSlots = detail::KeptLeaf::kNodeSlots;
   // A margin m > 0 stored as a float no larger than it (a float rounds
   // within 2^-24 of m; none certifies more than 1e30 cells); 0 for m <= 0
@@ -450,81 +452,146 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const auto lowered = [](double m) {
     return m > 0.0 ? float(std::min(m * (1.0 - 0x1p-20), 1e30)) : 0.0f;
   };
+  const bool rebase = previous == nullptr || !(moved + kCertificateSlack < previous->restClearance);
+  // A frontier walk refines the lists and never merges them back: once they
+  // hold more than twice the entries of the last whole walk, walk it whole.
+  if (previous && rebase &&
+      previous->frontierCount + previous->leafCount > 2 * std::uint64_t(previous->wholeEntries) + 8) {
+    previous = nullptr;
+  }
+  if (!previous) moved = 0.0;
+  const detail::RejectedCell wholeTree{0, 0.0f};
+  const std::span<const detail::RejectedCell> oldFrontier =
+      previous ? std::span(key->previousFrontier, previous->frontierCount) : std::span(&wholeTree, 1);
+  const std::span<const detail::KeptLeaf> oldLeaves =
+      previous ? std::span(key->previousLeaves, previous->leafCount) : std::span<const detail::KeptLeaf>();
+  const double movedBound = moved + kCertificateSlack;  // a margin above this still holds
+  const double carried = rebase ? moved : 0.0;          // what a margin not measured again loses
+  const double measuredLoss = rebase ? 0.0 : moved;     // what a margin measured now loses
+  // The least margins: of the frontier, and of the kept leaves' cells and nodes.
+  double clearFrontier = std::numeric_limits<double>::infinity();
+  double clearLeaves = std::numeric_limits<double>::infinity();
   const std::uint32_t leafFirst = std::uint32_t(buf.leaves.size());
-  detail::Certificate<D> made;
-  if (previous) {
-    // Only the leaves the certificate kept; the rest stays certified (the
-    // same reference map, so its clearance holds), and what is tested now is
-    // certified for as far as it may move beyond what the map has: every
-    // margin below is relative to the reference map (a margin m measured
-    // now bounds the one there from below by m - moved).
-    double clearKept = std::numeric_limits<double>::infinity();
-    const double movedBound = moved + kCertificateSlack;  // a margin above this still holds
-    for (std::uint32_t q = 0; q < previous->leafCount; ++q) {
-      detail::KeptLeaf& kept = buf.leaves.emplace_back(key->previousLeaves[q]);
-      const double cellClear = double(kept.cellMargin);
-      if (movedBound < cellClear) {
-        clearKept = std::min(clearKept, cellClear);
+  const std::uint32_t frontierFirst = std::uint32_t(buf.frontier.size());
+  const auto addFrontier = [&](std::uint32_t cell, double m) {
+    buf.frontier.push_back({cell, lowered(m)});
+    clearFrontier = std::min(clearFrontier, m);
+  };
+  // The subtree of frontier cell `root` walked at this step's map: its
+  // rejected cells join the frontier, its leaves that pass are kept.
+  double passed = 0.0;  // the margin of the last cell the walk kept
+  const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
+    double clear = 0.0;
+    if (!cellRejected(cell, clear)) {
+      passed = clear;
+      return false;
+    }
+    addFrontier(std::uint32_t(&cell - tree.cells.data()), clear - measuredLoss);
+    return true;
+  };
+  const auto keepLeaf = [&](std::uint32_t index) {
+    const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
+    // (The cubic path appends a copy: see the node records above.)
+    if constexpr (Cubic) {
+      buf.leaves.push_back(detail::KeptLeaf{});
+    } else {
+      buf.leaves.emplace_back();
+    }
+    detail::KeptLeaf& kept = buf.leaves.back();
+    kept.cell = index;
+    kept.cellMargin = -lowered(passed - measuredLoss);
+    tested += cell.end - cell.begin;
+    for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
+      const double m = testNode(k) - measuredLoss;
+      clearLeaves = std::min(clearLeaves, m);
+      const std::uint32_t j = k - cell.begin;
+      if (j < kSlots) kept.nodeMargin[j] = lowered(m);
+    }
+  };
+  // A kept leaf: its cell and nodes tested where their margins do not hold.
+  // Rebasing, a leaf whose cell is rejected joins the frontier.
+  const auto retestLeaf = [&](const detail::KeptLeaf& old) {
+    const double cellClear = double(old.cellMargin);
+    if (movedBound < cellClear) {
+      if (rebase) return addFrontier(old.cell, cellClear - carried);
+      buf.leaves.push_back(old);
+      clearLeaves = std::min(clearLeaves, cellClear);
+      return;
+    }
+    const typename geometry::NodeTree<D>::Cell& cell = tree.cells[old.cell];
+    detail::KeptLeaf kept = old;
+    if (!(movedBound < -cellClear)) {
+      ++buf.cellChecks;
+      double clear = 0.0;
+      if (cellRejected(cell, clear)) {
+        if (rebase) return addFrontier(old.cell, clear);
+        kept.cellMargin = lowered(clear - measuredLoss);
+        buf.leaves.push_back(kept);
+        clearLeaves = std::min(clearLeaves, clear - measuredLoss);
+        return;
+      }
+      kept.cellMargin = -lowered(clear - measuredLoss);
+    } else if (rebase) {
+      kept.cellMargin = -lowered(-cellClear - carried);
+    }
+    for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
+      const std::uint32_t j = k - cell.begin;
+      if (j < kSlots && movedBound < double(old.nodeMargin[j])) {
+        const double m = double(old.nodeMargin[j]) - carried;
+        clearLeaves = std::min(clearLeaves, m);
+        if (rebase) kept.nodeMargin[j] = lowered(m);
         continue;
       }
-      const typename geometry::NodeTree<D>::Cell& cell = tree.cells[kept.cell];
-      if (!(movedBound < -cellClear)) {
-        ++buf.cellChecks;
-        double clear = 0.0;
-        if (cellRejected(cell, clear)) {
-          clearKept = std::min(clearKept, clear - moved);
-          kept.cellMargin = lowered(clear - moved);
-          continue;
-        }
-        kept.cellMargin = -lowered(clear - moved);
-      }
-      for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
-        const std::uint32_t j = k - cell.begin;
-        if (j < kSlots && movedBound < double(kept.nodeMargin[j])) {
-          clearKept = std::min(clearKept, double(kept.nodeMargin[j]));
-          continue;
-        }
-        ++tested;
-        const double m = testNode(k) - moved;
-        clearKept = std::min(clearKept, m);
-        if (j < kSlots) kept.nodeMargin[j] = lowered(m);
-      }
+      ++tested;
+      const double m = testNode(k) - measuredLoss;
+      clearLeaves = std::min(clearLeaves, m);
+      if (j < kSlots) kept.nodeMargin[j] = lowered(m);
     }
-    made = *previous;
-    made.clearance = std::min(previous->restClearance, clearKept);
+    buf.leaves.push_back(kept);
+  };
+  if (!rebase) {
+    // A leaf walk: the frontier holds, as it is.
+    buf.frontier.insert(buf.frontier.end(), oldFrontier.begin(), oldFrontier.end());
+    clearFrontier = previous->restClearance;
+    for (const detail::KeptLeaf& old : oldLeaves) retestLeaf(old);
     ++buf.leafWalks;
   } else {
-    // The whole tree, keeping the leaves that survive and their margins.
-    buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
-      const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
-      // (The cubic path appends a copy: see the node records above.)
-      if constexpr (Cubic) {
-        buf.leaves.push_back(detail::KeptLeaf{});
+    // Both lists in tree order (by their cells' first nodes), so the new
+    // lists and the contacts come out in tree order too.
+    std::size_t f = 0, l = 0;
+    while (f < oldFrontier.size() || l < oldLeaves.size()) {
+      if (l == oldLeaves.size() ||
+          (f < oldFrontier.size() && tree.cells[oldFrontier[f].cell].begin < tree.cells[oldLeaves[l].cell].begin)) {
+        const detail::RejectedCell& old = oldFrontier[f++];
+        if (movedBound < double(old.margin)) {
+          addFrontier(old.cell, double(old.margin) - carried);
+        } else {
+          buf.cellChecks += walkTree<D>(tree, reject, keepLeaf, old.cell);
+        }
       } else {
-        buf.leaves.emplace_back();
+        retestLeaf(oldLeaves[l++]);
       }
-      detail::KeptLeaf& kept = buf.leaves.back();
-      kept.cell = index;
-      kept.cellMargin = -lowered(passed);
-      tested += cell.end - cell.begin;
-      for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
-        const double m = testNode(k);
-        clearNodes = std::min(clearNodes, m);
-        const std::uint32_t j = k - cell.begin;
-        if (j < kSlots) kept.nodeMargin[j] = lowered(m);
-      }
-    });
-    made = {key->owner, key->other, &owner, &other, map, shift, std::min(clearCells, clearNodes), clearCells};
+    }
+    if (previous) ++buf.frontierWalks;
   }
-  if (buf.nodes.size() > first) made.clearance = 0.0;
+  detail::Certificate<D> made = previous ? *previous : detail::Certificate<D>{};
+  if (rebase) {
+    made.owner = key->owner;
+    made.other = key->other;
+    made.ownerShape = &owner;
+    made.otherShape = &other;
+    made.map = map;
+    made.shift = shift;
+  }
+  made.restClearance = clearFrontier;
+  made.clearance = buf.nodes.size() > first ? 0.0 : std::min(clearFrontier, clearLeaves);
   made.leafThread = key->thread;
   made.leafFirst = leafFirst;
   made.leafCount = std::uint32_t(buf.leaves.size()) - leafFirst;
-  if (made.restClearance > kCertificateSlack) {
-    *key->out = made;
-  } else {
-    buf.leaves.resize(leafFirst);
-  }
+  made.frontierFirst = frontierFirst;
+  made.frontierCount = std::uint32_t(buf.frontier.size()) - frontierFirst;
+  if (!previous) made.wholeEntries = made.leafCount + made.frontierCount;
+  *key->out = made;
   sortByNode(buf, first);
   return tested;
 }
@@ -1046,8 +1113,11 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     buf.cellChecks = 0;
     buf.certifiedWalks = 0;
     buf.leafWalks = 0;
+    buf.frontierWalks = 0;
     std::swap(buf.leaves, buf.previousLeaves);
     buf.leaves.clear();
+    std::swap(buf.frontier, buf.previousFrontier);
+    buf.frontier.clear();
   }
   // Every particle's rotation matrix, once (a pair task reads two).
   rotations_.resize(n);
@@ -1065,7 +1135,7 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     certificateOrder_.clear();
     if (certificatePairs_ != pairs) {
       for (std::uint32_t q = 0; q < previousCertificates_.size(); ++q) {
-        if (previousCertificates_[q].restClearance > 0.0) certificateOrder_.push_back(q);
+        if (previousCertificates_[q].ownerShape) certificateOrder_.push_back(q);
       }
       std::sort(certificateOrder_.begin(), certificateOrder_.end(), [&](std::uint32_t x, std::uint32_t y) {
         return certificateLess(previousCertificates_[x], previousCertificates_[y].owner, previousCertificates_[y].other);
@@ -1075,15 +1145,18 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   }
   // The walk (owner in other) of task k's slot `slot`: its last certificate, its slot for this step's.
   const auto certificateKey = [&](std::size_t slot, std::uint64_t owner, std::uint64_t other) {
-    CertificateKey<D> key{owner, other, nullptr, nullptr, &certificates_[slot], std::uint32_t(threadIndex())};
-    key.out->restClearance = 0.0;
-    // A certificate whose leaves are still there (the thread count may have changed).
+    CertificateKey<D> key{owner, other, nullptr, nullptr, nullptr, &certificates_[slot], std::uint32_t(threadIndex())};
+    key.out->ownerShape = nullptr;
+    // A certificate whose lists are still there (the thread count may have changed).
     const auto matches = [&](const detail::Certificate<D>& c) {
-      if (!(c.restClearance > 0.0) || c.owner != owner || c.other != other) return false;
+      if (!c.ownerShape || c.owner != owner || c.other != other) return false;
       if (c.leafThread >= threads_.size()) return false;
       const auto& leaves = threads_[c.leafThread].previousLeaves;
+      const auto& frontier = threads_[c.leafThread].previousFrontier;
       if (std::size_t(c.leafFirst) + c.leafCount > leaves.size()) return false;
+      if (std::size_t(c.frontierFirst) + c.frontierCount > frontier.size()) return false;
       key.previousLeaves = leaves.data() + c.leafFirst;
+      key.previousFrontier = frontier.data() + c.frontierFirst;
       return true;
     };
     if (slot < previousCertificates_.size() && matches(previousCertificates_[slot])) {
@@ -1476,11 +1549,13 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   cellChecks_ = 0;
   certifiedWalks_ = 0;
   leafWalks_ = 0;
+  frontierWalks_ = 0;
   for (const ThreadBuffers<D>& buf : threads_) {
     nodeChecks_ += buf.nodeChecks;
     cellChecks_ += buf.cellChecks;
     certifiedWalks_ += buf.certifiedWalks;
     leafWalks_ += buf.leafWalks;
+    frontierWalks_ += buf.frontierWalks;
   }
 
   // The marks of nodes born this step are used.
@@ -1513,7 +1588,8 @@ std::size_t ContactSolver<D>::recordBytes() const {
                       bytes(historyKeys_) + bytes(history_);
   for (const ThreadBuffers<D>& buf : threads_) {
     total += bytes(buf.pairs) + bytes(buf.dashpots) + bytes(buf.nodes) + bytes(buf.work) + bytes(buf.shear) +
-             bytes(buf.preload) + bytes(buf.keys) + bytes(buf.leaves) + bytes(buf.previousLeaves);
+             bytes(buf.preload) + bytes(buf.keys) + bytes(buf.leaves) + bytes(buf.previousLeaves) +
+             bytes(buf.frontier) + bytes(buf.previousFrontier);
   }
   return total;
 }

@@ -63,7 +63,8 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
       .field("node_checks_last_step", static_cast<long long>(contacts.nodeChecks()))
       .field("cell_checks_last_step", static_cast<long long>(contacts.cellChecks()))
       .field("certified_walks_last_step", static_cast<long long>(contacts.certifiedWalks()))
-      .field("leaf_walks_last_step", static_cast<long long>(contacts.leafWalks()));
+      .field("leaf_walks_last_step", static_cast<long long>(contacts.leafWalks()))
+      .field("frontier_walks_last_step", static_cast<long long>(contacts.frontierWalks()));
 
   // Mass: what is in the world and what left it.
   w.key("mass").beginObject()

@@ -433,7 +433,7 @@ void checkCertificatesExact(const ContactLawDef& law = {}) {
   std::uint64_t spared = 0;
   std::size_t passesTouching = 0;
   const auto pairs = allPairs(p);
-  std::uint64_t leafOnly = 0;
+  std::uint64_t leafOnly = 0, frontier = 0;
   for (int pass = 0; pass < 200; ++pass) {
     const double step = pass < 150 ? 1.0 : 0.01;
     for (std::size_t i = 0; i < p.size(); ++i) {
@@ -455,18 +455,22 @@ void checkCertificatesExact(const ContactLawDef& law = {}) {
     without.compute(p, pairs, {}, tools, 1e-6);
     spared += with.certifiedWalks();
     leafOnly += with.leafWalks();
+    frontier += with.frontierWalks();
     EXPECT_EQ(without.leafWalks(), 0u);
+    EXPECT_EQ(without.frontierWalks(), 0u);
     EXPECT_EQ(without.certifiedWalks(), 0u);
     ASSERT_TRUE(sameContacts(with.nodeContacts(), without.nodeContacts())) << "pass " << pass;
     passesTouching += !with.nodeContacts().empty();
   }
   EXPECT_GT(spared, 100u);
   EXPECT_GT(leafOnly, 100u);
+  EXPECT_GT(frontier, 1000u);  // moves beyond the frontier's least margin: walked again only where used up
   EXPECT_GT(passesTouching, 60u);
   EXPECT_GT(with.toolContacts().size(), 0u);  // the ring closed onto the tool
   EXPECT_LT(passesTouching, 190u);  // apart at first: the contacts appear while certificates are in use
   ::testing::Test::RecordProperty("spared_walks", std::to_string(spared));
   ::testing::Test::RecordProperty("leaf_walks", std::to_string(leafOnly));
+  ::testing::Test::RecordProperty("frontier_walks", std::to_string(frontier));
 }
 
 TEST(NarrowPhase, SeparationCertificatesAreExact2D) { checkCertificatesExact<2>(); }

@@ -34,7 +34,10 @@ TEST(RunSummary, ListsDeclaredEffectsStagesAndBudget) {
   EXPECT_NE(json.find(contacts), std::string::npos);
   const std::string certified =
       "\"certified_walks_last_step\": " + std::to_string(world.contacts().certifiedWalks()) + ",";
-  const std::string leafOnly = "\"leaf_walks_last_step\": " + std::to_string(world.contacts().leafWalks());
+  const std::string leafOnly = "\"leaf_walks_last_step\": " + std::to_string(world.contacts().leafWalks()) + ",";
+  const std::string frontier =
+      "\"frontier_walks_last_step\": " + std::to_string(world.contacts().frontierWalks());
+  EXPECT_NE(json.find(frontier), std::string::npos) << json;
   EXPECT_NE(json.find(certified), std::string::npos) << json;
   EXPECT_NE(json.find(leafOnly), std::string::npos) << json;
   EXPECT_NE(json.find("\"name\": \"gravity\""), std::string::npos);

@@ -131,20 +131,32 @@ struct KeptLeaf {
   std::array<float, kNodeSlots> nodeMargin{};
 };
 
+/// A tree cell a certified walk rejected (internal; Certificate): how far
+/// the owner may move, in cells of the other's grid and relative to the
+/// certificate's map, before the cell's test could pass.
+struct RejectedCell {
+  std::uint32_t cell = 0;
+  float margin = 0.0f;
+};
+
 /// A separation certificate (internal; ContactSolver::setSeparationCertificates):
 /// when the composed map of the walk of `owner`'s nodes against `other`'s
-/// level set (owner body -> other's grid cells) was (map, shift), every node
-/// outside the walk's surviving leaves was rejected with a margin: none of
-/// them can reach the other body, nor its grid box or bounding sphere,
-/// before some point of the owner moves `restClearance` cells relative to
-/// that grid; while it has moved less, testing the nodes of those leaves
-/// (`leafCount` tree cells from `leafFirst` of thread `leafThread`'s leaf
-/// list) finds every contact. A leaf's cell or node whose margin (kept
-/// with the leaves: a lower bound of how far it was from passing its test
-/// at `map`) exceeds the move cannot pass it either, and is not tested.
-/// When the walk found no contact, no node at all can
-/// reach it before a move of `clearance` cells (0: it found one) and the
-/// walk is spared. A restClearance of 0: no certificate.
+/// level set (owner body -> other's grid cells) was (map, shift), the node
+/// tree was covered by two lists, in tree order: the frontier (cells whose
+/// test rejected them, `frontierCount` from `frontierFirst` of thread
+/// `leafThread`'s frontier list, each with its margin) and the leaves kept
+/// (`leafCount` from `leafFirst` of its leaf list, with their cells' and
+/// nodes' margins). A margin is a lower bound of how far every point of
+/// the cell (node) must move relative to that grid before its test could
+/// pass. So while the owner has moved less than `restClearance` (the
+/// frontier's least margin), testing the kept leaves finds every contact; a
+/// leaf's cell or node whose margin exceeds the move cannot pass its test
+/// either, and is not tested. Once it has moved more, only the frontier
+/// cells whose margins it exceeds are walked again (a frontier walk: the
+/// certificate is then re-made at the new map, with what was not tested
+/// keeping its margin less the move). When the walk found no contact, no
+/// node at all can reach the other before a move of `clearance` cells (0:
+/// it found one) and the walk is spared. `ownerShape` null: no certificate.
 template <int D>
 struct Certificate {
   std::uint64_t owner = 0, other = 0;  ///< global ids, in the walk's direction
@@ -155,6 +167,11 @@ struct Certificate {
   double clearance = 0.0;      ///< cells of the other's grid
   double restClearance = 0.0;  ///< cells of the other's grid
   std::uint32_t leafThread = 0, leafFirst = 0, leafCount = 0;
+  std::uint32_t frontierFirst = 0, frontierCount = 0;
+  /// Entries (frontier and kept leaves) of the last whole walk: a frontier
+  /// walk refines the lists and never coarsens them, so once they hold more
+  /// than twice as many the tree is walked whole again.
+  std::uint32_t wholeEntries = 0;
 };
 
 /// The allocator of the solver's record arrays (internal): a resize leaves
@@ -204,9 +221,11 @@ struct alignas(64) ThreadBuffers {
   std::uint64_t cellChecks = 0;  ///< node-tree cells tested (bulk rejection)
   std::uint64_t certifiedWalks = 0;  ///< walks a separation certificate spared
   std::uint64_t leafWalks = 0;       ///< walks that tested only the leaves a certificate kept
-  /// The leaves the certificates made this step keep (and the last
-  /// step's, read by any thread this step).
+  std::uint64_t frontierWalks = 0;   ///< walks that tested the kept leaves and part of a certificate's frontier
+  /// The leaves and frontiers of the certificates made this step (and the
+  /// last step's, read by any thread this step).
   std::vector<KeptLeaf> leaves, previousLeaves;
+  std::vector<RejectedCell> frontier, previousFrontier;
   // Scratch of sortByNode.
   std::vector<std::uint32_t> order;
   std::vector<NodeContact<D>> nodeScratch;
@@ -358,6 +377,10 @@ class ContactSolver {
   /// @brief Node walks that tested only the tree leaves a certificate kept
   /// (the rest of the tree certified clear) in the last compute().
   std::uint64_t leafWalks() const { return leafWalks_; }
+  /// @brief Node walks that tested the kept leaves and walked again only the
+  /// part of the tree a certificate had rejected whose margins the motion
+  /// had used up, in the last compute().
+  std::uint64_t frontierWalks() const { return frontierWalks_; }
 
   /// @brief Computes the node contacts and forces of the candidate pairs, of
   /// every particle against every plane and against every tool, at the current
@@ -571,7 +594,7 @@ class ContactSolver {
   std::vector<detail::Certificate<D>> certificates_, previousCertificates_;
   std::vector<std::array<std::uint32_t, 2>> certificatePairs_;  // the pairs certificates_ was made for
   std::vector<std::uint32_t> certificateOrder_;
-  std::uint64_t certifiedWalks_ = 0, leafWalks_ = 0;
+  std::uint64_t certifiedWalks_ = 0, leafWalks_ = 0, frontierWalks_ = 0;
   std::size_t particlePairCount_ = 0, planePairCount_ = 0;
   std::size_t particleCount_ = 0, planeCount_ = 0, toolCount_ = 0;
   double elasticEnergy_ = 0.0, dissipatedPower_ = 0.0;
