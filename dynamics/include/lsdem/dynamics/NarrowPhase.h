@@ -37,7 +37,8 @@
 /// that found nothing, and the parts of walks that rejected, are not repeated
 /// while the bodies have moved less than the margin they measured
 /// (separation certificates; down to single nodes of the leaves kept, see
-/// Certificate). Only the
+/// Certificate); once they have moved more, only the rejected cells whose
+/// own margins the move used up are walked again (frontier walks). Only the
 /// nodes of the leaves that remain are tested one by one: one D x D
 /// matrix-vector product, a bounding-sphere test, a grid-box test and, only
 /// for nodes near the other body, one multilinear look-up. The test is exact,
