@@ -483,6 +483,58 @@ TEST(NarrowPhase, SeparationCertificatesAreExactTricubic3D) {
   checkCertificatesExact<3>(law);
 }
 
+// Frontier walks over a long path: a grain rolled around another, touching
+// it nearly all the way (in 3D on a spiral from pole to pole), so the
+// contact moves over both surfaces and the walks refine their frontiers and
+// kept leaves where it passed, until (3D) the growth guard walks the trees
+// whole again. The contacts equal those of a solver without certificates,
+// bit for bit, at every pass.
+template <int D>
+void checkFrontierWalksAroundAGrain() {
+  Particles<D> p;
+  ParticleDef<D> def;
+  def.shape = grain<D>(5);
+  p.add(def);
+  def.shape = grain<D>(6);
+  p.add(def);
+  ContactSolver<D> with(ContactLawDef{}), without(ContactLawDef{});
+  without.setSeparationCertificates(false);
+  const PairList pairs{{0, 1}};
+  std::uint64_t walks = 0, frontier = 0, others = 0;
+  std::size_t touching = 0;
+  constexpr int kPasses = 600;
+  for (int pass = 0; pass < kPasses; ++pass) {
+    const double t = double(pass) / kPasses;
+    const double angle = 6.0 * std::numbers::pi * t;  // three turns
+    Vec<D> direction = Vec<D>::Zero();
+    if constexpr (D == 2) {
+      direction << std::cos(angle), std::sin(angle);
+      p.orientation[1] = 2.0 * angle;
+    } else {
+      const double polar = std::numbers::pi * (0.1 + 0.8 * t);
+      direction << std::sin(polar) * std::cos(angle), std::sin(polar) * std::sin(angle), std::cos(polar);
+      p.orientation[1] = Eigen::Quaterniond(Eigen::AngleAxisd(2.0 * angle, Vec<3>(0.3, 0.2, 1.0).normalized()));
+    }
+    // In and out by up to 0.6 cells, so contacts come and go along the way.
+    p.position[1] = (0.86 + 0.06 * std::sin(40.0 * angle)) * direction;
+    with.compute(p, pairs, {}, {}, 1e-6);
+    without.compute(p, pairs, {}, {}, 1e-6);
+    ASSERT_TRUE(sameContacts(with.nodeContacts(), without.nodeContacts())) << "pass " << pass;
+    touching += !with.nodeContacts().empty();
+    if (pass > 0) {
+      walks += 2;
+      frontier += with.frontierWalks();
+      others += with.certifiedWalks() + with.leafWalks() + with.frontierWalks();
+    }
+  }
+  EXPECT_GT(touching, std::size_t(kPasses * 3 / 4));
+  EXPECT_GT(frontier, walks / 2);  // most walks after the first start from the frontier
+  if constexpr (D == 3) EXPECT_GT(walks - others, 0u);  // and the growth guard walked some whole again
+}
+
+TEST(NarrowPhase, FrontierWalksAroundAGrain2D) { checkFrontierWalksAroundAGrain<2>(); }
+TEST(NarrowPhase, FrontierWalksAroundAGrain3D) { checkFrontierWalksAroundAGrain<3>(); }
+
 // The tricubic look-up's contacts are exactly those of testing every node
 // of every pair against the other body's Catmull-Rom interpolant: the
 // bulk rejection (multilinear, lowered by Shape::cubicMargin) and the cubic
