@@ -439,7 +439,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // margin 0.
   //
   // Rebasing: a walk whose move reaches the frontier's least margin walks
-  // again the frontier cells whose margins it reaches, and the certificate
+  // again the frontier cells whose margins it reaches (or one more move as
+  // large would, below), and the certificate
   // is re-made at this step's map; what is not tested keeps its margin less
   // the move (a point that moves d from here has moved at most d + moved
   // from the old map). Otherwise (a leaf walk) the frontier stays as it is
@@ -564,8 +565,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
           (f < oldFrontier.size() && tree.cells[oldFrontier[f].cell].begin < tree.cells[oldLeaves[l].cell].begin)) {
         const detail::RejectedCell& old = oldFrontier[f++];
         // (Also walked again when one more move as large would use its
-        // margin up: measured afresh, a margin is larger than one carried
-        // less the move's bound, and the certificate holds longer. The
+        // margin up: measured afresh, a margin is mostly larger than one
+        // carried less the move's bound, and the certificate holds longer. The
         // discharge: 3.5-5 % less time than walking only those used up.)
         if (movedBound + moved < double(old.margin)) {
           addFrontier(old.cell, double(old.margin) - carried);

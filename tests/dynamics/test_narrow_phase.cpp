@@ -464,7 +464,7 @@ void checkCertificatesExact(const ContactLawDef& law = {}) {
   }
   EXPECT_GT(spared, 100u);
   EXPECT_GT(leafOnly, 100u);
-  EXPECT_GT(frontier, 1000u);  // moves beyond the frontier's least margin: walked again only where used up
+  EXPECT_GT(frontier, 1000u);  // moves beyond the frontier's least margin: only part of the tree walked again
   EXPECT_GT(passesTouching, 60u);
   EXPECT_GT(with.toolContacts().size(), 0u);  // the ring closed onto the tool
   EXPECT_LT(passesTouching, 190u);  // apart at first: the contacts appear while certificates are in use
@@ -529,11 +529,114 @@ void checkFrontierWalksAroundAGrain() {
   }
   EXPECT_GT(touching, std::size_t(kPasses * 3 / 4));
   EXPECT_GT(frontier, walks / 2);  // most walks after the first start from the frontier
-  if constexpr (D == 3) EXPECT_GT(walks - others, 0u);  // and the growth guard walked some whole again
+  if constexpr (D == 3) {
+    EXPECT_GT(walks - others, 0u);  // and the growth guard walked some whole again
+  }
 }
 
 TEST(NarrowPhase, FrontierWalksAroundAGrain2D) { checkFrontierWalksAroundAGrain<2>(); }
 TEST(NarrowPhase, FrontierWalksAroundAGrain3D) { checkFrontierWalksAroundAGrain<3>(); }
+
+// Certificates under random motion: twelve grains about a turning tool,
+// each step in one of five regimes (at rest, jitter of 1e-4, 3e-3, 0.02 or
+// 0.1 grain diameters with turns to match, so moves go back and forth and
+// from far below to far above the margins), pulled back towards a ring that
+// breathes in and out; the pair list is sometimes every pair, sometimes
+// shuffled (certificates found by ids, not slots), the tool's pairs
+// sometimes limited, and each step runs on 1 to 3 threads (lists made on
+// one thread read on another). Contacts equal those without certificates,
+// bit for bit, at every step.
+template <int D>
+void checkCertificatesUnderRandomMotion(std::uint64_t seed, int steps) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0), u01(0.0, 1.0);
+  const auto shapes = std::array{grain<D>(1), grain<D>(2), grain<D>(3)};
+  const auto hub = grain<D>(4);
+  Particles<D> p;
+  std::vector<Vec<D>> ring;
+  for (int i = 0; i < 12; ++i) {
+    ParticleDef<D> def;
+    def.shape = shapes[std::size_t(i) % 3];
+    def.position = Vec<D>::Zero();
+    def.position[0] = 1.6 * std::cos(2.0 * std::numbers::pi * i / 12.0);
+    def.position[1] = 1.6 * std::sin(2.0 * std::numbers::pi * i / 12.0);
+    def.orientation = randomOrientation<D>(rng);
+    ring.push_back(def.position);
+    p.add(def);
+  }
+  std::vector<ToolPose<D>> tools(1);
+  tools[0].shape = hub.get();
+  ContactSolver<D> with(ContactLawDef{}), without(ContactLawDef{});
+  without.setSeparationCertificates(false);
+  std::vector<std::array<std::uint64_t, 2>> limit;
+  std::uint64_t contacts = 0, frontier = 0, leaf = 0, spared = 0;
+#ifdef _OPENMP
+  const int threadsBefore = omp_get_max_threads();
+#endif
+  for (int step = 0; step < steps; ++step) {
+    const double r = u01(rng);
+    const double amplitude = r < 0.2 ? 0.0 : r < 0.5 ? 1e-4 : r < 0.8 ? 3e-3 : r < 0.95 ? 0.02 : 0.1;
+    const double breathing = 0.75 + 0.2 * std::sin(0.02 * step);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      p.position[i] += randomVector<D>(rng, amplitude);
+      p.position[i] += 0.05 * (breathing * ring[i] - p.position[i]);
+      if constexpr (D == 2) {
+        p.orientation[i] += 3.0 * amplitude * u(rng);
+      } else {
+        const Vec<3> axis = Vec<3>(u(rng), u(rng), u(rng)).normalized();
+        p.orientation[i] = (p.orientation[i] * Eigen::Quaterniond(Eigen::AngleAxisd(3.0 * amplitude * u(rng), axis)))
+                               .normalized();
+      }
+    }
+    if constexpr (D == 2) {
+      tools[0].orientation += 2.0 * amplitude * u(rng);
+    } else {
+      tools[0].orientation =
+          (tools[0].orientation * Eigen::Quaterniond(Eigen::AngleAxisd(2.0 * amplitude * u(rng), Vec<3>::UnitX())))
+              .normalized();
+    }
+    PairList pairs = u01(rng) < 0.5 ? allPairs(p) : PairList{};
+    if (pairs.empty()) {
+      for (std::uint32_t i = 0; i < p.size(); ++i) {
+        for (std::uint32_t j = i + 1; j < p.size(); ++j) pairs.push_back({i, j});
+      }
+    }
+    if (u01(rng) < 0.3) std::shuffle(pairs.begin(), pairs.end(), rng);
+    if (u01(rng) < 0.3) {
+      limit.clear();
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        if (u01(rng) < 0.5) limit.push_back({p.id[i], 0});
+      }
+      with.limitToolPairs(std::span<const std::array<std::uint64_t, 2>>(limit));
+      without.limitToolPairs(std::span<const std::array<std::uint64_t, 2>>(limit));
+    } else {
+      with.limitToolPairs(std::nullopt);
+      without.limitToolPairs(std::nullopt);
+    }
+    const int threads = 1 + int(rng() % 3);
+#ifdef _OPENMP
+    omp_set_num_threads(threads);
+#endif
+    (void)threads;
+    with.compute(p, pairs, {}, tools, 1e-6);
+    without.compute(p, pairs, {}, tools, 1e-6);
+    ASSERT_TRUE(sameContacts(with.nodeContacts(), without.nodeContacts())) << "step " << step;
+    contacts += without.nodeContacts().size();
+    frontier += with.frontierWalks();
+    leaf += with.leafWalks();
+    spared += with.certifiedWalks();
+  }
+#ifdef _OPENMP
+  omp_set_num_threads(threadsBefore);
+#endif
+  EXPECT_GT(contacts, std::uint64_t(steps) * 20);  // the grains touch each other and the tool
+  EXPECT_GT(frontier, std::uint64_t(steps));
+  EXPECT_GT(leaf, std::uint64_t(steps));
+  EXPECT_GT(spared, std::uint64_t(steps));
+}
+
+TEST(NarrowPhase, CertificatesStayExactUnderRandomMotion2D) { checkCertificatesUnderRandomMotion<2>(1, 300); }
+TEST(NarrowPhase, CertificatesStayExactUnderRandomMotion3D) { checkCertificatesUnderRandomMotion<3>(2, 120); }
 
 // The tricubic look-up's contacts are exactly those of testing every node
 // of every pair against the other body's Catmull-Rom interpolant: the

@@ -38,7 +38,8 @@
 /// while the bodies have moved less than the margin they measured
 /// (separation certificates; down to single nodes of the leaves kept, see
 /// Certificate); once they have moved more, only the rejected cells whose
-/// own margins the move used up are walked again (frontier walks). Only the
+/// own margins the move used up (or one more move as large would) are
+/// walked again (frontier walks). Only the
 /// nodes of the leaves that remain are tested one by one: one D x D
 /// matrix-vector product, a bounding-sphere test, a grid-box test and, only
 /// for nodes near the other body, one multilinear look-up. The test is exact,
@@ -153,7 +154,8 @@ struct RejectedCell {
 /// frontier's least margin), testing the kept leaves finds every contact; a
 /// leaf's cell or node whose margin exceeds the move cannot pass its test
 /// either, and is not tested. Once it has moved more, only the frontier
-/// cells whose margins it exceeds are walked again (a frontier walk: the
+/// cells whose margins it exceeds (or one more move as large would) are
+/// walked again (a frontier walk: the
 /// certificate is then re-made at the new map, with what was not tested
 /// keeping its margin less the move). When the walk found no contact, no
 /// node at all can reach the other before a move of `clearance` cells (0:
@@ -378,9 +380,10 @@ class ContactSolver {
   /// @brief Node walks that tested only the tree leaves a certificate kept
   /// (the rest of the tree certified clear) in the last compute().
   std::uint64_t leafWalks() const { return leafWalks_; }
-  /// @brief Node walks that tested the kept leaves and walked again only the
-  /// part of the tree a certificate had rejected whose margins the motion
-  /// had used up, in the last compute().
+  /// @brief Node walks past the least margin of their certificate's
+  /// frontier in the last compute(): they tested the kept leaves and walked
+  /// again only the frontier cells whose margins the motion had used up
+  /// (or nearly: see collectLevelSet), none when every margin held.
   std::uint64_t frontierWalks() const { return frontierWalks_; }
 
   /// @brief Computes the node contacts and forces of the candidate pairs, of
