@@ -490,6 +490,12 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     addFrontier(std::uint32_t(&cell - tree.cells.data()), clear - measuredLoss);
     return true;
   };
+  // Node k (slot j of its leaf `kept`) tested now: its margin kept.
+  const auto testKept = [&](detail::KeptLeaf& kept, std::uint32_t k, std::uint32_t j) {
+    const double m = testNode(k) - measuredLoss;
+    clearLeaves = std::min(clearLeaves, m);
+    if (j < kSlots) kept.nodeMargin[j] = lowered(m);
+  };
   const auto keepLeaf = [&](std::uint32_t index) {
     const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
     // (The cubic path appends a copy: see the node records above.)
@@ -502,12 +508,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     kept.cell = index;
     kept.cellMargin = -lowered(passed - measuredLoss);
     tested += cell.end - cell.begin;
-    for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
-      const double m = testNode(k) - measuredLoss;
-      clearLeaves = std::min(clearLeaves, m);
-      const std::uint32_t j = k - cell.begin;
-      if (j < kSlots) kept.nodeMargin[j] = lowered(m);
-    }
+    for (std::uint32_t k = cell.begin; k < cell.end; ++k) testKept(kept, k, k - cell.begin);
   };
   // A kept leaf: its cell and nodes tested where their margins do not hold.
   // Rebasing, a leaf whose cell is rejected joins the frontier.
@@ -544,9 +545,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         continue;
       }
       ++tested;
-      const double m = testNode(k) - measuredLoss;
-      clearLeaves = std::min(clearLeaves, m);
-      if (j < kSlots) kept.nodeMargin[j] = lowered(m);
+      testKept(kept, k, j);
     }
     buf.leaves.push_back(kept);
   };
