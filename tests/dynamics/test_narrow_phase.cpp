@@ -595,8 +595,11 @@ void checkCertificatesUnderRandomMotion(std::uint64_t seed, int steps) {
           (tools[0].orientation * Eigen::Quaterniond(Eigen::AngleAxisd(2.0 * amplitude * u(rng), Vec<3>::UnitX())))
               .normalized();
     }
-    PairList pairs = u01(rng) < 0.5 ? allPairs(p) : PairList{};
-    if (pairs.empty()) {
+    // The broad phase's list, or every pair (certificates of pairs apart).
+    PairList pairs;
+    if (u01(rng) < 0.5) {
+      pairs = allPairs(p);
+    } else {
       for (std::uint32_t i = 0; i < p.size(); ++i) {
         for (std::uint32_t j = i + 1; j < p.size(); ++j) pairs.push_back({i, j});
       }
