@@ -544,7 +544,9 @@ TEST(NarrowPhase, FrontierWalksAroundAGrain3D) { checkFrontierWalksAroundAGrain<
 // breathes in and out; the pair list is sometimes every pair, sometimes
 // shuffled (certificates found by ids, not slots), the tool's pairs
 // sometimes limited, and each step runs on 1 to 3 threads (lists made on
-// one thread read on another). Contacts equal those without certificates,
+// one thread read on another). Three planes: one under the ring, moving
+// up and down and tilting, one at its side that breathes with it, one
+// out of reach of every grain. Contacts equal those without certificates,
 // bit for bit, at every step.
 template <int D>
 void checkCertificatesUnderRandomMotion(std::uint64_t seed, int steps) {
@@ -566,10 +568,12 @@ void checkCertificatesUnderRandomMotion(std::uint64_t seed, int steps) {
   }
   std::vector<ToolPose<D>> tools(1);
   tools[0].shape = hub.get();
+  std::vector<Plane<D>> planes(3);
+  planes[2].point[1] = 10.0;  // out of reach
   ContactSolver<D> with(ContactLawDef{}), without(ContactLawDef{});
   without.setSeparationCertificates(false);
   std::vector<std::array<std::uint64_t, 2>> limit;
-  std::uint64_t contacts = 0, frontier = 0, leaf = 0, spared = 0;
+  std::uint64_t contacts = 0, planeContacts = 0, frontier = 0, leaf = 0, spared = 0;
 #ifdef _OPENMP
   const int threadsBefore = omp_get_max_threads();
 #endif
@@ -595,6 +599,14 @@ void checkCertificatesUnderRandomMotion(std::uint64_t seed, int steps) {
           (tools[0].orientation * Eigen::Quaterniond(Eigen::AngleAxisd(2.0 * amplitude * u(rng), Vec<3>::UnitX())))
               .normalized();
     }
+    planes[0].normal = Vec<D>::UnitY();
+    planes[0].normal[0] = 0.1 * std::sin(0.03 * step) + amplitude * u(rng);
+    planes[0].normal.normalize();
+    planes[0].point = Vec<D>::Zero();
+    planes[0].point[1] = -1.6 * breathing - 0.2 + 0.05 * std::sin(0.1 * step) + amplitude * u(rng);
+    planes[1].normal = -Vec<D>::UnitX();
+    planes[1].point = Vec<D>::Zero();
+    planes[1].point[0] = 1.6 * breathing + 0.3;
     // The broad phase's list, or every pair (certificates of pairs apart).
     PairList pairs;
     if (u01(rng) < 0.5) {
@@ -621,10 +633,11 @@ void checkCertificatesUnderRandomMotion(std::uint64_t seed, int steps) {
     omp_set_num_threads(threads);
 #endif
     (void)threads;
-    with.compute(p, pairs, {}, tools, 1e-6);
-    without.compute(p, pairs, {}, tools, 1e-6);
+    with.compute(p, pairs, planes, tools, 1e-6);
+    without.compute(p, pairs, planes, tools, 1e-6);
     ASSERT_TRUE(sameContacts(with.nodeContacts(), without.nodeContacts())) << "step " << step;
     contacts += without.nodeContacts().size();
+    planeContacts += without.planeContacts().size();
     frontier += with.frontierWalks();
     leaf += with.leafWalks();
     spared += with.certifiedWalks();
@@ -633,6 +646,7 @@ void checkCertificatesUnderRandomMotion(std::uint64_t seed, int steps) {
   omp_set_num_threads(threadsBefore);
 #endif
   EXPECT_GT(contacts, std::uint64_t(steps) * 20);  // the grains touch each other and the tool
+  EXPECT_GT(planeContacts, std::uint64_t(steps));  // and the two planes in reach
   EXPECT_GT(frontier, std::uint64_t(steps));
   EXPECT_GT(leaf, std::uint64_t(steps));
   EXPECT_GT(spared, std::uint64_t(steps));
@@ -718,6 +732,61 @@ void checkNodeMargins() {
 
 TEST(NarrowPhase, NodeMarginsSpareClearNodes2D) { checkNodeMargins<2>(); }
 TEST(NarrowPhase, NodeMarginsSpareClearNodes3D) { checkNodeMargins<3>(); }
+
+// Plane certificates: grains pressed 0.15 into a floor (and one 2 above
+// it, out of reach), each step moving by 1e-3 (far below a cell) and
+// back, then lifted off the floor by 0.3 at once. Every plane walk after
+// the first is a leaf walk that tests only the nodes in contact, and no
+// tree cell; lifted clear, the first walk is a frontier walk and the ones
+// after it are spared whole. Contacts equal those of a solver without
+// certificates, bit for bit, at every step.
+template <int D>
+void checkPlaneCertificates() {
+  Particles<D> p;
+  for (int i = 0; i < 4; ++i) {
+    ParticleDef<D> def;
+    def.shape = grain<D>(std::uint64_t(i + 1));
+    def.position = Vec<D>::Zero();
+    def.position[0] = 3.0 * i;
+    def.position[1] = i == 3 ? 2.0 : 0.0;
+    p.add(def);
+  }
+  // The floor: 0.15 below each grain's lowest node.
+  double lowest = 0.0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    for (const Vec<D>& x : p.shape[i]->nodes().positions) lowest = std::min(lowest, x[1]);
+  }
+  std::vector<Plane<D>> planes(1);
+  planes[0].point[1] = lowest + 0.15;
+  ContactSolver<D> with(ContactLawDef{}), without(ContactLawDef{});
+  without.setSeparationCertificates(false);
+  const auto step = [&] {
+    with.compute(p, {}, planes, {}, 1e-6);
+    without.compute(p, {}, planes, {}, 1e-6);
+    EXPECT_TRUE(sameContacts(with.nodeContacts(), without.nodeContacts()));
+  };
+  step();
+  ASSERT_EQ(with.planeContacts().size(), 3u);
+  const std::uint64_t firstChecks = with.nodeChecks();
+  for (int k = 0; k < 4; ++k) {
+    p.position[0][1] += k % 2 == 0 ? 1e-3 : -1e-3;
+    step();
+    EXPECT_EQ(with.leafWalks(), 3u);
+    EXPECT_EQ(with.cellChecks(), 0u);
+    EXPECT_EQ(with.nodeChecks(), with.nodeContacts().size());
+  }
+  EXPECT_GT(firstChecks, with.nodeContacts().size());  // the first walk tested nodes clear of the floor too
+  for (std::size_t i = 0; i < 3; ++i) p.position[i][1] += 0.3;
+  step();
+  EXPECT_EQ(with.planeContacts().size(), 0u);
+  EXPECT_EQ(with.frontierWalks(), 3u);
+  step();
+  EXPECT_EQ(with.certifiedWalks(), 3u);
+  EXPECT_EQ(with.nodeChecks() + with.cellChecks(), 0u);
+}
+
+TEST(NarrowPhase, PlaneCertificatesSpareClearNodes2D) { checkPlaneCertificates<2>(); }
+TEST(NarrowPhase, PlaneCertificatesSpareClearNodes3D) { checkPlaneCertificates<3>(); }
 
 TEST(NarrowPhase, OneAndTwoThreadsAreBitwiseIdentical) {
 #ifndef _OPENMP
