@@ -733,61 +733,6 @@ void checkNodeMargins() {
 TEST(NarrowPhase, NodeMarginsSpareClearNodes2D) { checkNodeMargins<2>(); }
 TEST(NarrowPhase, NodeMarginsSpareClearNodes3D) { checkNodeMargins<3>(); }
 
-// Plane certificates: grains pressed 0.15 into a floor (and one 2 above
-// it, out of reach), each step moving by 1e-3 (far below a cell) and
-// back, then lifted off the floor by 0.3 at once. Every plane walk after
-// the first is a leaf walk that tests only the nodes in contact, and no
-// tree cell; lifted clear, the first walk is a frontier walk and the ones
-// after it are spared whole. Contacts equal those of a solver without
-// certificates, bit for bit, at every step.
-template <int D>
-void checkPlaneCertificates() {
-  Particles<D> p;
-  for (int i = 0; i < 4; ++i) {
-    ParticleDef<D> def;
-    def.shape = grain<D>(std::uint64_t(i + 1));
-    def.position = Vec<D>::Zero();
-    def.position[0] = 3.0 * i;
-    def.position[1] = i == 3 ? 2.0 : 0.0;
-    p.add(def);
-  }
-  // The floor: 0.15 below each grain's lowest node.
-  double lowest = 0.0;
-  for (std::size_t i = 0; i < 3; ++i) {
-    for (const Vec<D>& x : p.shape[i]->nodes().positions) lowest = std::min(lowest, x[1]);
-  }
-  std::vector<Plane<D>> planes(1);
-  planes[0].point[1] = lowest + 0.15;
-  ContactSolver<D> with(ContactLawDef{}), without(ContactLawDef{});
-  without.setSeparationCertificates(false);
-  const auto step = [&] {
-    with.compute(p, {}, planes, {}, 1e-6);
-    without.compute(p, {}, planes, {}, 1e-6);
-    EXPECT_TRUE(sameContacts(with.nodeContacts(), without.nodeContacts()));
-  };
-  step();
-  ASSERT_EQ(with.planeContacts().size(), 3u);
-  const std::uint64_t firstChecks = with.nodeChecks();
-  for (int k = 0; k < 4; ++k) {
-    p.position[0][1] += k % 2 == 0 ? 1e-3 : -1e-3;
-    step();
-    EXPECT_EQ(with.leafWalks(), 3u);
-    EXPECT_EQ(with.cellChecks(), 0u);
-    EXPECT_EQ(with.nodeChecks(), with.nodeContacts().size());
-  }
-  EXPECT_GT(firstChecks, with.nodeContacts().size());  // the first walk tested nodes clear of the floor too
-  for (std::size_t i = 0; i < 3; ++i) p.position[i][1] += 0.3;
-  step();
-  EXPECT_EQ(with.planeContacts().size(), 0u);
-  EXPECT_EQ(with.frontierWalks(), 3u);
-  step();
-  EXPECT_EQ(with.certifiedWalks(), 3u);
-  EXPECT_EQ(with.nodeChecks() + with.cellChecks(), 0u);
-}
-
-TEST(NarrowPhase, PlaneCertificatesSpareClearNodes2D) { checkPlaneCertificates<2>(); }
-TEST(NarrowPhase, PlaneCertificatesSpareClearNodes3D) { checkPlaneCertificates<3>(); }
-
 TEST(NarrowPhase, OneAndTwoThreadsAreBitwiseIdentical) {
 #ifndef _OPENMP
   GTEST_SKIP() << "built without OpenMP";
