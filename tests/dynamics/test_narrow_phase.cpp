@@ -85,6 +85,16 @@ PairList allPairs(const Particles<D>& p) {
   return pairs;
 }
 
+// Every pair of particles, in canonical order (ids ascend with the index).
+template <int D>
+PairList everyPair(const Particles<D>& p) {
+  PairList pairs;
+  for (std::uint32_t i = 0; i < p.size(); ++i) {
+    for (std::uint32_t j = i + 1; j < p.size(); ++j) pairs.push_back({i, j});
+  }
+  return pairs;
+}
+
 // Eight grains of three shapes on a ring of `radius` about the origin (in
 // the x-y plane), orientations drawn from `seed`.
 template <int D>
@@ -608,14 +618,7 @@ void checkCertificatesUnderRandomMotion(std::uint64_t seed, int steps) {
     planes[1].point = Vec<D>::Zero();
     planes[1].point[0] = 1.6 * breathing + 0.3;
     // The broad phase's list, or every pair (certificates of pairs apart).
-    PairList pairs;
-    if (u01(rng) < 0.5) {
-      pairs = allPairs(p);
-    } else {
-      for (std::uint32_t i = 0; i < p.size(); ++i) {
-        for (std::uint32_t j = i + 1; j < p.size(); ++j) pairs.push_back({i, j});
-      }
-    }
+    PairList pairs = u01(rng) < 0.5 ? allPairs(p) : everyPair(p);
     if (u01(rng) < 0.3) std::shuffle(pairs.begin(), pairs.end(), rng);
     if (u01(rng) < 0.3) {
       limit.clear();
@@ -662,10 +665,7 @@ TEST(NarrowPhase, CertificatesStayExactUnderRandomMotion3D) { checkCertificatesU
 template <int D>
 void checkTricubicAgainstBruteForce() {
   const Particles<D> p = ringOfGrains<D>(1.2, 5);
-  PairList pairs;
-  for (std::uint32_t i = 0; i < p.size(); ++i) {
-    for (std::uint32_t j = i + 1; j < p.size(); ++j) pairs.push_back({i, j});
-  }
+  const PairList pairs = everyPair(p);
   ContactLawDef law;
   law.interpolation = LevelSetInterpolation::Tricubic;
   ContactSolver<D> solver(law);
