@@ -144,7 +144,8 @@ struct RejectedCell {
 /// A separation certificate (internal; ContactSolver::setSeparationCertificates):
 /// when the composed map of the walk of `owner`'s nodes against `other`'s
 /// level set (owner body -> other's grid cells) was (map, shift), the node
-/// tree was covered by two lists, in tree order: the frontier (cells whose
+/// tree was covered by two lists (together every node once, in no set
+/// order): the frontier (cells whose
 /// test rejected them, `frontierCount` from `frontierFirst` of thread
 /// `leafThread`'s frontier list, each with its margin) and the leaves kept
 /// (`leafCount` from `leafFirst` of its leaf list, with their cells' and
