@@ -84,6 +84,19 @@ void runCommand(const RunArgs& a) {
   const bool terminal = isatty(fileno(stderr)) != 0;
   if (!a.quiet && speaks) {
     o.progress = [terminal](const io::RunProgress& p) {
+      const char* timeLeft = p.done ? "wall" : "ETA";
+      const std::string left = duration(p.done ? p.wallSeconds : p.etaSeconds);
+      if (!terminal) {
+        // A log (stderr not a terminal): every field, in an order that
+        // stays put for the scripts that read it (`step N ... M contacts`).
+        char line[256];
+        std::snprintf(line, sizeof(line),
+                      "step %llu  t = %.4g s (%.1f%%)  %.0f steps/s  %zu particles  %zu contacts  %zu breakages  %s %s",
+                      static_cast<unsigned long long>(p.steps), p.time, 100.0 * p.fraction, p.stepsPerSecond,
+                      p.particles, p.contacts, p.breakages, timeLeft, left.c_str());
+        std::cerr << line << '\n';
+        return;
+      }
       // Fields in display order, each with its rank (lower: dropped first)
       // so the line fits 80 columns: the least needed go when it would not.
       struct Field {
@@ -103,7 +116,7 @@ void runCommand(const RunArgs& a) {
       add(6, "%zu particles", p.particles);
       add(2, "%zu contacts", p.contacts);
       add(3, "%zu breakages", p.breakages);
-      add(7, "%s %s", p.done ? "wall" : "ETA", duration(p.done ? p.wallSeconds : p.etaSeconds).c_str());
+      add(7, "%s %s", timeLeft, left.c_str());
       const auto width = [&] {
         std::size_t w = 0;
         for (const Field& f : fields) w += f.text.size() + (w > 0 ? 2 : 0);
@@ -115,11 +128,7 @@ void runCommand(const RunArgs& a) {
       }
       std::string line;
       for (const Field& f : fields) line += (line.empty() ? "" : "  ") + f.text;
-      if (terminal) {
-        std::cerr << '\r' << line << "\033[K" << (p.done ? "\n" : "") << std::flush;
-      } else {
-        std::cerr << line << '\n';
-      }
+      std::cerr << '\r' << line << "\033[K" << (p.done ? "\n" : "") << std::flush;
     };
   }
   gStop.store(false);

@@ -14,8 +14,10 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 namespace fs = std::filesystem;
 using lsdem::test::runCaptured;
@@ -238,6 +240,34 @@ TEST(RunCli, ResumeWithAnEditedSceneNeedsForce) {
   EXPECT_NE(forced.output.find("anyway (--force)"), std::string::npos) << forced.output;
   EXPECT_EQ(readFile(out / "scene.toml"), readFile(scene));
   EXPECT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--force", "--quiet"}), 2);
+  fs::remove_all(dir);
+}
+
+// Progress written to a log (stderr not a terminal) keeps every field, in
+// the order scripts parse (`step N ... M contacts`), whatever its width;
+// the 80-column line is for terminals only.
+TEST(RunCli, ALogGetsWholeProgressLines) {
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_log");
+  const fs::path out = dir / "out";
+  const fs::path scene = longScene(dir);
+  const lsdem::test::ProcessResult r = runCaptured({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--steps", "3"});
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::regex line(R"(step (\d+)  t = \S+ s \(\S+%\)  \d+ steps/s  (\d+) particles  (\d+) contacts  (\d+) breakages  wall \S.*)");
+  std::istringstream lines(r.output);
+  std::string text;
+  std::vector<std::string> fields;  // step, particles, contacts, breakages of the last line matched
+  std::size_t matched = 0;
+  while (std::getline(lines, text)) {
+    std::smatch m;
+    if (std::regex_match(text, m, line)) {
+      fields = {m[1].str(), m[2].str(), m[3].str(), m[4].str()};
+      ++matched;
+    }
+  }
+  ASSERT_EQ(matched, 1u) << r.output;  // the closing line (a 3-step run shows no other)
+  EXPECT_EQ(fields[0], "3");
+  EXPECT_EQ(fields[1], "64");  // the scene's grid placement
+  EXPECT_EQ(fields[3], "0");
   fs::remove_all(dir);
 }
 
