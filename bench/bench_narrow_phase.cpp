@@ -12,13 +12,18 @@
 #ifdef _OPENMP
 #include <omp.h>
 #endif
+#ifdef __linux__
+#include <sched.h>
+#endif
 
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 using namespace lsdem;
@@ -172,8 +177,11 @@ void BM_NarrowPhase(benchmark::State& state) {
 // Thread scaling measured in pairs: each iteration runs one compute() at 1
 // thread and one at all threads (two solvers, so each keeps its own
 // per-thread caches), back to back, so a slow spell of the machine slows
-// both alike. Counters: the median wall time of each and the median of the
-// iterations' ratios (medians: a spell that hits one of a pair is dropped).
+// both alike. The one-thread pass runs pinned to each of the process's
+// cores in turn (Linux), since the cores of a shared machine need not run
+// alike: counters give the median one-thread time on each core, the median
+// all-thread time, and the speed-up against their mean (what one thread
+// takes on a core the system picks) and against the fastest core.
 template <int D>
 void BM_NarrowPhaseThreads(benchmark::State& state) {
   const Cluster<D> c = makeCluster<D>(int(state.range(0)), double(state.range(1)), 0.01 * double(state.range(2)));
@@ -187,21 +195,70 @@ void BM_NarrowPhaseThreads(benchmark::State& state) {
     return omp_get_wtime() - start;
   };
   for (int warm = 0; warm < 2; ++warm) timed(one, 1), timed(all, threads);
-  std::vector<double> oneTimes, allTimes, ratios;
+  // The cores the process may run on (one entry, -1, where they cannot be pinned).
+  std::vector<int> cores{-1};
+#ifdef __linux__
+  cpu_set_t allowed;
+  CPU_ZERO(&allowed);
+  if (sched_getaffinity(0, sizeof(allowed), &allowed) == 0 && CPU_COUNT(&allowed) > 1) {
+    cores.clear();
+    for (int k = 0; k < CPU_SETSIZE; ++k) {
+      if (CPU_ISSET(k, &allowed)) cores.push_back(k);
+    }
+  }
+#endif
+  const auto pinTo = [&](int core) {
+#ifdef __linux__
+    if (core < 0) return;
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(core, &set);
+    sched_setaffinity(0, sizeof(set), &set);
+#else
+    (void)core;
+#endif
+  };
+  const auto unpin = [&] {
+#ifdef __linux__
+    if (cores.front() >= 0) sched_setaffinity(0, sizeof(allowed), &allowed);
+#endif
+  };
+  std::vector<std::vector<double>> oneTimes(cores.size());
+  std::vector<double> allTimes;
+  std::size_t turn = 0;
   for (auto _ : state) {
-    oneTimes.push_back(timed(one, 1));
+    const std::size_t k = turn++ % cores.size();
+    // The idle OpenMP threads spin for a while after a parallel pass, and
+    // one spinning on the core just pinned to would share it: let them
+    // sleep first (not timed).
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    pinTo(cores[k]);
+    oneTimes[k].push_back(timed(one, 1));
+    unpin();
     allTimes.push_back(timed(all, threads));
-    ratios.push_back(oneTimes.back() / allTimes.back());
   }
   omp_set_num_threads(threads);
   const auto median = [](std::vector<double> v) {
+    if (v.empty()) return 0.0;
     std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
     return v[v.size() / 2];
   };
+  const double allMedian = median(allTimes);
+  double sum = 0.0, fastest = std::numeric_limits<double>::infinity();
+  std::size_t timedCores = 0;
+  for (std::size_t k = 0; k < cores.size(); ++k) {
+    if (oneTimes[k].empty()) continue;
+    const double m = median(oneTimes[k]);
+    state.counters[cores[k] < 0 ? std::string("1 thread ms") : "1 thread ms, core " + std::to_string(cores[k])] =
+        1e3 * m;
+    sum += m;
+    fastest = std::min(fastest, m);
+    ++timedCores;
+  }
   state.counters["threads"] = threads;
-  state.counters["1 thread ms"] = 1e3 * median(oneTimes);
-  state.counters["all ms"] = 1e3 * median(allTimes);
-  state.counters["speedup"] = median(ratios);
+  state.counters["all ms"] = 1e3 * allMedian;
+  state.counters["speedup"] = sum / double(timedCores) / allMedian;
+  state.counters["speedup, fastest core"] = fastest / allMedian;
 }
 // The settled and the pressed bed of BM_NarrowPhase.
 BENCHMARK(BM_NarrowPhaseThreads<3>)->Args({10, 20, 97})->Args({10, 20, 90})->Unit(benchmark::kMillisecond)->UseRealTime();
