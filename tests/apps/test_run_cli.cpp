@@ -250,9 +250,11 @@ TEST(RunCli, ALogGetsWholeProgressLines) {
   const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_log");
   const fs::path out = dir / "out";
   const fs::path scene = longScene(dir);
-  const lsdem::test::ProcessResult r = runCaptured({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--steps", "3"});
+  const lsdem::test::ProcessResult r =
+      runCaptured({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--steps", "3"});
   ASSERT_EQ(r.code, 0) << r.output;
-  const std::regex line(R"(step (\d+)  t = \S+ s \(\S+%\)  \d+ steps/s  (\d+) particles  (\d+) contacts  (\d+) breakages  wall \S.*)");
+  const std::regex line(
+      R"(step (\d+)  t = \S+ s \(\S+%\)  \d+ steps/s  (\d+) particles  (\d+) contacts  (\d+) breakages  wall \S.*)");
   std::istringstream lines(r.output);
   std::string text;
   std::vector<std::string> fields;  // step, particles, contacts, breakages of the last line matched
