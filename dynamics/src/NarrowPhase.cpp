@@ -1141,21 +1141,24 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
       certificatePairs_ = pairs;
     }
   }
+  // The lists of last step's certificate `c` in its thread's buffers, or
+  // false: none, or the lists are gone (the thread count may have changed).
+  const auto previousLists = [&](const detail::Certificate<D>& c, const detail::KeptLeaf*& leaves,
+                                 const detail::RejectedCell*& frontier) {
+    if (!c.ownerShape || c.leafThread >= threads_.size()) return false;
+    const ThreadBuffers<D>& buffers = threads_[c.leafThread];
+    if (std::size_t(c.leafFirst) + c.leafCount > buffers.previousLeaves.size()) return false;
+    if (std::size_t(c.frontierFirst) + c.frontierCount > buffers.previousFrontier.size()) return false;
+    leaves = buffers.previousLeaves.data() + c.leafFirst;
+    frontier = buffers.previousFrontier.data() + c.frontierFirst;
+    return true;
+  };
   // The walk (owner in other) of task k's slot `slot`: its last certificate, its slot for this step's.
   const auto certificateKey = [&](std::size_t slot, std::uint64_t owner, std::uint64_t other) {
     CertificateKey<D> key{owner, other, nullptr, nullptr, nullptr, &certificates_[slot], std::uint32_t(threadIndex())};
     key.out->ownerShape = nullptr;
-    // A certificate whose lists are still there (the thread count may have changed).
     const auto matches = [&](const detail::Certificate<D>& c) {
-      if (!c.ownerShape || c.owner != owner || c.other != other) return false;
-      if (c.leafThread >= threads_.size()) return false;
-      const auto& leaves = threads_[c.leafThread].previousLeaves;
-      const auto& frontier = threads_[c.leafThread].previousFrontier;
-      if (std::size_t(c.leafFirst) + c.leafCount > leaves.size()) return false;
-      if (std::size_t(c.frontierFirst) + c.frontierCount > frontier.size()) return false;
-      key.previousLeaves = leaves.data() + c.leafFirst;
-      key.previousFrontier = frontier.data() + c.frontierFirst;
-      return true;
+      return c.owner == owner && c.other == other && previousLists(c, key.previousLeaves, key.previousFrontier);
     };
     if (slot < previousCertificates_.size() && matches(previousCertificates_[slot])) {
       key.previous = &previousCertificates_[slot];
@@ -1183,17 +1186,12 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     }
     for (std::size_t slot = 2 * k + 2; slot < std::min(2 * k + 4, previousCertificates_.size()); ++slot) {
       const detail::Certificate<D>& c = previousCertificates_[slot];
-      if (!c.ownerShape || c.leafThread >= threads_.size()) continue;
-      const ThreadBuffers<D>& owner = threads_[c.leafThread];
+      const detail::KeptLeaf* leaves = nullptr;
+      const detail::RejectedCell* frontier = nullptr;
+      if (!previousLists(c, leaves, frontier)) continue;
       // (The first 256 bytes of each: most lists are shorter.)
-      if (std::size_t(c.frontierFirst) + c.frontierCount <= owner.previousFrontier.size()) {
-        prefetchLines(owner.previousFrontier.data() + c.frontierFirst,
-                      std::min<std::size_t>(c.frontierCount * sizeof(detail::RejectedCell), 256));
-      }
-      if (std::size_t(c.leafFirst) + c.leafCount <= owner.previousLeaves.size()) {
-        prefetchLines(owner.previousLeaves.data() + c.leafFirst,
-                      std::min<std::size_t>(c.leafCount * sizeof(detail::KeptLeaf), 256));
-      }
+      prefetchLines(frontier, std::min<std::size_t>(c.frontierCount * sizeof(detail::RejectedCell), 256));
+      prefetchLines(leaves, std::min<std::size_t>(c.leafCount * sizeof(detail::KeptLeaf), 256));
     }
   };
 
