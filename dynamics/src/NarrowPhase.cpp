@@ -364,6 +364,32 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     if (certify && cell.child == 0) clear = std::min({reach + r - std::sqrt(apart2), -outside, -above * perSlopeCell});
     return false;
   };
+  // The record of node i inside (phi < 0, gradient grad in cells); none for
+  // a node at a point of zero gradient (a medial point): it has no normal.
+  const auto addRecord = [&](std::uint32_t i, double phi, const Vec<D>& grad) {
+    const Vec<D>& x = nodes[i];
+    Vec<D> normal = gradToWorld * grad;
+    const double length = normal.norm();
+    if (!(length > 0.0)) return;
+    // Whole records, not value-initialised then written field by field.
+    if constexpr (Cubic) {
+      // (Appended from an lvalue: another std::vector member than the
+      // trilinear path's, which GCC then keeps inlined there as before.)
+      const NodeContact<D> record{Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB};
+      buf.nodes.push_back(record);
+    } else {
+      buf.nodes.push_back({Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB});
+    }
+    buf.work.push_back({stiffnessFactor<Formulation>(weights[i], weightToFactor), directionWeight * weights[i],
+                        length / h, -1});
+  };
+  // A trilinear node (tree position k, grid point g) known to be inside:
+  // its value again, with the gradient from the same corners, and its record.
+  [[maybe_unused]] const auto recordNode = [&](std::uint32_t k, const Vec<D>& g) {
+    Vec<D> grad;
+    const double phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
+    addRecord(tree.order[k], phi, grad);
+  };
   // One node (tree position k): appends its contact, or returns its margin
   // in cells (how far it may move before the test that rejected it could
   // pass; with certificates only, else 0); 0 for a contact and for a node
@@ -398,33 +424,90 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
       if (!(phi < 0.0)) return certify ? (phi - margin) * perSlopeCell : 0.0;
     }
-    // A node at a point of zero gradient (a medial point) has no normal: skipped.
-    Vec<D> normal = gradToWorld * grad;
-    const double length = normal.norm();
-    if (!(length > 0.0)) return 0.0;
-    // Whole records, not value-initialised then written field by field.
-    if constexpr (Cubic) {
-      // (Appended from an lvalue: another std::vector member than the
-      // trilinear path's, which GCC then keeps inlined there as before.)
-      const NodeContact<D> record{Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB};
-      buf.nodes.push_back(record);
-    } else {
-      buf.nodes.push_back({Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB});
-    }
-    buf.work.push_back({stiffnessFactor<Formulation>(weights[i], weightToFactor), directionWeight * weights[i],
-                        length / h, -1});
+    addRecord(i, phi, grad);
     return 0.0;
   };
   if (!certify) {
-    const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
-      double clear = 0.0;
-      return cellRejected(cell, clear);
-    };
-    buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
-      const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
+    // A whole walk, level by level, each step a batch: the cells of a level
+    // get their sphere and box tests, then the survivors their look-ups,
+    // then the nodes of the leaves that pass their sphere and box tests, then
+    // the survivors their look-ups, and only the nodes inside get records.
+    // Each batch's loop takes no branch on a test's outcome (the survivors
+    // are written and counted), so the look-ups of one batch overlap. The
+    // tests are cellRejected's and testNode's, in the same arithmetic, so
+    // the contacts are the same bit for bit.
+    using Cell = typename geometry::NodeTree<D>::Cell;
+    const std::size_t cells = tree.cells.size() + 2, points = std::max(cells, nodes.size());
+    if (buf.batchCells.size() < 2 * cells) buf.batchCells.resize(2 * cells);
+    if (buf.batchLeaves.size() < cells) buf.batchLeaves.resize(cells);
+    if (buf.batchLive.size() < points) buf.batchLive.resize(points);
+    if (buf.batchPoints.size() < points) buf.batchPoints.resize(points);
+    std::uint32_t* level = buf.batchCells.data();
+    std::uint32_t* next = level + cells;
+    std::uint32_t* const live = buf.batchLive.data();
+    std::uint32_t* const leaves = buf.batchLeaves.data();
+    Vec<D>* const at = buf.batchPoints.data();
+    std::uint32_t count = 1, leafCount = 0;
+    level[0] = 0;
+    while (count > 0) {
+      buf.cellChecks += count;
+      std::uint32_t near = 0;
+      for (std::uint32_t j = 0; j < count; ++j) {
+        const Cell& cell = tree.cells[level[j]];
+        const Vec<D> g = map * cell.centre + shift;
+        const double r = cell.radius / h;
+        // (Both tests made, joined by &: no branch.)
+        const bool inSphere = !((g - centre).squaredNorm() > (reach + r) * (reach + r));
+        const bool nearBox = !(beyondBox(g) - r > 0.0);
+        const bool reached = inSphere & nearBox;
+        live[near] = level[j];
+        // (The slope bound's point: the box's point closest to g.)
+        at[near] = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
+        near += reached;
+      }
+      std::uint32_t nextCount = 0;
+      for (std::uint32_t j = 0; j < near; ++j) {
+        const Cell& cell = tree.cells[live[j]];
+        double above = grid.valueAtCells(at[j]) - (slope * cell.radius + margin);
+        if constexpr (Cubic) above -= cubicMargin;
+        const bool passed = !(above > 0.0), leaf = cell.child == 0;
+        leaves[leafCount] = live[j];
+        leafCount += passed & leaf;
+        next[nextCount] = cell.child;
+        next[nextCount + 1] = cell.child + 1;
+        nextCount += 2 * std::uint32_t(passed & !leaf);
+      }
+      std::swap(level, next);
+      count = nextCount;
+    }
+    // The leaves in tree order (each level's are; the levels interleave), so
+    // the records come in node order.
+    std::sort(leaves, leaves + leafCount,
+              [&](std::uint32_t x, std::uint32_t y) { return tree.cells[x].begin < tree.cells[y].begin; });
+    std::uint32_t candidates = 0;
+    for (std::uint32_t l = 0; l < leafCount; ++l) {
+      const Cell& cell = tree.cells[leaves[l]];
       tested += cell.end - cell.begin;
-      for (std::uint32_t k = cell.begin; k < cell.end; ++k) testNode(k);
-    });
+      for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
+        const Vec<D> g = map * nodes[tree.order[k]] + shift;
+        live[candidates] = k;
+        at[candidates] = g;
+        const bool inSphere = !((g - centre).squaredNorm() > reach2), inBox = !(beyondBox(g) > 0.0);
+        candidates += inSphere & inBox;
+      }
+    }
+    if constexpr (Cubic) {
+      for (std::uint32_t j = 0; j < candidates; ++j) testNode(live[j]);
+    } else {
+      std::uint32_t inside = 0;
+      for (std::uint32_t j = 0; j < candidates; ++j) {
+        const double phi = grid.valueAtCells(at[j]);
+        live[inside] = live[j];
+        at[inside] = at[j];
+        inside += phi < 0.0;
+      }
+      for (std::uint32_t j = 0; j < inside; ++j) recordNode(live[j], at[j]);
+    }
     sortByNode(buf, first);
     return tested;
   }

@@ -230,6 +230,10 @@ struct alignas(64) ThreadBuffers {
   /// last step's, read by any thread this step).
   std::vector<KeptLeaf> leaves, previousLeaves;
   std::vector<RejectedCell> frontier, previousFrontier;
+  // Scratch of a whole walk made in batches (NarrowPhase.cpp): cell or node
+  // indices, survivors, leaves, and the points tested.
+  std::vector<std::uint32_t> batchCells, batchLive, batchLeaves;
+  std::vector<Vec<D>> batchPoints;
   // Scratch of sortByNode.
   std::vector<std::uint32_t> order;
   std::vector<NodeContact<D>> nodeScratch;
