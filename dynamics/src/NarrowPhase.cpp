@@ -387,7 +387,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // its value again, with the gradient from the same corners, and its record.
   [[maybe_unused]] const auto recordNode = [&](std::uint32_t k, const Vec<D>& g) {
     Vec<D> grad;
-    const double phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
+    const double phi = grid.valueAndGradientAtCells(g, grad);
     addRecord(tree.order[k], phi, grad);
   };
   // One node (tree position k): appends its contact, or returns its margin
@@ -427,43 +427,68 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     addRecord(i, phi, grad);
     return 0.0;
   };
-  if (!certify) {
-    // A whole walk, level by level, each step a batch: the cells of a level
-    // get their sphere and box tests, then the survivors their look-ups,
-    // then the nodes of the leaves that pass their sphere and box tests, then
-    // the survivors their look-ups, and only the nodes inside get records.
-    // Each batch's loop takes no branch on a test's outcome (the survivors
-    // are written and counted), so the look-ups of one batch overlap. The
-    // tests are cellRejected's and testNode's, in the same arithmetic, so
-    // the contacts are the same bit for bit.
-    using Cell = typename geometry::NodeTree<D>::Cell;
-    const std::size_t cells = tree.cells.size() + 2, points = std::max(cells, nodes.size());
-    if (buf.batchCells.size() < 2 * cells) buf.batchCells.resize(2 * cells);
-    if (buf.batchLeaves.size() < cells) buf.batchLeaves.resize(cells);
-    if (buf.batchLive.size() < points) buf.batchLive.resize(points);
-    if (buf.batchPoints.size() < points) buf.batchPoints.resize(points);
+  // Walks and node tests in batches. A batch's loop takes no branch on a
+  // test's outcome: it writes every item and counts the survivors, so the
+  // look-ups of one batch overlap instead of each waiting for the branch
+  // before it. The tests are cellRejected's and testNode's, in the same
+  // arithmetic, with the same margins, so walks find the same contacts and
+  // certificates bit for bit. Scratch (ThreadBuffers::batch*): every list
+  // holds each cell or node of the tree at most once.
+  using Cell = typename geometry::NodeTree<D>::Cell;
+  const std::size_t cellSpace = tree.cells.size() + 2, nodeSpace = std::max(cellSpace, nodes.size());
+  const auto atLeast = [](auto& v, std::size_t n) {
+    if (v.size() < n) v.resize(n);
+  };
+  atLeast(buf.batchCells, 2 * cellSpace);
+  atLeast(buf.batchLeaves, cellSpace);
+  atLeast(buf.batchLive, nodeSpace);
+  atLeast(buf.batchNodes, nodeSpace);
+  atLeast(buf.batchPoints, nodeSpace);
+  atLeast(buf.batchValues, 3 * nodeSpace);
+  // The subtrees of the cells batchCells[0, count), level by level: each
+  // level's cells get their sphere and box tests, then the survivors their
+  // slope bound's look-up. Returns how many leaves passed, in batchLeaves;
+  // with certificates (Certify), their margins (cellRejected's `clear`) in
+  // batchValues[cellSpace + l], and each rejected cell is given to
+  // rejected(cell, clear).
+  const auto walkCells = [&]<bool Certify>(std::uint32_t count, auto rejected) {
     std::uint32_t* level = buf.batchCells.data();
-    std::uint32_t* next = level + cells;
+    std::uint32_t* next = level + cellSpace;
     std::uint32_t* const live = buf.batchLive.data();
     std::uint32_t* const leaves = buf.batchLeaves.data();
+    std::uint32_t* const out = buf.batchNodes.data();  // rejected cells (Certify)
     Vec<D>* const at = buf.batchPoints.data();
-    std::uint32_t count = 1, leafCount = 0;
-    level[0] = 0;
+    double* const partial = buf.batchValues.data();           // a survivor's least margin of the first two tests
+    double* const leafClear = partial + cellSpace;             // a passed leaf's margin
+    double* const outClear = partial + 2 * cellSpace;          // a rejected cell's margin
+    std::uint32_t leafCount = 0;
     while (count > 0) {
       buf.cellChecks += count;
-      std::uint32_t near = 0;
+      std::uint32_t near = 0, outCount = 0;
       for (std::uint32_t j = 0; j < count; ++j) {
         const Cell& cell = tree.cells[level[j]];
         const Vec<D> g = map * cell.centre + shift;
         const double r = cell.radius / h;
+        const double apart2 = (g - centre).squaredNorm();
+        const double outside = beyondBox(g) - r;
         // (Both tests made, joined by &: no branch.)
-        const bool inSphere = !((g - centre).squaredNorm() > (reach + r) * (reach + r));
-        const bool nearBox = !(beyondBox(g) - r > 0.0);
+        const bool inSphere = !(apart2 > (reach + r) * (reach + r)), nearBox = !(outside > 0.0);
         const bool reached = inSphere & nearBox;
+        if constexpr (Certify) {
+          const double root = std::sqrt(apart2);
+          out[outCount] = level[j];
+          outClear[outCount] = inSphere ? outside : root - reach - r;
+          outCount += !reached;
+          partial[near] = std::min(reach + r - root, -outside);
+        }
         live[near] = level[j];
         // (The slope bound's point: the box's point closest to g.)
         at[near] = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
         near += reached;
+      }
+      if constexpr (Certify) {
+        for (std::uint32_t j = 0; j < outCount; ++j) rejected(out[j], outClear[j]);
+        outCount = 0;
       }
       std::uint32_t nextCount = 0;
       for (std::uint32_t j = 0; j < near; ++j) {
@@ -471,43 +496,80 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         double above = grid.valueAtCells(at[j]) - (slope * cell.radius + margin);
         if constexpr (Cubic) above -= cubicMargin;
         const bool passed = !(above > 0.0), leaf = cell.child == 0;
+        if constexpr (Certify) {
+          out[outCount] = live[j];
+          outClear[outCount] = above * perSlopeCell;
+          outCount += !passed;
+          leafClear[leafCount] = std::min(partial[j], -above * perSlopeCell);
+        }
         leaves[leafCount] = live[j];
         leafCount += passed & leaf;
         next[nextCount] = cell.child;
         next[nextCount + 1] = cell.child + 1;
         nextCount += 2 * std::uint32_t(passed & !leaf);
       }
+      if constexpr (Certify) {
+        for (std::uint32_t j = 0; j < outCount; ++j) rejected(out[j], outClear[j]);
+      }
       std::swap(level, next);
       count = nextCount;
     }
-    // The leaves in tree order (each level's are; the levels interleave), so
-    // the records come in node order.
-    std::sort(leaves, leaves + leafCount,
-              [&](std::uint32_t x, std::uint32_t y) { return tree.cells[x].begin < tree.cells[y].begin; });
+    return leafCount;
+  };
+  // The nodes at tree positions ks[0, n) tested as testNode tests them: the
+  // records of those inside are appended; with certificates each one's
+  // margin (testNode's return) goes to margins[j].
+  const auto testNodes = [&](const std::uint32_t* ks, std::uint32_t n, double* margins) {
+    std::uint32_t* const live = buf.batchLive.data();
+    Vec<D>* const at = buf.batchPoints.data();
     std::uint32_t candidates = 0;
-    for (std::uint32_t l = 0; l < leafCount; ++l) {
-      const Cell& cell = tree.cells[leaves[l]];
-      tested += cell.end - cell.begin;
-      for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
-        const Vec<D> g = map * nodes[tree.order[k]] + shift;
-        live[candidates] = k;
-        at[candidates] = g;
-        const bool inSphere = !((g - centre).squaredNorm() > reach2), inBox = !(beyondBox(g) > 0.0);
-        candidates += inSphere & inBox;
-      }
+    for (std::uint32_t j = 0; j < n; ++j) {
+      const Vec<D> g = map * nodes[tree.order[ks[j]]] + shift;
+      const double apart2 = (g - centre).squaredNorm();
+      const double outside = beyondBox(g);
+      const bool inSphere = !(apart2 > reach2), inBox = !(outside > 0.0);
+      if (certify) margins[j] = inSphere ? outside : std::sqrt(apart2) - reach;
+      live[candidates] = j;
+      at[candidates] = g;
+      candidates += inSphere & inBox;
     }
     if constexpr (Cubic) {
-      for (std::uint32_t j = 0; j < candidates; ++j) testNode(live[j]);
+      for (std::uint32_t c = 0; c < candidates; ++c) {
+        const double m = testNode(ks[live[c]]);
+        if (certify) margins[live[c]] = m;
+      }
     } else {
       std::uint32_t inside = 0;
-      for (std::uint32_t j = 0; j < candidates; ++j) {
-        const double phi = grid.valueAtCells(at[j]);
-        live[inside] = live[j];
-        at[inside] = at[j];
+      for (std::uint32_t c = 0; c < candidates; ++c) {
+        const double phi = grid.valueAtCells(at[c]);
+        if (certify) margins[live[c]] = (phi - margin) * perSlopeCell;
+        live[inside] = live[c];
+        at[inside] = at[c];
         inside += phi < 0.0;
       }
-      for (std::uint32_t j = 0; j < inside; ++j) recordNode(live[j], at[j]);
+      for (std::uint32_t c = 0; c < inside; ++c) {
+        if (certify) margins[live[c]] = 0.0;
+        recordNode(ks[live[c]], at[c]);
+      }
     }
+  };
+  // The leaves batchLeaves[0, count) in tree order (each level's are; the
+  // levels interleave), so their records come in node order.
+  const auto sortLeaves = [&](std::uint32_t count) {
+    std::sort(buf.batchLeaves.data(), buf.batchLeaves.data() + count,
+              [&](std::uint32_t x, std::uint32_t y) { return tree.cells[x].begin < tree.cells[y].begin; });
+  };
+  if (!certify) {
+    buf.batchCells[0] = 0;
+    const std::uint32_t leafCount = walkCells.template operator()<false>(1, [](std::uint32_t, double) {});
+    sortLeaves(leafCount);
+    std::uint32_t n = 0;
+    for (std::uint32_t l = 0; l < leafCount; ++l) {
+      const Cell& cell = tree.cells[buf.batchLeaves[l]];
+      for (std::uint32_t k = cell.begin; k < cell.end; ++k) buf.batchNodes[n++] = k;
+    }
+    tested = n;
+    testNodes(buf.batchNodes.data(), n, nullptr);
     sortByNode(buf, first);
     return tested;
   }
@@ -561,25 +623,19 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     buf.frontier.push_back({cell, lowered(m)});
     clearFrontier = std::min(clearFrontier, m);
   };
-  // The subtree of frontier cell `root` walked at this step's map: its
-  // rejected cells join the frontier, its leaves that pass are kept.
-  double passed = 0.0;  // the margin of the last cell the walk kept
-  const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
-    double clear = 0.0;
-    if (!cellRejected(cell, clear)) {
-      passed = clear;
-      return false;
-    }
-    addFrontier(std::uint32_t(&cell - tree.cells.data()), clear - measuredLoss);
-    return true;
+  // The nodes to test (tree position, and the index in buf.leaves of the
+  // leaf they belong to), tested in one batch once every leaf is known.
+  std::uint32_t* const queued = buf.batchNodes.data();
+  atLeast(buf.batchOwners, nodeSpace);
+  std::uint32_t* const owners = buf.batchOwners.data();
+  std::uint32_t queuedCount = 0;
+  const auto queue = [&](std::uint32_t k, std::size_t leaf) {
+    queued[queuedCount] = k;
+    owners[queuedCount] = std::uint32_t(leaf);
+    ++queuedCount;
   };
-  // Node k (slot j of its leaf `kept`) tested now: its margin kept.
-  const auto testKept = [&](detail::KeptLeaf& kept, std::uint32_t k, std::uint32_t j) {
-    const double m = testNode(k) - measuredLoss;
-    clearLeaves = std::min(clearLeaves, m);
-    if (j < kSlots) kept.nodeMargin[j] = lowered(m);
-  };
-  const auto keepLeaf = [&](std::uint32_t index) {
+  // A leaf the walk passed (margin `passed`): kept, its nodes queued.
+  const auto keepLeaf = [&](std::uint32_t index, double passed) {
     const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
     // (The cubic path appends a copy: see the node records above.)
     if constexpr (Cubic) {
@@ -591,7 +647,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     kept.cell = index;
     kept.cellMargin = -lowered(passed - measuredLoss);
     tested += cell.end - cell.begin;
-    for (std::uint32_t k = cell.begin; k < cell.end; ++k) testKept(kept, k, k - cell.begin);
+    for (std::uint32_t k = cell.begin; k < cell.end; ++k) queue(k, buf.leaves.size() - 1);
   };
   // A kept leaf: its cell and nodes tested where their margins do not hold.
   // Rebasing, a leaf whose cell is rejected joins the frontier.
@@ -619,6 +675,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     } else if (rebase) {
       kept.cellMargin = -lowered(-cellClear - carried);
     }
+    // (Its nodes to test are queued under the index it is appended at.)
     for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
       const std::uint32_t j = k - cell.begin;
       if (j < kSlots && movedBound < double(old.nodeMargin[j])) {
@@ -628,7 +685,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         continue;
       }
       ++tested;
-      testKept(kept, k, j);
+      queue(k, buf.leaves.size());
     }
     buf.leaves.push_back(kept);
   };
@@ -641,6 +698,9 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   } else {
     // The frontier, then the kept leaves: together they cover the tree
     // once, so the order is free (the contacts are sorted by node below).
+    // The frontier cells walked again are the roots of one batched walk:
+    // its rejected cells join the frontier, its leaves that pass are kept.
+    std::uint32_t roots = 0;
     for (const detail::RejectedCell& old : oldFrontier) {
       // (Also walked again when one more move as large would use its
       // margin up: measured afresh, a margin is mostly larger than one
@@ -649,11 +709,24 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       if (movedBound + moved < double(old.margin)) {
         addFrontier(old.cell, double(old.margin) - carried);
       } else {
-        buf.cellChecks += walkTree<D>(tree, reject, keepLeaf, old.cell);
+        buf.batchCells[roots++] = old.cell;
       }
     }
+    const std::uint32_t leafCount = walkCells.template operator()<true>(
+        roots, [&](std::uint32_t cell, double clear) { addFrontier(cell, clear - measuredLoss); });
+    for (std::uint32_t l = 0; l < leafCount; ++l) keepLeaf(buf.batchLeaves[l], buf.batchValues[cellSpace + l]);
     for (const detail::KeptLeaf& old : oldLeaves) retestLeaf(old);
     if (previous) ++buf.frontierWalks;
+  }
+  // The queued nodes, in one batch; their margins to their leaves.
+  double* const margins = buf.batchValues.data();
+  testNodes(queued, queuedCount, margins);
+  for (std::uint32_t e = 0; e < queuedCount; ++e) {
+    const double m = margins[e] - measuredLoss;
+    clearLeaves = std::min(clearLeaves, m);
+    detail::KeptLeaf& kept = buf.leaves[owners[e]];
+    const std::uint32_t j = queued[e] - tree.cells[kept.cell].begin;
+    if (j < kSlots) kept.nodeMargin[j] = lowered(m);
   }
   detail::Certificate<D> made = previous ? *previous : detail::Certificate<D>{};
   if (rebase) {

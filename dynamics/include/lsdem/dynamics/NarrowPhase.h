@@ -230,10 +230,11 @@ struct alignas(64) ThreadBuffers {
   /// last step's, read by any thread this step).
   std::vector<KeptLeaf> leaves, previousLeaves;
   std::vector<RejectedCell> frontier, previousFrontier;
-  // Scratch of a whole walk made in batches (NarrowPhase.cpp): cell or node
-  // indices, survivors, leaves, and the points tested.
-  std::vector<std::uint32_t> batchCells, batchLive, batchLeaves;
+  // Scratch of the walks made in batches (NarrowPhase.cpp): cell and node
+  // lists, survivors, leaves, the points tested and margins.
+  std::vector<std::uint32_t> batchCells, batchLive, batchLeaves, batchNodes, batchOwners;
   std::vector<Vec<D>> batchPoints;
+  std::vector<double> batchValues;
   // Scratch of sortByNode.
   std::vector<std::uint32_t> order;
   std::vector<NodeContact<D>> nodeScratch;
