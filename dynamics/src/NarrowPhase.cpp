@@ -364,31 +364,38 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     if (certify && cell.child == 0) clear = std::min({reach + r - std::sqrt(apart2), -outside, -above * perSlopeCell});
     return false;
   };
-  // The record of node i inside (phi < 0, gradient grad in cells); none for
-  // a node at a point of zero gradient (a medial point): it has no normal.
-  const auto addRecord = [&](std::uint32_t i, double phi, const Vec<D>& grad) {
-    const Vec<D>& x = nodes[i];
-    Vec<D> normal = gradToWorld * grad;
-    const double length = normal.norm();
-    if (!(length > 0.0)) return;
-    // Whole records, not value-initialised then written field by field.
-    if constexpr (Cubic) {
-      // (Appended from an lvalue: another std::vector member than the
-      // trilinear path's, which GCC then keeps inlined there as before.)
-      const NodeContact<D> record{Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB};
-      buf.nodes.push_back(record);
-    } else {
-      buf.nodes.push_back({Ro * x + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB});
-    }
-    buf.work.push_back({stiffnessFactor<Formulation>(weights[i], weightToFactor), directionWeight * weights[i],
-                        length / h, -1});
+  // Node i's records, inside at phi < 0 with world normal `normal` of
+  // length `length` > 0 (a node at a point of zero gradient, a medial
+  // point, has no normal and no record).
+  const auto contactOf = [&](std::uint32_t i, double phi, const Vec<D>& normal, double length) {
+    return NodeContact<D>{Ro * nodes[i] + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB};
   };
-  // A trilinear node (tree position k, grid point g) known to be inside:
-  // its value again, with the gradient from the same corners, and its record.
-  [[maybe_unused]] const auto recordNode = [&](std::uint32_t k, const Vec<D>& g) {
-    Vec<D> grad;
-    const double phi = grid.valueAndGradientAtCells(g, grad);
-    addRecord(tree.order[k], phi, grad);
+  const auto workOf = [&](std::uint32_t i, double length) {
+    return NodeWork<D>{stiffnessFactor<Formulation>(weights[i], weightToFactor), directionWeight * weights[i],
+                       length / h, -1};
+  };
+  // The records of the trilinear nodes at tree positions ks[at[c]], grid
+  // points g[c], c < count, known to be inside: each one's value again,
+  // with the gradient from the same corners. Written in place (Records
+  // leaves a resize unwritten).
+  [[maybe_unused]] const auto recordNodes = [&](const std::uint32_t* ks, const std::uint32_t* at, const Vec<D>* g,
+                                                std::uint32_t count) {
+    std::size_t n = buf.nodes.size();
+    buf.nodes.resize(n + count);
+    buf.work.resize(n + count);
+    for (std::uint32_t c = 0; c < count; ++c) {
+      Vec<D> grad;
+      const double phi = grid.valueAndGradientAtCells(g[c], grad);
+      const Vec<D> normal = gradToWorld * grad;
+      const double length = normal.norm();
+      if (!(length > 0.0)) continue;
+      const std::uint32_t i = tree.order[ks[at[c]]];
+      buf.nodes[n] = contactOf(i, phi, normal, length);
+      buf.work[n] = workOf(i, length);
+      ++n;
+    }
+    buf.nodes.resize(n);
+    buf.work.resize(n);
   };
   // One node (tree position k): appends its contact, or returns its margin
   // in cells (how far it may move before the test that rejected it could
@@ -424,7 +431,19 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
       if (!(phi < 0.0)) return certify ? (phi - margin) * perSlopeCell : 0.0;
     }
-    addRecord(i, phi, grad);
+    const Vec<D> normal = gradToWorld * grad;
+    const double length = normal.norm();
+    if (!(length > 0.0)) return 0.0;
+    // Whole records, not value-initialised then written field by field.
+    if constexpr (Cubic) {
+      // (Appended from an lvalue: another std::vector member than the
+      // trilinear path's, which GCC then keeps inlined there as before.)
+      const NodeContact<D> record = contactOf(i, phi, normal, length);
+      buf.nodes.push_back(record);
+    } else {
+      buf.nodes.push_back(contactOf(i, phi, normal, length));
+    }
+    buf.work.push_back(workOf(i, length));
     return 0.0;
   };
   // Walks and node tests in batches. A batch's loop takes no branch on a
@@ -436,22 +455,26 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // holds each cell or node of the tree at most once.
   using Cell = typename geometry::NodeTree<D>::Cell;
   const std::size_t cellSpace = tree.cells.size() + 2, nodeSpace = std::max(cellSpace, nodes.size());
-  const auto atLeast = [](auto& v, std::size_t n) {
-    if (v.size() < n) v.resize(n);
+  // (Sized by the walks that use them: a leaf walk does not.)
+  const auto sizeScratch = [&] {
+    const auto atLeast = [](auto& v, std::size_t n) {
+      if (v.size() < n) v.resize(n);
+    };
+    atLeast(buf.batchCells, 2 * cellSpace);
+    atLeast(buf.batchLeaves, cellSpace);
+    atLeast(buf.batchLive, nodeSpace);
+    atLeast(buf.batchNodes, nodeSpace);
+    atLeast(buf.batchOwners, nodeSpace);
+    atLeast(buf.batchPoints, nodeSpace);
+    atLeast(buf.batchValues, 3 * nodeSpace);
   };
-  atLeast(buf.batchCells, 2 * cellSpace);
-  atLeast(buf.batchLeaves, cellSpace);
-  atLeast(buf.batchLive, nodeSpace);
-  atLeast(buf.batchNodes, nodeSpace);
-  atLeast(buf.batchPoints, nodeSpace);
-  atLeast(buf.batchValues, 3 * nodeSpace);
   // The subtrees of the cells batchCells[0, count), level by level: each
   // level's cells get their sphere and box tests, then the survivors their
   // slope bound's look-up. Returns how many leaves passed, in batchLeaves;
   // with certificates (Certify), their margins (cellRejected's `clear`) in
   // batchValues[cellSpace + l], and each rejected cell is given to
   // rejected(cell, clear).
-  const auto walkCells = [&]<bool Certify>(std::uint32_t count, auto rejected) {
+  const auto walkCells = [&]<bool Certify>(std::uint32_t count, auto rejected) __attribute__((noinline)) {
     std::uint32_t* level = buf.batchCells.data();
     std::uint32_t* next = level + cellSpace;
     std::uint32_t* const live = buf.batchLive.data();
@@ -519,7 +542,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // The nodes at tree positions ks[0, n) tested as testNode tests them: the
   // records of those inside are appended; with certificates each one's
   // margin (testNode's return) goes to margins[j].
-  const auto testNodes = [&](const std::uint32_t* ks, std::uint32_t n, double* margins) {
+  const auto testNodes = [&](const std::uint32_t* ks, std::uint32_t n, double* margins) __attribute__((noinline)) {
     std::uint32_t* const live = buf.batchLive.data();
     Vec<D>* const at = buf.batchPoints.data();
     std::uint32_t candidates = 0;
@@ -547,10 +570,10 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         at[inside] = at[c];
         inside += phi < 0.0;
       }
-      for (std::uint32_t c = 0; c < inside; ++c) {
-        if (certify) margins[live[c]] = 0.0;
-        recordNode(ks[live[c]], at[c]);
+      if (certify) {
+        for (std::uint32_t c = 0; c < inside; ++c) margins[live[c]] = 0.0;
       }
+      recordNodes(ks, live, at, inside);
     }
   };
   // The leaves batchLeaves[0, count) in tree order (each level's are; the
@@ -560,6 +583,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
               [&](std::uint32_t x, std::uint32_t y) { return tree.cells[x].begin < tree.cells[y].begin; });
   };
   if (!certify) {
+    sizeScratch();
     buf.batchCells[0] = 0;
     const std::uint32_t leafCount = walkCells.template operator()<false>(1, [](std::uint32_t, double) {});
     sortLeaves(leafCount);
@@ -623,16 +647,24 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     buf.frontier.push_back({cell, lowered(m)});
     clearFrontier = std::min(clearFrontier, m);
   };
-  // The nodes to test (tree position, and the index in buf.leaves of the
-  // leaf they belong to), tested in one batch once every leaf is known.
+  // The nodes of the leaves a walk passes (tree position, and the index in
+  // buf.leaves of their leaf), tested in one batch once the walk is done.
+  // (A kept leaf's nodes are tested one by one, testKept: batched, the
+  // leaf walks of a settled bed took 5-12 % longer.)
+  if (rebase) sizeScratch();
   std::uint32_t* const queued = buf.batchNodes.data();
-  atLeast(buf.batchOwners, nodeSpace);
   std::uint32_t* const owners = buf.batchOwners.data();
   std::uint32_t queuedCount = 0;
   const auto queue = [&](std::uint32_t k, std::size_t leaf) {
     queued[queuedCount] = k;
     owners[queuedCount] = std::uint32_t(leaf);
     ++queuedCount;
+  };
+  // Node k (slot j of its leaf `kept`) tested now: its margin kept.
+  const auto testKept = [&](detail::KeptLeaf& kept, std::uint32_t k, std::uint32_t j) {
+    const double m = testNode(k) - measuredLoss;
+    clearLeaves = std::min(clearLeaves, m);
+    if (j < kSlots) kept.nodeMargin[j] = lowered(m);
   };
   // A leaf the walk passed (margin `passed`): kept, its nodes queued.
   const auto keepLeaf = [&](std::uint32_t index, double passed) {
@@ -675,7 +707,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     } else if (rebase) {
       kept.cellMargin = -lowered(-cellClear - carried);
     }
-    // (Its nodes to test are queued under the index it is appended at.)
     for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
       const std::uint32_t j = k - cell.begin;
       if (j < kSlots && movedBound < double(old.nodeMargin[j])) {
@@ -685,7 +716,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         continue;
       }
       ++tested;
-      queue(k, buf.leaves.size());
+      testKept(kept, k, j);
     }
     buf.leaves.push_back(kept);
   };
@@ -700,33 +731,58 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     // once, so the order is free (the contacts are sorted by node below).
     // The frontier cells walked again are the roots of one batched walk:
     // its rejected cells join the frontier, its leaves that pass are kept.
-    std::uint32_t roots = 0;
+    // (Also walked again when one more move as large would use its margin
+    // up: measured afresh, a margin is mostly larger than one carried less
+    // the move's bound, and the certificate holds longer. The discharge:
+    // 3.5-5 % less time than walking only those used up.) Without a branch
+    // on the outcome: each cell is written to both lists and counted in
+    // one, and the least margin carried is kept in a local (clearFrontier,
+    // which the lambdas share, would go through memory for each cell).
+    const std::size_t base = buf.frontier.size();
+    buf.frontier.resize(base + oldFrontier.size());
+    detail::RejectedCell* const carriedTo = buf.frontier.data() + base;
+    std::uint32_t* const rootsTo = buf.batchCells.data();
+    std::uint32_t carriedCount = 0, roots = 0;
+    double leastCarried = clearFrontier;
     for (const detail::RejectedCell& old : oldFrontier) {
-      // (Also walked again when one more move as large would use its
-      // margin up: measured afresh, a margin is mostly larger than one
-      // carried less the move's bound, and the certificate holds longer. The
-      // discharge: 3.5-5 % less time than walking only those used up.)
-      if (movedBound + moved < double(old.margin)) {
-        addFrontier(old.cell, double(old.margin) - carried);
-      } else {
-        buf.batchCells[roots++] = old.cell;
-      }
+      const double m = double(old.margin);
+      const bool carry = movedBound + moved < m;
+      carriedTo[carriedCount] = {old.cell, lowered(m - carried)};
+      carriedCount += carry;
+      rootsTo[roots] = old.cell;
+      roots += !carry;
+      leastCarried = carry ? std::min(leastCarried, m - carried) : leastCarried;
     }
+    buf.frontier.resize(base + carriedCount);
+    clearFrontier = leastCarried;
     const std::uint32_t leafCount = walkCells.template operator()<true>(
         roots, [&](std::uint32_t cell, double clear) { addFrontier(cell, clear - measuredLoss); });
-    for (std::uint32_t l = 0; l < leafCount; ++l) keepLeaf(buf.batchLeaves[l], buf.batchValues[cellSpace + l]);
+    // Kept in tree order (with their margins: the order goes through
+    // batchLive), so that the leaf walks after it find contacts in node order.
+    std::uint32_t* const byBegin = buf.batchLive.data();
+    for (std::uint32_t l = 0; l < leafCount; ++l) byBegin[l] = l;
+    std::sort(byBegin, byBegin + leafCount, [&](std::uint32_t x, std::uint32_t y) {
+      return tree.cells[buf.batchLeaves[x]].begin < tree.cells[buf.batchLeaves[y]].begin;
+    });
+    for (std::uint32_t l = 0; l < leafCount; ++l) {
+      keepLeaf(buf.batchLeaves[byBegin[l]], buf.batchValues[cellSpace + byBegin[l]]);
+    }
     for (const detail::KeptLeaf& old : oldLeaves) retestLeaf(old);
     if (previous) ++buf.frontierWalks;
   }
   // The queued nodes, in one batch; their margins to their leaves.
-  double* const margins = buf.batchValues.data();
-  testNodes(queued, queuedCount, margins);
-  for (std::uint32_t e = 0; e < queuedCount; ++e) {
-    const double m = margins[e] - measuredLoss;
-    clearLeaves = std::min(clearLeaves, m);
-    detail::KeptLeaf& kept = buf.leaves[owners[e]];
-    const std::uint32_t j = queued[e] - tree.cells[kept.cell].begin;
-    if (j < kSlots) kept.nodeMargin[j] = lowered(m);
+  if (queuedCount > 0) {
+    double* const margins = buf.batchValues.data();
+    testNodes(queued, queuedCount, margins);
+    double leastNode = clearLeaves;  // (a local, as leastCarried above)
+    for (std::uint32_t e = 0; e < queuedCount; ++e) {
+      const double m = margins[e] - measuredLoss;
+      leastNode = std::min(leastNode, m);
+      detail::KeptLeaf& kept = buf.leaves[owners[e]];
+      const std::uint32_t j = queued[e] - tree.cells[kept.cell].begin;
+      if (j < kSlots) kept.nodeMargin[j] = lowered(m);
+    }
+    clearLeaves = leastNode;
   }
   detail::Certificate<D> made = previous ? *previous : detail::Certificate<D>{};
   if (rebase) {
