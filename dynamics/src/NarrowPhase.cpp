@@ -165,7 +165,8 @@ void sortByNode(ThreadBuffers<D>& buf, std::size_t first) {
 }
 
 // Depth-first walk over the cells of a node tree below cell `root` (the
-// tree's root: all of it): `reject(cell)` true skips the cell and
+// tree's root: all of it; planes' walks: a level-set walk goes in batches,
+// collectLevelSet): `reject(cell)` true skips the cell and
 // everything below it; `leaf(index)` gets the index of each leaf that
 // survives. Returns the cells tested.
 template <int D, class Reject, class Leaf>

@@ -42,7 +42,12 @@
 /// walked again (frontier walks). Only the
 /// nodes of the leaves that remain are tested one by one: one D x D
 /// matrix-vector product, a bounding-sphere test, a grid-box test and, only
-/// for nodes near the other body, one multilinear look-up. The test is exact,
+/// for nodes near the other body, one multilinear look-up. A walk of the
+/// tree (a whole walk, or the frontier cells walked again) goes level by
+/// level in batches: a level's cells get their sphere and box tests, then
+/// the survivors their look-ups, then the passed leaves' nodes likewise, in
+/// loops that write every item and count the survivors instead of branching
+/// on each outcome, so that the look-ups of a batch overlap. The test is exact,
 /// so the contacts are those of testing every node; they are put back in node
 /// order, so forces and sums are bitwise the same. The law's parts (normal model, formulation, friction, damping) are
 /// template parameters of the kernel, chosen once per compute() call, so a part
