@@ -432,6 +432,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
       if (!(phi < 0.0)) return certify ? (phi - margin) * perSlopeCell : 0.0;
     }
+    // A node at a point of zero gradient (a medial point) has no normal: skipped.
     const Vec<D> normal = gradToWorld * grad;
     const double length = normal.norm();
     if (!(length > 0.0)) return 0.0;
@@ -577,20 +578,26 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       recordNodes(ks, live, at, inside);
     }
   };
-  // The leaves batchLeaves[0, count) in tree order (each level's are; the
-  // levels interleave), so their records come in node order.
-  const auto sortLeaves = [&](std::uint32_t count) {
-    std::sort(buf.batchLeaves.data(), buf.batchLeaves.data() + count,
-              [&](std::uint32_t x, std::uint32_t y) { return tree.cells[x].begin < tree.cells[y].begin; });
+  // The order of the leaves batchLeaves[0, count) in the tree, in
+  // batchLive (each level's leaves are in order; the levels interleave):
+  // taken in it, their nodes' records come in node order, as a leaf walk's
+  // after them do.
+  const auto orderLeaves = [&](std::uint32_t count) {
+    std::uint32_t* const byBegin = buf.batchLive.data();
+    for (std::uint32_t l = 0; l < count; ++l) byBegin[l] = l;
+    std::sort(byBegin, byBegin + count, [&](std::uint32_t x, std::uint32_t y) {
+      return tree.cells[buf.batchLeaves[x]].begin < tree.cells[buf.batchLeaves[y]].begin;
+    });
+    return byBegin;
   };
   if (!certify) {
     sizeScratch();
     buf.batchCells[0] = 0;
     const std::uint32_t leafCount = walkCells.template operator()<false>(1, [](std::uint32_t, double) {});
-    sortLeaves(leafCount);
+    const std::uint32_t* const byBegin = orderLeaves(leafCount);
     std::uint32_t n = 0;
     for (std::uint32_t l = 0; l < leafCount; ++l) {
-      const Cell& cell = tree.cells[buf.batchLeaves[l]];
+      const Cell& cell = tree.cells[buf.batchLeaves[byBegin[l]]];
       for (std::uint32_t k = cell.begin; k < cell.end; ++k) buf.batchNodes[n++] = k;
     }
     tested = n;
@@ -758,13 +765,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     clearFrontier = leastCarried;
     const std::uint32_t leafCount = walkCells.template operator()<true>(
         roots, [&](std::uint32_t cell, double clear) { addFrontier(cell, clear - measuredLoss); });
-    // Kept in tree order (with their margins: the order goes through
-    // batchLive), so that the leaf walks after it find contacts in node order.
-    std::uint32_t* const byBegin = buf.batchLive.data();
-    for (std::uint32_t l = 0; l < leafCount; ++l) byBegin[l] = l;
-    std::sort(byBegin, byBegin + leafCount, [&](std::uint32_t x, std::uint32_t y) {
-      return tree.cells[buf.batchLeaves[x]].begin < tree.cells[buf.batchLeaves[y]].begin;
-    });
+    const std::uint32_t* const byBegin = orderLeaves(leafCount);
     for (std::uint32_t l = 0; l < leafCount; ++l) {
       keepLeaf(buf.batchLeaves[byBegin[l]], buf.batchValues[cellSpace + byBegin[l]]);
     }
