@@ -165,8 +165,8 @@ void sortByNode(ThreadBuffers<D>& buf, std::size_t first) {
 }
 
 // Depth-first walk over the cells of a node tree below cell `root` (the
-// tree's root: all of it; planes' walks: a level-set walk goes in batches,
-// collectLevelSet): `reject(cell)` true skips the cell and
+// tree's root: all of it), as plane walks make it (a level-set walk goes
+// level by level in batches: collectLevelSet): `reject(cell)` true skips the cell and
 // everything below it; `leaf(index)` gets the index of each leaf that
 // survives. Returns the cells tested.
 template <int D, class Reject, class Leaf>
@@ -333,36 +333,55 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const auto beyondBox = [upper](const Vec<D>& g) {
     return std::max((-g.array()).maxCoeff(), (g.array() - upper.array()).maxCoeff());
   };
+  using Cell = typename geometry::NodeTree<D>::Cell;
+  // A tree cell's sphere in the other's grid (cells): centre g, radius r,
+  // squared distance from the other's bounding sphere's centre, and how far
+  // it lies beyond the node box along its worst axis. Its first two tests:
+  // rejected when apart2 > (reach + r)^2, or when outside > 0.
+  struct PlacedCell {
+    Vec<D> g;
+    double r, apart2, outside;
+  };
+  const auto placeCell = [&](const Cell& cell) {
+    const Vec<D> g = map * cell.centre + shift;
+    const double r = cell.radius / h;
+    return PlacedCell{g, r, (g - centre).squaredNorm(), beyondBox(g) - r};
+  };
+  // The slope bound of a cell of radius `radius` (world units) placed at g:
+  // rejected when the value is > 0. The bound holds along segments in the
+  // grid box, and only nodes in the box are tested: a centre outside the
+  // box is replaced by its closest point of the box, no farther from any
+  // node in the box.
+  const auto slopeAbove = [&](const Vec<D>& g, double radius) {
+    double above = grid.valueAtCells(g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper)) - (slope * radius + margin);
+    if constexpr (Cubic) above -= cubicMargin;
+    return above;
+  };
   // A tree cell's test: true when none of its nodes can touch. With
   // certificates, `clear` gets its margin in cells: for a rejected cell, how
   // far it may move before its test could pass; for a passed leaf, how far
   // before it could be rejected (the least of its three tests' slack), so
-  // that a leaf walk need not make it again before then.
-  const auto cellRejected = [&](const typename geometry::NodeTree<D>::Cell& cell, double& clear) {
-    const Vec<D> g = map * cell.centre + shift;
-    const double r = cell.radius / h;
-    const double apart2 = (g - centre).squaredNorm();
-    if (apart2 > (reach + r) * (reach + r)) {
-      if (certify) clear = std::sqrt(apart2) - reach - r;
+  // that a leaf walk need not make it again before then. (The batched walk,
+  // walkCells, makes the same tests with the same margins.)
+  const auto cellRejected = [&](const Cell& cell, double& clear) {
+    const PlacedCell c = placeCell(cell);
+    if (c.apart2 > (reach + c.r) * (reach + c.r)) {
+      if (certify) clear = std::sqrt(c.apart2) - reach - c.r;
       return true;
     }
-    const double outside = beyondBox(g) - r;
-    if (outside > 0.0) {
-      clear = outside;
+    if (c.outside > 0.0) {
+      clear = c.outside;
       return true;
     }
-    // The slope bound holds along segments in the grid box, and only nodes in
-    // the box are tested: a centre outside the box is replaced by its closest
-    // point of the box, no farther from any node in the box.
-    const Vec<D> inside = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
-    double above = grid.valueAtCells(inside) - (slope * cell.radius + margin);
-    if constexpr (Cubic) above -= cubicMargin;
+    const double above = slopeAbove(c.g, cell.radius);
     if (above > 0.0) {
       clear = above * perSlopeCell;
       return true;
     }
     // (Only a leaf's is kept: KeptLeaf.)
-    if (certify && cell.child == 0) clear = std::min({reach + r - std::sqrt(apart2), -outside, -above * perSlopeCell});
+    if (certify && cell.child == 0) {
+      clear = std::min({reach + c.r - std::sqrt(c.apart2), -c.outside, -above * perSlopeCell});
+    }
     return false;
   };
   // Node i's records, inside at phi < 0 with world normal `normal` of
@@ -455,7 +474,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // arithmetic, with the same margins, so walks find the same contacts and
   // certificates bit for bit. Scratch (ThreadBuffers::batch*): every list
   // holds each cell or node of the tree at most once.
-  using Cell = typename geometry::NodeTree<D>::Cell;
   const std::size_t cellSpace = tree.cells.size() + 2, nodeSpace = std::max(cellSpace, nodes.size());
   // (Sized by the walks that use them: a leaf walk does not.)
   const auto sizeScratch = [&] {
@@ -491,24 +509,19 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       buf.cellChecks += count;
       std::uint32_t near = 0, outCount = 0;
       for (std::uint32_t j = 0; j < count; ++j) {
-        const Cell& cell = tree.cells[level[j]];
-        const Vec<D> g = map * cell.centre + shift;
-        const double r = cell.radius / h;
-        const double apart2 = (g - centre).squaredNorm();
-        const double outside = beyondBox(g) - r;
+        const PlacedCell c = placeCell(tree.cells[level[j]]);
         // (Both tests made, joined by &: no branch.)
-        const bool inSphere = !(apart2 > (reach + r) * (reach + r)), nearBox = !(outside > 0.0);
+        const bool inSphere = !(c.apart2 > (reach + c.r) * (reach + c.r)), nearBox = !(c.outside > 0.0);
         const bool reached = inSphere & nearBox;
         if constexpr (Certify) {
-          const double root = std::sqrt(apart2);
+          const double root = std::sqrt(c.apart2);
           out[outCount] = level[j];
-          outClear[outCount] = inSphere ? outside : root - reach - r;
+          outClear[outCount] = inSphere ? c.outside : root - reach - c.r;
           outCount += !reached;
-          partial[near] = std::min(reach + r - root, -outside);
+          partial[near] = std::min(reach + c.r - root, -c.outside);
         }
         live[near] = level[j];
-        // (The slope bound's point: the box's point closest to g.)
-        at[near] = g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper);
+        at[near] = c.g;
         near += reached;
       }
       if constexpr (Certify) {
@@ -518,8 +531,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       std::uint32_t nextCount = 0;
       for (std::uint32_t j = 0; j < near; ++j) {
         const Cell& cell = tree.cells[live[j]];
-        double above = grid.valueAtCells(at[j]) - (slope * cell.radius + margin);
-        if constexpr (Cubic) above -= cubicMargin;
+        const double above = slopeAbove(at[j], cell.radius);
         const bool passed = !(above > 0.0), leaf = cell.child == 0;
         if constexpr (Certify) {
           out[outCount] = live[j];
