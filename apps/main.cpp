@@ -77,6 +77,8 @@ struct Mpi {
     std::fwrite(line.data(), 1, line.size(), stderr);
     std::fflush(stderr);
     MPI_Abort(MPI_COMM_WORLD, code);
+#else
+    (void)rank, (void)sameOnEveryRank;  // (used on several ranks only)
 #endif
     return code;
   }
