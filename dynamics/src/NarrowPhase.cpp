@@ -342,18 +342,19 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     Vec<D> g;
     double r, apart2, outside;
   };
-  const auto placeCell = [&](const Cell& cell) {
+  const auto placeCell = [map, shift, centre, h, beyondBox](const Cell& cell) {
     const Vec<D> g = map * cell.centre + shift;
     const double r = cell.radius / h;
     return PlacedCell{g, r, (g - centre).squaredNorm(), beyondBox(g) - r};
   };
   // The slope bound of a cell of radius `radius` (world units) placed at g:
-  // rejected when the value is > 0. The bound holds along segments in the
-  // grid box, and only nodes in the box are tested: a centre outside the
-  // box is replaced by its closest point of the box, no farther from any
-  // node in the box.
-  const auto slopeAbove = [&](const Vec<D>& g, double radius) {
-    double above = grid.valueAtCells(g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper)) - (slope * radius + margin);
+  // rejected when slopeAbove(value at slopePoint(g), radius) > 0. The bound
+  // holds along segments in the grid box, and only nodes in the box are
+  // tested: a centre outside the box is replaced by its closest point of
+  // the box, no farther from any node in the box.
+  const auto slopePoint = [upper](const Vec<D>& g) -> Vec<D> { return g.cwiseMax(Vec<D>::Zero()).cwiseMin(upper); };
+  const auto slopeAbove = [slope, margin, cubicMargin](double value, double radius) {
+    double above = value - (slope * radius + margin);
     if constexpr (Cubic) above -= cubicMargin;
     return above;
   };
@@ -373,7 +374,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       clear = c.outside;
       return true;
     }
-    const double above = slopeAbove(c.g, cell.radius);
+    const double above = slopeAbove(grid.valueAtCells(slopePoint(c.g)), cell.radius);
     if (above > 0.0) {
       clear = above * perSlopeCell;
       return true;
@@ -453,8 +454,10 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     }
     // A node at a point of zero gradient (a medial point) has no normal: skipped.
     const Vec<D> normal = gradToWorld * grad;
-    const double length = normal.norm();
-    if (!(length > 0.0)) return 0.0;
+    // (Tested squared: the branch need not wait for the square root.)
+    const double length2 = normal.squaredNorm();
+    if (!(length2 > 0.0)) return 0.0;
+    const double length = std::sqrt(length2);
     // Whole records, not value-initialised then written field by field.
     if constexpr (Cubic) {
       // (Appended from an lvalue: another std::vector member than the
@@ -486,7 +489,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     atLeast(buf.batchNodes, nodeSpace);
     atLeast(buf.batchOwners, nodeSpace);
     atLeast(buf.batchPoints, nodeSpace);
-    atLeast(buf.batchValues, 3 * nodeSpace);
+    atLeast(buf.batchValues, 4 * nodeSpace);
   };
   // The subtrees of the cells batchCells[0, count), level by level: each
   // level's cells get their sphere and box tests, then the survivors their
@@ -504,40 +507,49 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     double* const partial = buf.batchValues.data();           // a survivor's least margin of the first two tests
     double* const leafClear = partial + cellSpace;             // a passed leaf's margin
     double* const outClear = partial + 2 * cellSpace;          // a rejected cell's margin
+    double* const values = partial + 3 * cellSpace;            // a survivor's look-up
     std::uint32_t leafCount = 0;
+    // (Local copies: a store to the scratch lists cannot then change them,
+    // and they stay in registers.)
+    const auto placeCell_ = placeCell;
+    const auto slopePoint_ = slopePoint;
+    const auto slopeAbove_ = slopeAbove;
+    const double reach_ = reach, perSlopeCell_ = perSlopeCell;
+    const Cell* const cells = tree.cells.data();
     while (count > 0) {
       buf.cellChecks += count;
       std::uint32_t near = 0, outCount = 0;
       for (std::uint32_t j = 0; j < count; ++j) {
-        const PlacedCell c = placeCell(tree.cells[level[j]]);
+        const PlacedCell c = placeCell_(cells[level[j]]);
         // (Both tests made, joined by &: no branch.)
-        const bool inSphere = !(c.apart2 > (reach + c.r) * (reach + c.r)), nearBox = !(c.outside > 0.0);
+        const bool inSphere = !(c.apart2 > (reach_ + c.r) * (reach_ + c.r)), nearBox = !(c.outside > 0.0);
         const bool reached = inSphere & nearBox;
         if constexpr (Certify) {
           const double root = std::sqrt(c.apart2);
           out[outCount] = level[j];
-          outClear[outCount] = inSphere ? c.outside : root - reach - c.r;
+          outClear[outCount] = inSphere ? c.outside : root - reach_ - c.r;
           outCount += !reached;
-          partial[near] = std::min(reach + c.r - root, -c.outside);
+          partial[near] = std::min(reach_ + c.r - root, -c.outside);
         }
         live[near] = level[j];
-        at[near] = c.g;
+        at[near] = slopePoint_(c.g);
         near += reached;
       }
       if constexpr (Certify) {
         for (std::uint32_t j = 0; j < outCount; ++j) rejected(out[j], outClear[j]);
         outCount = 0;
       }
+      grid.valuesAtCells(at, near, values);
       std::uint32_t nextCount = 0;
       for (std::uint32_t j = 0; j < near; ++j) {
-        const Cell& cell = tree.cells[live[j]];
-        const double above = slopeAbove(at[j], cell.radius);
+        const Cell& cell = cells[live[j]];
+        const double above = slopeAbove_(values[j], cell.radius);
         const bool passed = !(above > 0.0), leaf = cell.child == 0;
         if constexpr (Certify) {
           out[outCount] = live[j];
-          outClear[outCount] = above * perSlopeCell;
+          outClear[outCount] = above * perSlopeCell_;
           outCount += !passed;
-          leafClear[leafCount] = std::min(partial[j], -above * perSlopeCell);
+          leafClear[leafCount] = std::min(partial[j], -above * perSlopeCell_);
         }
         leaves[leafCount] = live[j];
         leafCount += passed & leaf;
@@ -560,12 +572,18 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     std::uint32_t* const live = buf.batchLive.data();
     Vec<D>* const at = buf.batchPoints.data();
     std::uint32_t candidates = 0;
+    const Mat<D> map_ = map;
+    const Vec<D> shift_ = shift, centre_ = centre;
+    const double reach_ = reach, reach2_ = reach2, perSlopeCell_ = perSlopeCell, margin_ = margin;
+    const auto beyondBox_ = beyondBox;
+    const Vec<D>* const positions = nodes.data();
+    const std::uint32_t* const order = tree.order.data();
     for (std::uint32_t j = 0; j < n; ++j) {
-      const Vec<D> g = map * nodes[tree.order[ks[j]]] + shift;
-      const double apart2 = (g - centre).squaredNorm();
-      const double outside = beyondBox(g);
-      const bool inSphere = !(apart2 > reach2), inBox = !(outside > 0.0);
-      if (certify) margins[j] = inSphere ? outside : std::sqrt(apart2) - reach;
+      const Vec<D> g = map_ * positions[order[ks[j]]] + shift_;
+      const double apart2 = (g - centre_).squaredNorm();
+      const double outside = beyondBox_(g);
+      const bool inSphere = !(apart2 > reach2_), inBox = !(outside > 0.0);
+      if (certify) margins[j] = inSphere ? outside : std::sqrt(apart2) - reach_;
       live[candidates] = j;
       at[candidates] = g;
       candidates += inSphere & inBox;
@@ -576,10 +594,13 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         if (certify) margins[live[c]] = m;
       }
     } else {
+      // (margins, where given, are batchValues[0, n): the values go after them.)
+      double* const values = buf.batchValues.data() + nodeSpace;
+      grid.valuesAtCells(at, candidates, values);
       std::uint32_t inside = 0;
       for (std::uint32_t c = 0; c < candidates; ++c) {
-        const double phi = grid.valueAtCells(at[c]);
-        if (certify) margins[live[c]] = (phi - margin) * perSlopeCell;
+        const double phi = values[c];
+        if (certify) margins[live[c]] = (phi - margin_) * perSlopeCell_;
         live[inside] = live[c];
         at[inside] = at[c];
         inside += phi < 0.0;

@@ -236,7 +236,7 @@ struct alignas(64) ThreadBuffers {
   std::vector<KeptLeaf> leaves, previousLeaves;
   std::vector<RejectedCell> frontier, previousFrontier;
   // Scratch of the walks made in batches (NarrowPhase.cpp): cell and node
-  // lists, survivors, leaves, the points tested and margins.
+  // lists, survivors, leaves, the points tested, margins and look-ups.
   std::vector<std::uint32_t> batchCells, batchLive, batchLeaves, batchNodes, batchOwners;
   std::vector<Vec<D>> batchPoints;
   std::vector<double> batchValues;
