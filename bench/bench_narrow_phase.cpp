@@ -154,21 +154,35 @@ void BM_NarrowPhase(benchmark::State& state) {
                                                   benchmark::Counter::kIsIterationInvariantRate);
   // The machine's raw look-up rate next to it, on this bed's own grid (the
   // first shape's), at 2^16 points within a cell of its surface in grid
-  // coordinates (Grid::valueAtCells, the narrow phase's look-up), for
-  // 50 ms after the timed passes: one line prints both.
+  // coordinates, for 50 ms each after the timed passes: one at a time
+  // (Grid::valueAtCells, "raw look-ups/s") and in one batch
+  // (Grid::valuesAtCells, two per instruction, as the batched walks make
+  // theirs: "raw batched look-ups/s"). One line prints all three.
   {
     const geometry::Grid<D>& grid = p.shape[0]->grid();
     const std::vector<Vec<D>> points = surfacePointsAtCells(grid);
-    double sum = 0.0, seconds = 0.0;
-    std::size_t count = 0;
-    const auto start = std::chrono::steady_clock::now();
-    while (seconds < 0.05) {
+    std::vector<double> values(points.size());
+    const auto rate = [&](auto&& lookUps) {
+      double seconds = 0.0;
+      std::size_t count = 0;
+      const auto start = std::chrono::steady_clock::now();
+      while (seconds < 0.05) {
+        lookUps();
+        count += points.size();
+        seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      }
+      return double(count) / seconds;
+    };
+    double sum = 0.0;
+    state.counters["raw look-ups/s"] = rate([&] {
       for (const Vec<D>& g : points) sum += grid.valueAtCells(g);
-      count += points.size();
-      seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    }
+    });
     benchmark::DoNotOptimize(sum);
-    state.counters["raw look-ups/s"] = double(count) / seconds;
+    state.counters["raw batched look-ups/s"] = rate([&] {
+      grid.valuesAtCells(points.data(), points.size(), values.data());
+      benchmark::DoNotOptimize(values.data());
+      benchmark::ClobberMemory();
+    });
   }
   state.SetLabel("node checks");
 }
@@ -308,6 +322,30 @@ void BM_LookupAtCells(benchmark::State& state) {
 }
 BENCHMARK(BM_LookupAtCells<3>)->Arg(0)->Arg(1);
 BENCHMARK(BM_LookupAtCells<2>)->Arg(0)->Arg(1);
+// The batched walks' look-up (Grid::valuesAtCells, two points per
+// instruction) against one at a time (Grid::valueAtCells), values only, at
+// the points of BM_LookupAtCells: argument 1 batched, 0 one at a time.
+// Items = look-ups.
+template <int D>
+void BM_BatchedLookup(benchmark::State& state) {
+  const geometry::Grid<D> grid = geometry::sphereGrid<D>(0.5, 1.0 / 10.0);
+  const bool batched = state.range(0) == 1;
+  const std::vector<Vec<D>> points = surfacePointsAtCells(grid);
+  std::vector<double> values(points.size());
+  for (auto _ : state) {
+    if (batched) {
+      grid.valuesAtCells(points.data(), points.size(), values.data());
+    } else {
+      for (std::size_t j = 0; j < points.size(); ++j) values[j] = grid.valueAtCells(points[j]);
+    }
+    benchmark::DoNotOptimize(values.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * std::int64_t(points.size()));
+  state.SetLabel(batched ? "batched" : "one at a time");
+}
+BENCHMARK(BM_BatchedLookup<3>)->Arg(0)->Arg(1);
+BENCHMARK(BM_BatchedLookup<2>)->Arg(0)->Arg(1);
 
 // The grid layout for the trilinear look-up (issue: "one cache line per
 // cell's corners"): a cell's 8 corner values in one 32-byte aligned block
