@@ -385,9 +385,17 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     }
     return false;
   };
+  // The world normal of a node's gradient `grad` (cells) in `normal`, and
+  // its length: 0 where the gradient is zero (a medial point: the node has
+  // no normal and no record). (Tested squared: the outcome need not wait
+  // for the square root.)
+  const auto normalOf = [&](const Vec<D>& grad, Vec<D>& normal) {
+    normal = gradToWorld * grad;
+    const double length2 = normal.squaredNorm();
+    return length2 > 0.0 ? std::sqrt(length2) : 0.0;
+  };
   // Node i's records, inside at phi < 0 with world normal `normal` of
-  // length `length` > 0 (a node at a point of zero gradient, a medial
-  // point, has no normal and no record).
+  // length `length` > 0 (normalOf).
   const auto contactOf = [&](std::uint32_t i, double phi, const Vec<D>& normal, double length) {
     return NodeContact<D>{Ro * nodes[i] + xo, normal / length, Vec<D>::Zero(), -phi, i, ownerIsB};
   };
@@ -407,8 +415,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     for (std::uint32_t c = 0; c < count; ++c) {
       Vec<D> grad;
       const double phi = grid.valueAndGradientAtCells(g[c], grad);
-      const Vec<D> normal = gradToWorld * grad;
-      const double length = normal.norm();
+      Vec<D> normal;
+      const double length = normalOf(grad, normal);
       if (!(length > 0.0)) continue;
       const std::uint32_t i = tree.order[ks[at[c]]];
       buf.nodes[n] = contactOf(i, phi, normal, length);
@@ -452,12 +460,9 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       phi = grid.valueAtCellsGradientBelow(g, 0.0, grad);
       if (!(phi < 0.0)) return certify ? (phi - margin) * perSlopeCell : 0.0;
     }
-    // A node at a point of zero gradient (a medial point) has no normal: skipped.
-    const Vec<D> normal = gradToWorld * grad;
-    // (Tested squared: the branch need not wait for the square root.)
-    const double length2 = normal.squaredNorm();
-    if (!(length2 > 0.0)) return 0.0;
-    const double length = std::sqrt(length2);
+    Vec<D> normal;
+    const double length = normalOf(grad, normal);
+    if (!(length > 0.0)) return 0.0;
     // Whole records, not value-initialised then written field by field.
     if constexpr (Cubic) {
       // (Appended from an lvalue: another std::vector member than the
