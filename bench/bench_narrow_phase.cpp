@@ -194,8 +194,9 @@ void BM_NarrowPhase(benchmark::State& state) {
 // both alike. The one-thread pass runs pinned to each of the process's
 // cores in turn (Linux), since the cores of a shared machine need not run
 // alike: counters give the median one-thread time on each core, the median
-// all-thread time, and the speed-up against their mean (what one thread
-// takes on a core the system picks) and against the fastest core.
+// all-thread time (and its gather's: ContactSolver::gatherSeconds), and the
+// speed-up against their mean (what one thread takes on a core the system
+// picks) and against the fastest core.
 template <int D>
 void BM_NarrowPhaseThreads(benchmark::State& state) {
   const Cluster<D> c = makeCluster<D>(int(state.range(0)), double(state.range(1)), 0.01 * double(state.range(2)));
@@ -238,7 +239,7 @@ void BM_NarrowPhaseThreads(benchmark::State& state) {
 #endif
   };
   std::vector<std::vector<double>> oneTimes(cores.size());
-  std::vector<double> allTimes;
+  std::vector<double> allTimes, allGathers;
   std::size_t turn = 0;
   for (auto _ : state) {
     const std::size_t k = turn++ % cores.size();
@@ -250,6 +251,7 @@ void BM_NarrowPhaseThreads(benchmark::State& state) {
     oneTimes[k].push_back(timed(one, 1));
     unpin();
     allTimes.push_back(timed(all, threads));
+    allGathers.push_back(all.gatherSeconds());
   }
   omp_set_num_threads(threads);
   const auto median = [](std::vector<double> v) {
@@ -271,6 +273,10 @@ void BM_NarrowPhaseThreads(benchmark::State& state) {
   }
   state.counters["threads"] = threads;
   state.counters["all ms"] = 1e3 * allMedian;
+  // Of which the records' gather (the other threads' records copied into
+  // the output, in task order): the part of the pass that does not shrink
+  // with the walks.
+  state.counters["all ms, gather"] = 1e3 * median(allGathers);
   state.counters["speedup"] = sum / double(timedCores) / allMedian;
   state.counters["speedup, fastest core"] = fastest / allMedian;
 }

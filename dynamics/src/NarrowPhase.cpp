@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <set>
@@ -1313,7 +1314,9 @@ void ContactSolver<D>::compute(const Particles<D>& particles, const std::vector<
   });
 
   // Concatenate the per-thread records in task order; totals and history.
+  const double gatherStart = wallSeconds();
   gather(particles, pairs.size(), planes.empty() ? 0 : n);
+  gatherSeconds_ = wallSeconds() - gatherStart;
 }
 
 template <int D>
@@ -1793,10 +1796,19 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
         at += count;
         return std::pair{lo, hi};
       };
+      // Byte copies: the records are plain data (RecordAllocator; Eigen's
+      // fixed-size members are arrays of doubles, as checkpoints also treat
+      // them), and std::copy would copy them member by member (Eigen's
+      // vectors are not trivially copyable): 20-30 % longer at two threads.
       const auto copy = [](const auto& source, std::size_t first, auto& target, std::size_t out, std::size_t lo,
                            std::size_t hi) {
-        std::copy(source.begin() + std::ptrdiff_t(first + lo), source.begin() + std::ptrdiff_t(first + hi),
-                  target.begin() + std::ptrdiff_t(out + lo));
+        using Record = std::remove_cvref_t<decltype(source[0])>;
+        static_assert(std::is_standard_layout_v<Record> && std::is_trivially_destructible_v<Record>,
+                      "records are plain data");
+        if (hi > lo) {
+          std::memcpy(static_cast<void*>(target.data() + out + lo), static_cast<const void*>(source.data() + first + lo),
+                      (hi - lo) * sizeof(Record));
+        }
       };
       const auto [pairLo, pairHi] = part(run.pairCount);
       copy(buf.pairs, run.firstPair, pairs_, run.outPair, pairLo, pairHi);

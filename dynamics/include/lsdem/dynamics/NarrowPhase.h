@@ -514,6 +514,10 @@ class ContactSolver {
   /// @brief Node-tree cells tested in the last compute() (bulk rejection; one
   /// level-set look-up each against a level set, one dot product against a plane).
   std::uint64_t cellChecks() const { return cellChecks_; }
+  /// @brief Wall seconds the last compute() took to put the threads' records
+  /// into one output in task order (part of its time; about 0 on one thread,
+  /// whose buffers become the output: the other threads' records are copied).
+  double gatherSeconds() const { return gatherSeconds_; }
   /// @brief Node contacts carrying shear history into the next compute().
   std::size_t historySize() const { return history_.empty() ? 0 : nodes_.size(); }
   /// @brief Forgets every shear history (e.g. after a restart without it).
@@ -614,6 +618,7 @@ class ContactSolver {
   std::size_t particleCount_ = 0, planeCount_ = 0, toolCount_ = 0;
   double elasticEnergy_ = 0.0, dissipatedPower_ = 0.0;
   std::uint64_t nodeChecks_ = 0, cellChecks_ = 0;
+  double gatherSeconds_ = 0.0;  // the last compute()'s gather(), wall seconds
   // Scratch reused between steps.
   std::vector<Mat<D>> rotations_;  // each particle's, this compute()
   std::vector<detail::ThreadBuffers<D>> threads_;
