@@ -165,6 +165,45 @@ void sortByNode(ThreadBuffers<D>& buf, std::size_t first) {
   }
 }
 
+// Copies records [lo, hi) of a run that starts at `first` in `source` to
+// `out + lo` on in `target`, as bytes: the records are plain data
+// (RecordAllocator; Eigen's fixed-size members are arrays of doubles, as
+// checkpoints also treat them), and std::copy would copy them member by
+// member (Eigen's vectors are not trivially copyable): 20-30 % longer.
+template <class Source, class Target>
+void copyRecords(const Source& source, std::size_t first, Target& target, std::size_t out, std::size_t lo,
+                 std::size_t hi) {
+  using Record = typename Source::value_type;
+  static_assert(std::is_same_v<Record, typename Target::value_type>);
+  static_assert(std::is_standard_layout_v<Record> && std::is_trivially_destructible_v<Record>,
+                "records are plain data");
+  if (hi <= lo) return;
+  std::memcpy(static_cast<void*>(target.data() + out + lo), static_cast<const void*>(source.data() + first + lo),
+              (hi - lo) * sizeof(Record));
+}
+
+// Copies `total` records that lie in `runCount` runs (sizeOf(r): run r's
+// count) in equal shares, one per thread (all threads when there are more
+// than 4096): copy(r, lo, hi) copies records [lo, hi) of run r.
+template <class SizeOf, class Copy>
+void copyInShares(std::size_t runCount, std::size_t total, std::size_t threads, const SizeOf& sizeOf,
+                  const Copy& copy) {
+  const std::ptrdiff_t shares = total > 4096 ? std::ptrdiff_t(std::max<std::size_t>(threads, 1)) : 1;
+#pragma omp parallel for schedule(static) if (shares > 1)
+  for (std::ptrdiff_t share = 0; share < shares; ++share) {
+    const std::size_t from = total * std::size_t(share) / std::size_t(shares);
+    const std::size_t to = total * std::size_t(share + 1) / std::size_t(shares);
+    std::size_t at = 0;  // records of the runs before this one
+    for (std::size_t r = 0; r < runCount && at < to; ++r) {
+      const std::size_t count = sizeOf(r);
+      // The part [lo, hi) of [at, at + count) in this share, as offsets in the run.
+      const std::size_t lo = std::clamp(from, at, at + count) - at, hi = std::clamp(to, at, at + count) - at;
+      at += count;
+      if (hi > lo) copy(r, lo, hi);
+    }
+  }
+}
+
 // Depth-first walk over the cells of a node tree below cell `root` (the
 // tree's root: all of it), as plane walks make it (a level-set walk goes
 // level by level in batches: collectLevelSet): `reject(cell)` true skips the cell and
@@ -1208,6 +1247,7 @@ std::vector<typename ContactSolver<D>::RestOverlap> ContactSolver<D>::restOverla
                                                                                    std::size_t index) const {
   std::vector<RestOverlap> out;
   if (preload_.empty()) return out;
+  copyPendingRecords();
   for (std::size_t k = 0; k < pairs_.size(); ++k) {
     const PairContact<D>& rec = pairs_[k];
     const bool particlePair = k < particlePairCount_;
@@ -1352,6 +1392,9 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
   const std::size_t planeTasks = planes.empty() ? 0 : n;
   const std::size_t toolTasks = tools.empty() ? 0 : n;
   tasks_.resize(pairTasks + planeTasks + toolTasks);
+  // (The last step's pending records are this step's history: where a
+  // thread holding some would go, they are copied first.)
+  if (threads_.size() > std::size_t(threadCount())) copyPendingRecords();
   threads_.resize(std::size_t(threadCount()));
   for (ThreadBuffers<D>& buf : threads_) {
     buf.pairs.clear();
@@ -1459,10 +1502,28 @@ void ContactSolver<D>::run(const Particles<D>& p, const std::vector<Pair>& pairs
     const auto it = std::lower_bound(history_.begin(), history_.end(), 0,
                                      [&](const HistoryPair& h, int) { return keyLess(h, idA, other); });
     if (it != history_.end() && it->idA == idA && it->other == other) {
-      view.keys = historyKeys_.data() + it->first;
-      view.nodes = nodes_.data() + it->first;
-      if (Friction && !shear_.empty()) view.shear = shear_.data() + it->first;
-      if (withPreload) view.preload = preload_.data() + it->first;
+      // In the output arrays, or in the held buffers of a pending run (a
+      // pair's records lie in one run).
+      std::size_t q = it->first;
+      const std::uint32_t* keys = historyKeys_.data();
+      const NodeContact<D>* nodes = nodes_.data();
+      const Vec<D>* shear = shear_.data();
+      const double* preload = preload_.data();
+      if (!pending_.empty() && q >= pending_.front().outNode) {
+        const auto run = std::upper_bound(pending_.begin(), pending_.end(), q,
+                                          [](std::size_t at, const TaskOutput& r) { return at < r.outNode; }) -
+                         1;
+        const ThreadBuffers<D>& held = threads_[run->thread];
+        q = q - run->outNode + run->firstNode;
+        keys = held.heldKeys.data();
+        nodes = held.heldNodes.data();
+        shear = held.heldShear.data();
+        preload = held.heldPreload.data();
+      }
+      view.keys = keys + q;
+      view.nodes = nodes + q;
+      if (Friction && !shear_.empty()) view.shear = shear + q;
+      if (withPreload) view.preload = preload + q;
       view.count = it->count;
     }
     return view;
@@ -1768,60 +1829,45 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
     }
   }
   if (!friction) shear_.clear();
-  // The other runs' records, appended: the arrays grow to their totals
-  // (RecordAllocator: unwritten), then every thread copies an equal share
-  // of the records, run by run.
-  const std::size_t headPairs = pairs_.size(), headNodes = nodes_.size();
+  // The other runs' records, after the first's: the arrays grow to their
+  // totals (RecordAllocator: unwritten). Their pair records are copied now
+  // (few); their node-level records stay where their threads wrote them
+  // until read (pending_, copyPendingRecords).
+  const std::size_t headPairs = pairs_.size();
   pairs_.resize(pairTotal);
   dashpots_.resize(pairTotal);
   nodes_.resize(nodeTotal);
   if (anyPreload) preload_.resize(nodeTotal);
   if (keys) historyKeys_.resize(nodeTotal);
   if (friction) shear_.resize(nodeTotal);
-  const std::size_t copied = (pairTotal - headPairs) + (nodeTotal - headNodes);
   const std::size_t runCount = runs_.size() - 1;
-  const std::ptrdiff_t shares = copied > 4096 ? std::ptrdiff_t(threads_.size()) : 1;
-#pragma omp parallel for schedule(static) if (shares > 1)
-  for (std::ptrdiff_t share = 0; share < shares; ++share) {
-    // This share: records [from, to) of the copied ones, counting each run's pairs, then its nodes.
-    const std::size_t from = copied * std::size_t(share) / std::size_t(shares);
-    const std::size_t to = copied * std::size_t(share + 1) / std::size_t(shares);
-    std::size_t at = 0;  // records of the runs before this one
-    for (std::size_t b = next; b < runCount && at < to; ++b) {
-      const TaskOutput run = runAt(b);
-      const ThreadBuffers<D>& buf = threads_[run.thread];
-      // The part [lo, hi) of [at, at + count) in this share, as offsets in the run.
-      const auto part = [&](std::size_t count) {
-        const std::size_t lo = std::clamp(from, at, at + count) - at, hi = std::clamp(to, at, at + count) - at;
-        at += count;
-        return std::pair{lo, hi};
-      };
-      // Byte copies: the records are plain data (RecordAllocator; Eigen's
-      // fixed-size members are arrays of doubles, as checkpoints also treat
-      // them), and std::copy would copy them member by member (Eigen's
-      // vectors are not trivially copyable): 20-30 % longer at two threads.
-      const auto copy = [](const auto& source, std::size_t first, auto& target, std::size_t out, std::size_t lo,
-                           std::size_t hi) {
-        using Record = std::remove_cvref_t<decltype(source[0])>;
-        static_assert(std::is_standard_layout_v<Record> && std::is_trivially_destructible_v<Record>,
-                      "records are plain data");
-        if (hi > lo) {
-          std::memcpy(static_cast<void*>(target.data() + out + lo), static_cast<const void*>(source.data() + first + lo),
-                      (hi - lo) * sizeof(Record));
+  runList_.clear();
+  for (std::size_t b = next; b < runCount; ++b) runList_.push_back(runAt(b));
+  copyInShares(
+      runList_.size(), pairTotal - headPairs, threads_.size(), [&](std::size_t r) { return runList_[r].pairCount; },
+      [&](std::size_t r, std::size_t lo, std::size_t hi) {
+        const TaskOutput& run = runList_[r];
+        const ThreadBuffers<D>& buf = threads_[run.thread];
+        copyRecords(buf.pairs, run.firstPair, pairs_, run.outPair, lo, hi);
+        copyRecords(buf.dashpots, run.firstPair, dashpots_, run.outPair, lo, hi);
+        for (std::size_t q = run.outPair + lo; q < run.outPair + hi; ++q) {
+          pairs_[q].firstNode = std::uint32_t(pairs_[q].firstNode - run.firstNode + run.outNode);
         }
-      };
-      const auto [pairLo, pairHi] = part(run.pairCount);
-      copy(buf.pairs, run.firstPair, pairs_, run.outPair, pairLo, pairHi);
-      copy(buf.dashpots, run.firstPair, dashpots_, run.outPair, pairLo, pairHi);
-      for (std::size_t q = run.outPair + pairLo; q < run.outPair + pairHi; ++q) {
-        pairs_[q].firstNode = std::uint32_t(pairs_[q].firstNode - run.firstNode + run.outNode);
-      }
-      const auto [nodeLo, nodeHi] = part(run.nodeCount);
-      copy(buf.nodes, run.firstNode, nodes_, run.outNode, nodeLo, nodeHi);
-      if (anyPreload) copy(buf.preload, run.firstNode, preload_, run.outNode, nodeLo, nodeHi);
-      if (keys) copy(buf.keys, run.firstNode, historyKeys_, run.outNode, nodeLo, nodeHi);
-      if (friction) copy(buf.shear, run.firstNode, shear_, run.outNode, nodeLo, nodeHi);
+      });
+  // The threads holding pending records move them aside (heldNodes ...).
+  pending_.clear();
+  for (const TaskOutput& run : runList_) {
+    if (run.nodeCount > 0) pending_.push_back(run);
+  }
+  for (std::size_t t = 0; t < threads_.size(); ++t) {
+    if (std::none_of(pending_.begin(), pending_.end(), [&](const TaskOutput& run) { return run.thread == t; })) {
+      continue;
     }
+    ThreadBuffers<D>& buf = threads_[t];
+    std::swap(buf.nodes, buf.heldNodes);
+    std::swap(buf.shear, buf.heldShear);
+    std::swap(buf.preload, buf.heldPreload);
+    std::swap(buf.keys, buf.heldKeys);
   }
   // The next step's blocks weigh tasks by what these cost.
   taskCost_.resize(tasks_.size());
@@ -1871,6 +1917,27 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
 }
 
 template <int D>
+void ContactSolver<D>::copyPendingRecords() const {
+  const std::lock_guard<std::mutex> lock(pendingLock_.mutex);
+  if (pending_.empty()) return;
+  // The arrays gather() sized (an array it left empty is not kept).
+  const std::size_t total = nodes_.size();
+  const bool preload = preload_.size() == total, keys = historyKeys_.size() == total, shear = shear_.size() == total;
+  std::size_t copied = 0;
+  for (const TaskOutput& run : pending_) copied += run.nodeCount;
+  copyInShares(pending_.size(), copied, threads_.size(), [&](std::size_t r) { return pending_[r].nodeCount; },
+               [&](std::size_t r, std::size_t lo, std::size_t hi) {
+                 const TaskOutput& run = pending_[r];
+                 const ThreadBuffers<D>& buf = threads_[run.thread];
+                 copyRecords(buf.heldNodes, run.firstNode, nodes_, run.outNode, lo, hi);
+                 if (preload) copyRecords(buf.heldPreload, run.firstNode, preload_, run.outNode, lo, hi);
+                 if (keys) copyRecords(buf.heldKeys, run.firstNode, historyKeys_, run.outNode, lo, hi);
+                 if (shear) copyRecords(buf.heldShear, run.firstNode, shear_, run.outNode, lo, hi);
+               });
+  pending_.clear();
+}
+
+template <int D>
 std::size_t ContactSolver<D>::recordBytes() const {
   const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   std::size_t total = bytes(pairs_) + bytes(dashpots_) + bytes(nodes_) + bytes(shear_) + bytes(preload_) +
@@ -1878,7 +1945,8 @@ std::size_t ContactSolver<D>::recordBytes() const {
   for (const ThreadBuffers<D>& buf : threads_) {
     total += bytes(buf.pairs) + bytes(buf.dashpots) + bytes(buf.nodes) + bytes(buf.work) + bytes(buf.shear) +
              bytes(buf.preload) + bytes(buf.keys) + bytes(buf.leaves) + bytes(buf.previousLeaves) +
-             bytes(buf.frontier) + bytes(buf.previousFrontier);
+             bytes(buf.frontier) + bytes(buf.previousFrontier) + bytes(buf.heldNodes) + bytes(buf.heldShear) +
+             bytes(buf.heldPreload) + bytes(buf.heldKeys);
   }
   return total;
 }
@@ -1895,6 +1963,7 @@ std::vector<typename ContactSolver<D>::ParticleHistory> ContactSolver<D>::partic
     throw std::invalid_argument("contact solver: particleHistories() needs ids in strictly ascending order");
   }
   std::vector<ParticleHistory> out(ids.size());
+  copyPendingRecords();
   // Each pair of the history goes to both of its particles among `ids` (the
   // other key of a plane or tool pair is no particle id), in history order,
   // as particleHistory() takes them.
@@ -1951,6 +2020,7 @@ void ContactSolver<D>::adoptHistories(std::span<const std::uint64_t> ids,
 template <int D>
 void ContactSolver<D>::appendHistory(const ParticleHistory& history) {
   if (history.pairs.empty()) return;
+  copyPendingRecords();
   // The arrays the history points into, aligned with nodes_ before appending
   // (kept when either side has them: a solver whose last compute() found no
   // contact holds none yet).
@@ -1991,6 +2061,7 @@ bool ContactSolver<D>::overwriteHistories(std::span<const std::uint64_t> ids,
     throw std::invalid_argument("ContactSolver::overwriteHistories: ids and histories differ in number");
   }
   const ParticleHistory all = mergedHistory(histories);
+  copyPendingRecords();
   // The same pairs here (history_ is sorted by key), node for node.
   const std::unordered_set<std::uint64_t> given(ids.begin(), ids.end());
   std::size_t mine = 0;
@@ -2025,6 +2096,7 @@ bool ContactSolver<D>::overwriteHistories(std::span<const std::uint64_t> ids,
 
 template <int D>
 void ContactSolver<D>::buildHistoryKeysFor(std::size_t count) {
+  copyPendingRecords();
   historyKeys_.resize(count);
   for (std::size_t q = 0; q < count; ++q) historyKeys_[q] = nodeKey(nodes_[q]);
 }
@@ -2091,6 +2163,7 @@ void ContactSolver<D>::addSpringsByGroup(std::span<const std::int64_t> groupOf, 
 
 template <int D>
 void ContactSolver<D>::saveState(StateWriter& out) const {
+  copyPendingRecords();
   out.putTag("contacts 4");  // 2: with the pair dashpots; 3: pair records without padding; 4: rest overlaps
   out.putVector(pairs_);
   out.putVector(dashpots_);
@@ -2114,6 +2187,7 @@ void ContactSolver<D>::saveState(StateWriter& out) const {
 template <int D>
 void ContactSolver<D>::loadState(StateReader& in) {
   in.expectTag("contacts 4");
+  pending_.clear();
   in.getVector(pairs_);
   in.getVector(dashpots_);
   in.getVector(nodes_);

@@ -255,9 +255,12 @@ void checkOrderIndependence() {
 }
 
 // A dense random cluster of grains in a box of planes with a tool: forces,
-// torques and node contacts after a few steps, as raw bytes.
+// torques and node contacts after a few steps, as raw bytes. The node
+// records are read after the last step, or (readEachStep) after every step;
+// the last step runs on `lastThreads` threads where > 0.
 template <int D>
-std::vector<unsigned char> clusterRun(int threads, std::size_t count, const ContactLawDef& law = {}) {
+std::vector<unsigned char> clusterRun(int threads, std::size_t count, const ContactLawDef& law = {},
+                                      bool readEachStep = false, int lastThreads = 0) {
 #ifdef _OPENMP
   const int before = omp_get_max_threads();
   omp_set_num_threads(threads);
@@ -303,10 +306,17 @@ std::vector<unsigned char> clusterRun(int threads, std::size_t count, const Cont
     bytes.insert(bytes.end(), b, b + size);
   };
   const double dt = 2e-5;
+  std::size_t readEach = 0;
   for (int s = 0; s < 4; ++s) {
+#ifdef _OPENMP
+    if (s == 3 && lastThreads > 0) omp_set_num_threads(lastThreads);
+#else
+    (void)lastThreads;
+#endif
     kickDrift(p, dt);
     clearForces(p);
     solver.compute(p, allPairs(p), planes, tools, dt);
+    if (readEachStep) readEach += solver.nodeContacts().size() + solver.nodeShear().size();
     const BoundaryLoads<D>& loads = solver.accumulate(p);
     kick(p, dt);
     append(loads.planeForce.data(), loads.planeForce.size() * sizeof(Vec<D>));
@@ -316,6 +326,7 @@ std::vector<unsigned char> clusterRun(int threads, std::size_t count, const Cont
   EXPECT_GT(solver.planeContacts().size(), 0u);
   EXPECT_GT(solver.toolContacts().size(), 0u);
   EXPECT_GT(solver.historySize(), 0u);
+  if (readEachStep) EXPECT_GT(readEach, 0u);
   for (std::size_t i = 0; i < p.size(); ++i) {
     append(&p.force[i], sizeof(Vec<D>));
     append(&p.torque[i], sizeof(Spin<D>));
@@ -751,6 +762,14 @@ TEST(NarrowPhase, OneAndTwoThreadsAreBitwiseIdentical) {
     EXPECT_EQ(clusterRun<2>(threads, 300), one2) << threads << " threads";
     EXPECT_EQ(clusterRun<3>(threads, 64), one3) << threads << " threads";
   }
+  // The other threads' node records are copied into the output only when
+  // read (ContactSolver::nodeContacts), and the next step reads its history
+  // from either place: read after every step, or with the thread count
+  // dropping while records are held by a thread that goes away.
+  EXPECT_EQ(clusterRun<3>(2, 64, {}, true), one3);
+  EXPECT_EQ(clusterRun<3>(3, 64, {}, false, 1), one3);
+  EXPECT_EQ(clusterRun<3>(1, 64, {}, false, 3), one3);
+  EXPECT_EQ(clusterRun<2>(4, 300, {}, true, 2), one2);
   // The tricubic look-up too.
   ContactLawDef cubic;
   cubic.interpolation = LevelSetInterpolation::Tricubic;

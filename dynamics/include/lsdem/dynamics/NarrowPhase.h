@@ -55,8 +55,9 @@
 ///
 /// Determinism. Pairs run in parallel (OpenMP); each pair writes only its own
 /// records (node contacts go to per-thread buffers and are concatenated in
-/// pair order afterwards), and accumulate() sums forces into particles in pair
-/// order, so results are bitwise identical for any number of threads.
+/// pair order afterwards, when first read), and accumulate() sums forces into
+/// particles in pair order, so results are bitwise identical for any number
+/// of threads.
 
 #include "lsdem/dynamics/Contact.h"
 #include "lsdem/dynamics/ContactLaw.h"
@@ -72,6 +73,7 @@
 #include <cstdint>
 #include <optional>
 #include <memory>
+#include <mutex>
 #include <span>
 #include <type_traits>
 #include <vector>
@@ -240,10 +242,27 @@ struct alignas(64) ThreadBuffers {
   std::vector<std::uint32_t> batchCells, batchLive, batchLeaves, batchNodes, batchOwners;
   std::vector<Vec<D>> batchPoints;
   std::vector<double> batchValues;
+  /// The node-level records of this thread's runs that the output does not
+  /// hold yet (ContactSolver::pending_): the last compute()'s, swapped out
+  /// of nodes / shear / preload / keys, so the next compute() writes its own
+  /// there while reading these as its history.
+  Records<NodeContact<D>> heldNodes;
+  Records<Vec<D>> heldShear;
+  Records<double> heldPreload;
+  Records<std::uint32_t> heldKeys;
   // Scratch of sortByNode.
   std::vector<std::uint32_t> order;
   std::vector<NodeContact<D>> nodeScratch;
   std::vector<NodeWork<D>> workScratch;
+};
+
+/// A mutex that copies as a new one (internal): lets ContactSolver, which
+/// holds one, stay copyable.
+struct CopyLock {
+  std::mutex mutex;
+  CopyLock() = default;
+  CopyLock(const CopyLock&) {}
+  CopyLock& operator=(const CopyLock&) { return *this; }
 };
 
 /// Where one task's records went (internal): thread buffer ranges and output offsets.
@@ -462,15 +481,24 @@ class ContactSolver {
   /// @brief Node contacts of the last compute(); pair k owns
   /// [pairContacts()[k].firstNode, + nodeCount). Within a pair: the nodes of a
   /// inside b (ownerIsB = 0) by node index, then those of b inside a.
-  std::span<const NodeContact<D>> nodeContacts() const { return nodes_; }
+  std::span<const NodeContact<D>> nodeContacts() const {
+    copyPendingRecords();
+    return nodes_;
+  }
   /// @brief Shear displacement of each node contact after the last compute()
   /// (world frame, m; in the tangent plane), aligned with nodeContacts(); empty
   /// when the law has no friction.
-  std::span<const Vec<D>> nodeShear() const { return shear_; }
+  std::span<const Vec<D>> nodeShear() const {
+    copyPendingRecords();
+    return shear_;
+  }
 
   /// @brief Rest overlap of each node contact after the last compute() (m),
   /// aligned with nodeContacts(): 0 but for springs born relaxed.
-  std::span<const double> nodePreload() const { return preload_; }
+  std::span<const double> nodePreload() const {
+    copyPendingRecords();
+    return preload_;
+  }
 
   /// @brief Bytes the record arrays hold (capacity): the output of the last
   /// compute() and the threads' buffers it was gathered from.
@@ -585,15 +613,26 @@ class ContactSolver {
   // Output of the last compute(); nodes_ / shear_ with history_ are also the history.
   detail::Records<PairContact<D>> pairs_;
   detail::Records<PairDashpot<D>> dashpots_;  // aligned with pairs_; not part of the saved state
-  detail::Records<NodeContact<D>> nodes_;
-  detail::Records<Vec<D>> shear_;
-  detail::Records<double> preload_;  // aligned with nodes_
+  // The node-level output (nodes_, shear_, preload_, historyKeys_) is sized
+  // by gather(), which fills only the first run's part (or swaps it in):
+  // the other runs' records stay in their threads' held buffers (pending_)
+  // until a reader asks for the arrays (copyPendingRecords, which a const
+  // reader may call: hence mutable). The next compute() reads its history
+  // from either place, so a step whose node records nobody reads copies
+  // none (on one thread there is nothing to copy).
+  mutable detail::Records<NodeContact<D>> nodes_;
+  mutable detail::Records<Vec<D>> shear_;
+  mutable detail::Records<double> preload_;  // aligned with nodes_
+  mutable std::vector<detail::TaskOutput> pending_;  // runs in output order (outNode), held by their threads
+  mutable detail::CopyLock pendingLock_;
+  // Copies the pending runs' records into the node-level output (none left after).
+  void copyPendingRecords() const;
   std::vector<detail::BirthNode> newborn_;  // sorted by (id, node); for the next compute()
   std::vector<detail::HistoryPair> history_;  // sorted by (idA, other)
   // Node keys of nodes_ (owner bit and node index), aligned with it while
   // history_ is kept: the history merge reads these, not the 88-byte records
   // (filled as gather() copies the records; rebuilt from them on loadState()).
-  detail::Records<std::uint32_t> historyKeys_;
+  mutable detail::Records<std::uint32_t> historyKeys_;
   void buildHistoryKeys();
   // Appends `history`'s pairs to the history (none of them held already) and sorts it.
   void appendHistory(const ParticleHistory& history);
@@ -626,6 +665,7 @@ class ContactSolver {
   std::vector<std::size_t> blocks_;        // task bounds of the parts, two threads each, this compute()
   std::vector<detail::TaskCursor> cursors_;  // per part: its tasks not yet taken
   std::vector<std::size_t> runs_;          // task bounds of the runs of records (findRuns)
+  std::vector<detail::TaskOutput> runList_;  // gather(): the runs after the first, in output order
   std::vector<std::uint32_t> taskCost_;    // the last compute()'s cost per task
   std::vector<double> blockSeconds_;       // the last compute()'s seconds of work per part (all threads)
   std::vector<double> threadSeconds_;      // per thread and part, this compute()
