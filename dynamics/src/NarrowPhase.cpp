@@ -166,7 +166,8 @@ void sortByNode(ThreadBuffers<D>& buf, std::size_t first) {
 }
 
 // Copies records [lo, hi) of a run that starts at `first` in `source` to
-// `out + lo` on in `target`, as bytes: the records are plain data
+// the run's place in `target`, which starts at `out`, as bytes: the
+// records are plain data
 // (RecordAllocator; Eigen's fixed-size members are arrays of doubles, as
 // checkpoints also treat them), and std::copy would copy them member by
 // member (Eigen's vectors are not trivially copyable): 20-30 % longer.
