@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -326,13 +327,31 @@ std::vector<unsigned char> clusterRun(int threads, std::size_t count, const Cont
   EXPECT_GT(solver.planeContacts().size(), 0u);
   EXPECT_GT(solver.toolContacts().size(), 0u);
   EXPECT_GT(solver.historySize(), 0u);
-  if (readEachStep) EXPECT_GT(readEach, 0u);
+  if (readEachStep) {
+    EXPECT_GT(readEach, 0u);
+  }
   for (std::size_t i = 0; i < p.size(); ++i) {
     append(&p.force[i], sizeof(Vec<D>));
     append(&p.torque[i], sizeof(Spin<D>));
     append(&p.position[i], sizeof(Vec<D>));
     append(&p.velocity[i], sizeof(Vec<D>));
   }
+  // Every particle's shear history, taken before anything else reads the
+  // node records (at several threads they are then still in the threads'
+  // buffers: particleHistories() copies them first).
+  std::vector<std::uint64_t> ids(p.id.begin(), p.id.end());
+  std::sort(ids.begin(), ids.end());
+  std::size_t historyNodes = 0;
+  for (const auto& h : solver.particleHistories(ids)) {
+    append(h.pairs.data(), h.pairs.size() * sizeof(h.pairs[0]));
+    for (const NodeContact<D>& c : h.nodes) {
+      append(c.force.data(), sizeof(Vec<D>));
+      append(&c.node, sizeof(c.node));
+    }
+    append(h.shear.data(), h.shear.size() * sizeof(Vec<D>));
+    historyNodes += h.nodes.size();
+  }
+  EXPECT_GT(historyNodes, 0u);
   for (const NodeContact<D>& c : solver.nodeContacts()) {
     append(c.force.data(), sizeof(Vec<D>));
     append(&c.node, sizeof(c.node));

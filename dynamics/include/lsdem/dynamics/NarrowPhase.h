@@ -243,9 +243,10 @@ struct alignas(64) ThreadBuffers {
   std::vector<Vec<D>> batchPoints;
   std::vector<double> batchValues;
   /// The node-level records of this thread's runs that the output does not
-  /// hold yet (ContactSolver::pending_): the last compute()'s, swapped out
-  /// of nodes / shear / preload / keys, so the next compute() writes its own
-  /// there while reading these as its history.
+  /// hold yet (ContactSolver::pending_, which says which; older ones where
+  /// the last compute() left this thread none), swapped out of nodes /
+  /// shear / preload / keys, so the next compute() writes its own there
+  /// while reading these as its history.
   Records<NodeContact<D>> heldNodes;
   Records<Vec<D>> heldShear;
   Records<double> heldPreload;
@@ -481,6 +482,10 @@ class ContactSolver {
   /// @brief Node contacts of the last compute(); pair k owns
   /// [pairContacts()[k].firstNode, + nodeCount). Within a pair: the nodes of a
   /// inside b (ownerIsB = 0) by node index, then those of b inside a.
+  /// @note After a compute() on several threads, the first call (of this,
+  /// nodeShear() or nodePreload()) copies the other threads' records into
+  /// one array, on all threads (OpenMP; one thread inside a parallel
+  /// region), under a lock; later calls only return it.
   std::span<const NodeContact<D>> nodeContacts() const {
     copyPendingRecords();
     return nodes_;
