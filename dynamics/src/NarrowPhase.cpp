@@ -167,10 +167,10 @@ void sortByNode(ThreadBuffers<D>& buf, std::size_t first) {
 
 // Copies records [lo, hi) of a run that starts at `first` in `source` to
 // the run's place in `target`, which starts at `out`, as bytes: the
-// records are plain data
-// (RecordAllocator; Eigen's fixed-size members are arrays of doubles, as
-// checkpoints also treat them), and std::copy would copy them member by
-// member (Eigen's vectors are not trivially copyable): 20-30 % longer.
+// records are plain data (RecordAllocator; Eigen's fixed-size members are
+// arrays of doubles, as checkpoints also treat them), and std::copy would
+// copy them member by member (Eigen's vectors are not trivially
+// copyable): 20-30 % longer.
 template <class Source, class Target>
 void copyRecords(const Source& source, std::size_t first, Target& target, std::size_t out, std::size_t lo,
                  std::size_t hi) {
@@ -1841,13 +1841,17 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
   if (anyPreload) preload_.resize(nodeTotal);
   if (keys) historyKeys_.resize(nodeTotal);
   if (friction) shear_.resize(nodeTotal);
+  // (The last step's pending runs were its history, read by run().)
   const std::size_t runCount = runs_.size() - 1;
-  runList_.clear();
-  for (std::size_t b = next; b < runCount; ++b) runList_.push_back(runAt(b));
+  pending_.clear();
+  for (std::size_t b = next; b < runCount; ++b) {
+    const TaskOutput run = runAt(b);
+    if (run.pairCount > 0 || run.nodeCount > 0) pending_.push_back(run);
+  }
   copyInShares(
-      runList_.size(), pairTotal - headPairs, threads_.size(), [&](std::size_t r) { return runList_[r].pairCount; },
+      pending_.size(), pairTotal - headPairs, threads_.size(), [&](std::size_t r) { return pending_[r].pairCount; },
       [&](std::size_t r, std::size_t lo, std::size_t hi) {
-        const TaskOutput& run = runList_[r];
+        const TaskOutput& run = pending_[r];
         const ThreadBuffers<D>& buf = threads_[run.thread];
         copyRecords(buf.pairs, run.firstPair, pairs_, run.outPair, lo, hi);
         copyRecords(buf.dashpots, run.firstPair, dashpots_, run.outPair, lo, hi);
@@ -1856,10 +1860,6 @@ void ContactSolver<D>::gather(const Particles<D>& particles, std::size_t particl
         }
       });
   // The threads holding pending records move them aside (heldNodes ...).
-  pending_.clear();
-  for (const TaskOutput& run : runList_) {
-    if (run.nodeCount > 0) pending_.push_back(run);
-  }
   for (std::size_t t = 0; t < threads_.size(); ++t) {
     if (std::none_of(pending_.begin(), pending_.end(), [&](const TaskOutput& run) { return run.thread == t; })) {
       continue;

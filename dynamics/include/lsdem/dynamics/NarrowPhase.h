@@ -670,7 +670,6 @@ class ContactSolver {
   std::vector<std::size_t> blocks_;        // task bounds of the parts, two threads each, this compute()
   std::vector<detail::TaskCursor> cursors_;  // per part: its tasks not yet taken
   std::vector<std::size_t> runs_;          // task bounds of the runs of records (findRuns)
-  std::vector<detail::TaskOutput> runList_;  // gather(): the runs after the first, in output order
   std::vector<std::uint32_t> taskCost_;    // the last compute()'s cost per task
   std::vector<double> blockSeconds_;       // the last compute()'s seconds of work per part (all threads)
   std::vector<double> threadSeconds_;      // per thread and part, this compute()
