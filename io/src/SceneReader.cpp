@@ -289,6 +289,11 @@ class SceneReader {
     const toml::table* t = top.optionalTable("shapes");
     if (!t) top.fail("", "missing table [shapes]: a scene needs at least one shape");
     TomlReader all(*t, file_, "shapes");
+    // The declared shapes are read here and built together after the
+    // table (buildDeclaredShapes: several at a time); their places in
+    // scene_.shapes are held meanwhile.
+    std::vector<ShapeDecl> declared;
+    std::vector<std::size_t> declaredAt;
     for (const auto& [k, v] : *t) {
       const std::string name(k.str());
       const std::string path = "shapes." + name;
@@ -317,12 +322,15 @@ class SceneReader {
         }
         continue;
       }
-      const ShapeDecl decl = detail::readShapeTable(*s, file_, path, D);
       (void)line;
       indices.push_back(scene_.shapes.size());
       scene_.shapeNames.push_back(name);
-      scene_.shapes.push_back(buildDeclaredShape<D>(decl, &scene_.notes));
+      declared.push_back(detail::readShapeTable(*s, file_, path, D));
+      declaredAt.push_back(scene_.shapes.size());
+      scene_.shapes.emplace_back();
     }
+    std::vector<std::shared_ptr<const geometry::Shape<D>>> built = buildDeclaredShapes<D>(declared, &scene_.notes);
+    for (std::size_t s = 0; s < built.size(); ++s) scene_.shapes[declaredAt[s]] = std::move(built[s]);
   }
 
   // The shapes a key names ("grain", or a list of names; a folder counts as all its grains).

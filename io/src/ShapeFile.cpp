@@ -6,6 +6,7 @@
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/MeshToLevelSet.h"
 
+#include <exception>
 #include <stdexcept>
 
 namespace lsdem::io {
@@ -44,7 +45,39 @@ std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& de
   }
 }
 
+template <int D>
+std::vector<std::shared_ptr<const geometry::Shape<D>>> buildDeclaredShapes(const std::vector<ShapeDecl>& decls,
+                                                                           std::vector<std::string>* notes) {
+  const std::ptrdiff_t n = std::ptrdiff_t(decls.size());
+  std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes(decls.size());
+  std::vector<std::vector<std::string>> notesOf(decls.size());
+  std::vector<std::exception_ptr> errors(decls.size());
+  // One shape per thread at a time, the largest share of a build being
+  // serial; a single shape is built alone, its own parallel loops then
+  // having every thread. (No exception leaves the parallel loop: each is
+  // kept and the first in declaration order thrown after it.)
+#pragma omp parallel for schedule(dynamic, 1) if (n > 1)
+  for (std::ptrdiff_t s = 0; s < n; ++s) {
+    try {
+      shapes[std::size_t(s)] = buildDeclaredShape<D>(decls[std::size_t(s)], &notesOf[std::size_t(s)]);
+    } catch (...) {
+      errors[std::size_t(s)] = std::current_exception();
+    }
+  }
+  for (const std::exception_ptr& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
+  if (notes) {
+    for (const std::vector<std::string>& lines : notesOf) notes->insert(notes->end(), lines.begin(), lines.end());
+  }
+  return shapes;
+}
+
 template std::shared_ptr<const geometry::Shape<2>> buildDeclaredShape<2>(const ShapeDecl&, std::vector<std::string>*);
 template std::shared_ptr<const geometry::Shape<3>> buildDeclaredShape<3>(const ShapeDecl&, std::vector<std::string>*);
+template std::vector<std::shared_ptr<const geometry::Shape<2>>> buildDeclaredShapes<2>(const std::vector<ShapeDecl>&,
+                                                                                        std::vector<std::string>*);
+template std::vector<std::shared_ptr<const geometry::Shape<3>>> buildDeclaredShapes<3>(const std::vector<ShapeDecl>&,
+                                                                                        std::vector<std::string>*);
 
 }  // namespace lsdem::io

@@ -4,6 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -126,4 +130,76 @@ TEST(ShapeFile, GeometryProblemsBecomeInputErrors) {
   }
   // A 2D declaration asked for as 3D.
   EXPECT_THROW(io::buildDeclaredShape<3>(decl), io::InputError);
+}
+
+namespace {
+// OpenMP's thread count for a scope (nothing without OpenMP).
+struct ThreadCount {
+  explicit ThreadCount([[maybe_unused]] int threads) {
+#ifdef _OPENMP
+    omp_set_num_threads(threads);
+#endif
+  }
+  ~ThreadCount() {
+#ifdef _OPENMP
+    omp_set_num_threads(before);
+#endif
+  }
+  ThreadCount(const ThreadCount&) = delete;
+  ThreadCount& operator=(const ThreadCount&) = delete;
+#ifdef _OPENMP
+  int before = omp_get_max_threads();
+#endif
+};
+}  // namespace
+
+// A scene's shapes are built several at a time (buildDeclaredShapes): each
+// is the shape built alone, bit for bit (grid, nodes, mass), in the order
+// declared, at one thread or two.
+TEST(ShapeFile, ShapesBuiltTogetherAreThoseBuiltAlone) {
+  std::vector<io::ShapeDecl> decls;
+  decls.push_back(io::readShapeFile(writeFile("t_se.toml",
+      "[shape]\ndimension = 3\nkind = \"superellipsoid\"\nsemi_axes = [0.5, 0.4, 0.3]\nexponents = [2.5, 3]\n"
+      "cells_across = 12\n")));
+  decls.push_back(io::readShapeFile(writeFile("t_grain.toml",
+      "[shape]\ndimension = 3\nkind = \"random_grain\"\nequivalent_diameter = 1\nroughness = 0.2\nseed = 4\n"
+      "cells_across = 12\n")));
+  decls.push_back(io::readShapeFile(writeFile("t_sphere.toml",
+      "[shape]\ndimension = 3\nkind = \"sphere\"\nradius = 0.4\ncells_across = 10\n")));
+  std::vector<std::shared_ptr<const geometry::Shape<3>>> alone;
+  for (const io::ShapeDecl& d : decls) alone.push_back(io::buildDeclaredShape<3>(d));
+  for (int threads : {1, 2}) {
+    const ThreadCount scoped(threads);
+    const auto together = io::buildDeclaredShapes<3>(decls);
+    ASSERT_EQ(together.size(), decls.size());
+    for (std::size_t s = 0; s < decls.size(); ++s) {
+      SCOPED_TRACE("shape " + std::to_string(s) + ", threads " + std::to_string(threads));
+      EXPECT_EQ(together[s]->grid().values(), alone[s]->grid().values());
+      EXPECT_EQ(together[s]->nodes().positions, alone[s]->nodes().positions);
+      EXPECT_EQ(together[s]->nodes().weights, alone[s]->nodes().weights);
+      EXPECT_EQ(together[s]->volume(), alone[s]->volume());
+      EXPECT_EQ(together[s]->mass().inertiaTensor(), alone[s]->mass().inertiaTensor());
+    }
+  }
+}
+
+// Two bad declarations among good ones: the error is the first one's (in
+// the order given), whichever build ends first.
+TEST(ShapeFile, ShapesBuiltTogetherReportTheFirstBadDeclaration) {
+  const io::ShapeDecl good = io::readShapeFile(writeFile("t_disc.toml",
+      "[shape]\ndimension = 2\nkind = \"circle\"\nradius = 0.5\ncells_across = 16\n"));
+  io::ShapeDecl bowtie = io::readShapeFile(writeFile("t_bowtie.toml",
+      "[shape]\ndimension = 2\nkind = \"polygon\"\nvertices = [[0,0],[1,1],[1,0],[0,1]]\nspacing = 0.05\n"));
+  std::vector<io::ShapeDecl> decls{good, bowtie, good, bowtie};
+  decls[1].key = "shapes.first";
+  decls[3].key = "shapes.second";
+  for (int threads : {1, 2}) {
+    const ThreadCount scoped(threads);
+    try {
+      io::buildDeclaredShapes<2>(decls);
+      ADD_FAILURE() << "a bow-tie polygon was accepted";
+    } catch (const io::InputError& e) {
+      EXPECT_EQ(e.key(), "shapes.first") << e.what();
+    }
+  }
 }

@@ -39,4 +39,14 @@ template <int D>
 std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& decl,
                                                              std::vector<std::string>* notes = nullptr);
 
+/// @brief Builds the declared shapes, several at a time on OpenMP threads
+/// (each shape's own build is mostly serial: mesh remeshing, fast
+/// sweeping). Returns them in the order given; the notes come in that
+/// order too. Each shape is the one buildDeclaredShape makes, whatever the
+/// thread count. A problem throws the InputError of the first declaration
+/// (in the order given) that has one, after every build has ended.
+template <int D>
+std::vector<std::shared_ptr<const geometry::Shape<D>>> buildDeclaredShapes(const std::vector<ShapeDecl>& decls,
+                                                                           std::vector<std::string>* notes = nullptr);
+
 }  // namespace lsdem::io
