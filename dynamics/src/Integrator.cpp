@@ -1,5 +1,7 @@
 #include "lsdem/dynamics/Integrator.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace lsdem::dynamics {
@@ -31,11 +33,13 @@ inline void sinCos(double x, double& s, double& c) {
 // Exact free rotation about body axis k for a time s: the body turns by
 // a = s L_k / I_k about its own axis k (q <- q (cos a/2, sin a/2 e_k)); the
 // body-frame momentum turns by -a about the same axis. One sine and cosine,
-// of a/2; those of a follow by the double-angle formulas.
-void rotateAboutBodyAxis(Eigen::Quaterniond& q, Vec<3>& Lbody, const Vec<3>& invInertia, int k, double s) {
+// of a/2; those of a follow by the double-angle formulas. (The axis is a
+// template argument: the turns inline with their indices known.)
+template <int k>
+inline void rotateAboutBodyAxis(Eigen::Quaterniond& q, Vec<3>& Lbody, const Vec<3>& invInertia, double s) {
   double sh = 0.0, ch = 1.0;
   sinCos(0.5 * s * Lbody[k] * invInertia[k], sh, ch);
-  const int i = (k + 1) % 3, j = (k + 2) % 3;
+  constexpr int i = (k + 1) % 3, j = (k + 2) % 3;
   // q (ch, sh e_k): w' = ch w - sh v_k; v' = ch v + sh w e_k + sh v x e_k,
   // where (v x e_k)_i = v_j, (v x e_k)_j = -v_i, (v x e_k)_k = 0.
   const double w = q.w(), vi = q.vec()[i], vj = q.vec()[j], vk = q.vec()[k];
@@ -50,15 +54,30 @@ void rotateAboutBodyAxis(Eigen::Quaterniond& q, Vec<3>& Lbody, const Vec<3>& inv
 }
 
 // The splitting x(dt/2), y(dt/2), z(dt), y(dt/2), x(dt/2) of the free
-// rotation, on the orientation and the body-frame angular momentum.
-void freeRotationBody(Eigen::Quaterniond& q, Vec<3>& Lbody, const Vec<3>& invInertia, double dt) {
-  rotateAboutBodyAxis(q, Lbody, invInertia, 0, 0.5 * dt);
-  rotateAboutBodyAxis(q, Lbody, invInertia, 1, 0.5 * dt);
-  rotateAboutBodyAxis(q, Lbody, invInertia, 2, dt);
-  rotateAboutBodyAxis(q, Lbody, invInertia, 1, 0.5 * dt);
-  rotateAboutBodyAxis(q, Lbody, invInertia, 0, 0.5 * dt);
-  q.normalize();
+// rotation, on the orientations and body-frame angular momenta of `count`
+// bodies. Each turn is made for all of them before the next: a body's five
+// turns are one chain, each waiting for the one before, and bodies taken
+// one after another left the processor waiting on it; taken together, the
+// chains of different bodies overlap. (Each body's arithmetic is the same
+// either way, bit for bit.)
+void freeRotationBodies(Eigen::Quaterniond* q, Vec<3>* Lbody, const Vec<3>* invInertia, std::size_t count,
+                        double dt) {
+  const auto turn = [&]<int k>(double s) {
+    for (std::size_t b = 0; b < count; ++b) rotateAboutBodyAxis<k>(q[b], Lbody[b], invInertia[b], s);
+  };
+  turn.template operator()<0>(0.5 * dt);
+  turn.template operator()<1>(0.5 * dt);
+  turn.template operator()<2>(dt);
+  turn.template operator()<1>(0.5 * dt);
+  turn.template operator()<0>(0.5 * dt);
+  for (std::size_t b = 0; b < count; ++b) q[b].normalize();
 }
+void freeRotationBody(Eigen::Quaterniond& q, Vec<3>& Lbody, const Vec<3>& invInertia, double dt) {
+  freeRotationBodies(&q, &Lbody, &invInertia, 1, dt);
+}
+
+// Bodies per batch of kickDrift's free rotations (freeRotationBodies).
+constexpr std::ptrdiff_t kRotationBatch = 8;
 
 // The translational half kick of particle i.
 template <int D>
@@ -80,19 +99,34 @@ template <int D>
 void kickDrift(Particles<D>& p, double dt) {
   const double half = 0.5 * dt;
   const std::ptrdiff_t n = std::ptrdiff_t(p.size());
+  if constexpr (D == 2) {
 #pragma omp parallel for schedule(static) if (n > 512)
-  for (std::ptrdiff_t i = 0; i < n; ++i) {
-    kickVelocity(p, i, half);
-    p.position[i] += dt * p.velocity[i];
-    if constexpr (D == 2) {
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+      kickVelocity(p, i, half);
+      p.position[i] += dt * p.velocity[i];
       p.angularVelocity[i] += half * p.invInertia[i] * p.torque[i];
       p.orientation[i] += dt * p.angularVelocity[i];
-    } else {
-      Eigen::Quaterniond& q = p.orientation[i];
-      Vec<3> Lbody =
-          p.inertia[i].cwiseProduct(q.conjugate() * p.angularVelocity[i]) + half * (q.conjugate() * p.torque[i]);
-      freeRotationBody(q, Lbody, p.invInertia[i], dt);
-      p.angularVelocity[i] = q * Vec<3>(p.invInertia[i].cwiseProduct(Lbody));
+    }
+  } else {
+    // In batches of bodies, whose free rotations are made together.
+    const std::ptrdiff_t batches = (n + kRotationBatch - 1) / kRotationBatch;
+#pragma omp parallel for schedule(static) if (n > 512)
+    for (std::ptrdiff_t batch = 0; batch < batches; ++batch) {
+      const std::ptrdiff_t first = batch * kRotationBatch, count = std::min(kRotationBatch, n - first);
+      std::array<Vec<3>, kRotationBatch> Lbody;
+      for (std::ptrdiff_t b = 0; b < count; ++b) {
+        const std::ptrdiff_t i = first + b;
+        kickVelocity(p, i, half);
+        p.position[i] += dt * p.velocity[i];
+        const Eigen::Quaterniond& q = p.orientation[i];
+        Lbody[std::size_t(b)] =
+            p.inertia[i].cwiseProduct(q.conjugate() * p.angularVelocity[i]) + half * (q.conjugate() * p.torque[i]);
+      }
+      freeRotationBodies(&p.orientation[first], Lbody.data(), &p.invInertia[first], std::size_t(count), dt);
+      for (std::ptrdiff_t b = 0; b < count; ++b) {
+        const std::ptrdiff_t i = first + b;
+        p.angularVelocity[i] = p.orientation[i] * Vec<3>(p.invInertia[i].cwiseProduct(Lbody[std::size_t(b)]));
+      }
     }
   }
 }
