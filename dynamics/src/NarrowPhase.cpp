@@ -765,6 +765,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     detail::KeptLeaf& kept = buf.leaves.back();
     kept.cell = index;
     kept.cellMargin = -lowered(passed - measuredLoss);
+    // (Its nodes' margins, and their least, come with the batch's tests below.)
+    kept.leastNode = cell.end - cell.begin > kSlots ? 0.0f : std::numeric_limits<float>::infinity();
     tested += cell.end - cell.begin;
     for (std::uint32_t k = cell.begin; k < cell.end; ++k) queue(k, buf.leaves.size() - 1);
   };
@@ -794,6 +796,20 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     } else if (rebase) {
       kept.cellMargin = -lowered(-cellClear - carried);
     }
+    const std::uint32_t slots = std::min(cell.end - cell.begin, kSlots);
+    if (movedBound < double(old.leastNode)) {
+      // Every node's margin holds: none is tested. (The least of the
+      // margins less `carried`, lowered, is the least of those lowered
+      // one by one: both steps keep the order.)
+      const double m = double(old.leastNode) - carried;
+      clearLeaves = std::min(clearLeaves, m);
+      if (rebase) {
+        for (std::uint32_t j = 0; j < slots; ++j) kept.nodeMargin[j] = lowered(double(old.nodeMargin[j]) - carried);
+        kept.leastNode = lowered(m);
+      }
+      buf.leaves.push_back(kept);
+      return;
+    }
     for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
       const std::uint32_t j = k - cell.begin;
       if (j < kSlots && movedBound < double(old.nodeMargin[j])) {
@@ -805,6 +821,9 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       ++tested;
       testKept(kept, k, j);
     }
+    float least = cell.end - cell.begin > kSlots ? 0.0f : std::numeric_limits<float>::infinity();
+    for (std::uint32_t j = 0; j < slots; ++j) least = std::min(least, kept.nodeMargin[j]);
+    kept.leastNode = least;
     buf.leaves.push_back(kept);
   };
   if (!rebase) {
@@ -861,7 +880,10 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       leastNode = std::min(leastNode, m);
       detail::KeptLeaf& kept = buf.leaves[owners[e]];
       const std::uint32_t j = queued[e] - tree.cells[kept.cell].begin;
-      if (j < kSlots) kept.nodeMargin[j] = lowered(m);
+      if (j < kSlots) {
+        kept.nodeMargin[j] = lowered(m);
+        kept.leastNode = std::min(kept.leastNode, kept.nodeMargin[j]);
+      }
     }
     clearLeaves = leastNode;
   }

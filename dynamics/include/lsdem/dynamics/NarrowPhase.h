@@ -132,12 +132,15 @@ struct NodeWork {
 /// further nodes have none), in cells of the other's grid, relative to the
 /// certificate's map (Certificate; collectLevelSet in NarrowPhase.cpp). A
 /// cell margin m > 0: the cell's test rejects it until a move of m; m < 0:
-/// it passes until a move of -m; 0: test it.
+/// it passes until a move of -m; 0: test it. `leastNode` is the least of
+/// its nodes' margins (0 when it has nodes without a slot, which are always
+/// tested): while it holds, no node of the leaf is tested.
 struct KeptLeaf {
   static constexpr std::uint32_t kNodeSlots = geometry::NodeTree<3>::kLeafSize;
   std::uint32_t cell = 0;
   float cellMargin = 0.0f;
   std::array<float, kNodeSlots> nodeMargin{};
+  float leastNode = 0.0f;
 };
 
 /// A tree cell a certified walk rejected (internal; Certificate): how far
