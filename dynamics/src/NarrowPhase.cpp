@@ -753,6 +753,11 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     clearLeaves = std::min(clearLeaves, m);
     if (j < kSlots) kept.nodeMargin[j] = lowered(m);
   };
+  // Where a leaf's least node margin starts, before its slots' margins:
+  // 0 for a leaf with nodes beyond its slots (tested every walk).
+  const auto leastNodeFrom = [](const Cell& cell) {
+    return cell.end - cell.begin > kSlots ? 0.0f : std::numeric_limits<float>::infinity();
+  };
   // A leaf the walk passed (margin `passed`): kept, its nodes queued.
   const auto keepLeaf = [&](std::uint32_t index, double passed) {
     const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
@@ -766,7 +771,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     kept.cell = index;
     kept.cellMargin = -lowered(passed - measuredLoss);
     // (Its nodes' margins, and their least, come with the batch's tests below.)
-    kept.leastNode = cell.end - cell.begin > kSlots ? 0.0f : std::numeric_limits<float>::infinity();
+    kept.leastNode = leastNodeFrom(cell);
     tested += cell.end - cell.begin;
     for (std::uint32_t k = cell.begin; k < cell.end; ++k) queue(k, buf.leaves.size() - 1);
   };
@@ -821,7 +826,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       ++tested;
       testKept(kept, k, j);
     }
-    float least = cell.end - cell.begin > kSlots ? 0.0f : std::numeric_limits<float>::infinity();
+    float least = leastNodeFrom(cell);
     for (std::uint32_t j = 0; j < slots; ++j) least = std::min(least, kept.nodeMargin[j]);
     kept.leastNode = least;
     buf.leaves.push_back(kept);

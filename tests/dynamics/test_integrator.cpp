@@ -1,14 +1,11 @@
 #include "support/Shapes.h"
+#include "support/Threads.h"
 #include "lsdem/dynamics/Integrator.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 using namespace lsdem;
 using namespace lsdem::dynamics;
@@ -185,12 +182,7 @@ TEST(Integrator, BodiesSteppedTogetherMatchEachAlone) {
     p.force[k] = Vec<3>(-0.3, 0.1 * std::cos(i), 0.2);
   };
   for (int threads : {1, 2}) {
-#ifdef _OPENMP
-    const int before = omp_get_max_threads();
-    omp_set_num_threads(threads);
-#else
-    if (threads > 1) continue;
-#endif
+    const test::ScopedThreads scoped(threads);
     Particles<3> together;
     std::vector<Particles<3>> alone(n);
     for (int i = 0; i < n; ++i) {
@@ -220,8 +212,5 @@ TEST(Integrator, BodiesSteppedTogetherMatchEachAlone) {
       setUp(start, i);
       EXPECT_GT(together.orientation[i].angularDistance(start.orientation[0]), 0.01) << "body " << i;
     }
-#ifdef _OPENMP
-    omp_set_num_threads(before);
-#endif
   }
 }

@@ -1,12 +1,9 @@
 #include "support/Files.h"
+#include "support/Threads.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/ShapeFile.h"
 
 #include <gtest/gtest.h>
-
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include <filesystem>
 #include <fstream>
@@ -132,27 +129,6 @@ TEST(ShapeFile, GeometryProblemsBecomeInputErrors) {
   EXPECT_THROW(io::buildDeclaredShape<3>(decl), io::InputError);
 }
 
-namespace {
-// OpenMP's thread count for a scope (nothing without OpenMP).
-struct ThreadCount {
-  explicit ThreadCount([[maybe_unused]] int threads) {
-#ifdef _OPENMP
-    omp_set_num_threads(threads);
-#endif
-  }
-  ~ThreadCount() {
-#ifdef _OPENMP
-    omp_set_num_threads(before);
-#endif
-  }
-  ThreadCount(const ThreadCount&) = delete;
-  ThreadCount& operator=(const ThreadCount&) = delete;
-#ifdef _OPENMP
-  int before = omp_get_max_threads();
-#endif
-};
-}  // namespace
-
 // A scene's shapes are built several at a time (buildDeclaredShapes): each
 // is the shape built alone, bit for bit (grid, nodes, mass), in the order
 // declared, at one thread or two.
@@ -169,7 +145,7 @@ TEST(ShapeFile, ShapesBuiltTogetherAreThoseBuiltAlone) {
   std::vector<std::shared_ptr<const geometry::Shape<3>>> alone;
   for (const io::ShapeDecl& d : decls) alone.push_back(io::buildDeclaredShape<3>(d));
   for (int threads : {1, 2}) {
-    const ThreadCount scoped(threads);
+    const lsdem::test::ScopedThreads scoped(threads);
     const auto together = io::buildDeclaredShapes<3>(decls);
     ASSERT_EQ(together.size(), decls.size());
     for (std::size_t s = 0; s < decls.size(); ++s) {
@@ -194,7 +170,7 @@ TEST(ShapeFile, ShapesBuiltTogetherReportTheFirstBadDeclaration) {
   decls[1].key = "shapes.first";
   decls[3].key = "shapes.second";
   for (int threads : {1, 2}) {
-    const ThreadCount scoped(threads);
+    const lsdem::test::ScopedThreads scoped(threads);
     try {
       io::buildDeclaredShapes<2>(decls);
       ADD_FAILURE() << "a bow-tie polygon was accepted";
