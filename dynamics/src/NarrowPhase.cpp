@@ -444,18 +444,19 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     return NodeWork<D>{stiffnessFactor<Formulation>(weights[i], weightToFactor), directionWeight * weights[i],
                        length / h, -1};
   };
-  // The records of the trilinear nodes at tree positions ks[at[c]], grid
-  // points g[c], c < count, known to be inside: each one's value again,
-  // with the gradient from the same corners. Written in place (Records
-  // leaves a resize unwritten).
-  [[maybe_unused]] const auto recordNodes = [&](const std::uint32_t* ks, const std::uint32_t* at, const Vec<D>* g,
-                                                std::uint32_t count) {
+  // The records of the trilinear nodes at tree positions ks[at[c]], c <
+  // count, known to be inside: lookUp(c, grad) gives node c's value and
+  // writes its gradient (looked up again from the same corners, or kept
+  // from a look-up that made both). Written in place (Records leaves a
+  // resize unwritten).
+  [[maybe_unused]] const auto recordNodes = [&](const std::uint32_t* ks, const std::uint32_t* at, std::uint32_t count,
+                                                auto lookUp) {
     std::size_t n = buf.nodes.size();
     buf.nodes.resize(n + count);
     buf.work.resize(n + count);
     for (std::uint32_t c = 0; c < count; ++c) {
       Vec<D> grad;
-      const double phi = grid.valueAndGradientAtCells(g[c], grad);
+      const double phi = lookUp(c, grad);
       Vec<D> normal;
       const double length = normalOf(grad, normal);
       if (!(length > 0.0)) continue;
@@ -613,8 +614,11 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   };
   // The nodes at tree positions ks[0, n) tested as testNode tests them: the
   // records of those inside are appended; with certificates each one's
-  // margin (testNode's return) goes to margins[j].
-  const auto testNodes = [&](const std::uint32_t* ks, std::uint32_t n, double* margins) __attribute__((noinline)) {
+  // margin (testNode's return) goes to margins[j]. With Gradients, one
+  // look-up gives every candidate's value and gradient (Grid::
+  // valuesAndGradientsAtCells), for nodes that mostly lie inside; else the
+  // values first, and the gradients of those inside from a second look-up.
+  const auto testNodes = [&]<bool Gradients>(const std::uint32_t* ks, std::uint32_t n, double* margins) __attribute__((noinline)) {
     std::uint32_t* const live = buf.batchLive.data();
     Vec<D>* const at = buf.batchPoints.data();
     std::uint32_t candidates = 0;
@@ -642,19 +646,32 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     } else {
       // (margins, where given, are batchValues[0, n): the values go after them.)
       double* const values = buf.batchValues.data() + nodeSpace;
-      grid.valuesAtCells(at, candidates, values);
+      if constexpr (Gradients) {
+        grid.valuesAndGradientsAtCells(at, candidates, values, at);
+      } else {
+        grid.valuesAtCells(at, candidates, values);
+      }
       std::uint32_t inside = 0;
       for (std::uint32_t c = 0; c < candidates; ++c) {
         const double phi = values[c];
         if (certify) margins[live[c]] = (phi - margin_) * perSlopeCell_;
         live[inside] = live[c];
         at[inside] = at[c];
+        if constexpr (Gradients) values[inside] = phi;
         inside += phi < 0.0;
       }
       if (certify) {
         for (std::uint32_t c = 0; c < inside; ++c) margins[live[c]] = 0.0;
       }
-      recordNodes(ks, live, at, inside);
+      if constexpr (Gradients) {
+        recordNodes(ks, live, inside, [&](std::uint32_t c, Vec<D>& grad) {
+          grad = at[c];
+          return values[c];
+        });
+      } else {
+        recordNodes(ks, live, inside,
+                    [&](std::uint32_t c, Vec<D>& grad) { return grid.valueAndGradientAtCells(at[c], grad); });
+      }
     }
   };
   // The order of the leaves batchLeaves[0, count) in the tree, in
@@ -680,7 +697,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       for (std::uint32_t k = cell.begin; k < cell.end; ++k) buf.batchNodes[n++] = k;
     }
     tested = n;
-    testNodes(buf.batchNodes.data(), n, nullptr);
+    testNodes.template operator()<false>(buf.batchNodes.data(), n, nullptr);
     sortByNode(buf, first);
     return tested;
   }
@@ -734,11 +751,15 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     buf.frontier.push_back({cell, lowered(m)});
     clearFrontier = std::min(clearFrontier, m);
   };
-  // The nodes of the leaves a walk passes (tree position, and the index in
-  // buf.leaves of their leaf), tested in one batch once the walk is done.
-  // (A kept leaf's nodes are tested one by one, testKept: batched, the
-  // leaf walks of a settled bed took 5-12 % longer.)
-  if (rebase) sizeScratch();
+  // The nodes to test (tree position, and the index in buf.leaves of their
+  // leaf): those of the leaves a walk passes, and those of kept leaves whose
+  // margins no longer hold; tested in one batch once the walk is done, with
+  // one look-up each for the value and gradient. Taken one by one, a kept
+  // leaf's nodes each waited for their grid corners in turn; in the batch,
+  // without a branch between them, those waits overlap. Where the grids do
+  // not fit in the caches (fragments re-gridded finer: three grains 3D in
+  // its crushing stage) the retests spend most of their time there.
+  sizeScratch();
   std::uint32_t* const queued = buf.batchNodes.data();
   std::uint32_t* const owners = buf.batchOwners.data();
   std::uint32_t queuedCount = 0;
@@ -746,12 +767,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     queued[queuedCount] = k;
     owners[queuedCount] = std::uint32_t(leaf);
     ++queuedCount;
-  };
-  // Node k (slot j of its leaf `kept`) tested now: its margin kept.
-  const auto testKept = [&](detail::KeptLeaf& kept, std::uint32_t k, std::uint32_t j) {
-    const double m = testNode(k) - measuredLoss;
-    clearLeaves = std::min(clearLeaves, m);
-    if (j < kSlots) kept.nodeMargin[j] = lowered(m);
   };
   // Where a leaf's least node margin starts, before its slots' margins:
   // 0 for a leaf with nodes beyond its slots (tested every walk).
@@ -824,7 +839,9 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         continue;
       }
       ++tested;
-      testKept(kept, k, j);
+      // (Its margin comes with the batch, below: none until then.)
+      if (j < kSlots) kept.nodeMargin[j] = std::numeric_limits<float>::infinity();
+      queue(k, buf.leaves.size());
     }
     float least = leastNodeFrom(cell);
     for (std::uint32_t j = 0; j < slots; ++j) least = std::min(least, kept.nodeMargin[j]);
@@ -878,7 +895,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // The queued nodes, in one batch; their margins to their leaves.
   if (queuedCount > 0) {
     double* const margins = buf.batchValues.data();
-    testNodes(queued, queuedCount, margins);
+    testNodes.template operator()<true>(queued, queuedCount, margins);
     double leastNode = clearLeaves;  // (a local, as leastCarried above)
     for (std::uint32_t e = 0; e < queuedCount; ++e) {
       const double m = margins[e] - measuredLoss;

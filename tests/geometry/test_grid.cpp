@@ -358,8 +358,9 @@ TEST(Grid, CubicDeviationBoundHolds) {
 // The batched look-up (two points per instruction where the target has
 // SSE2) gives valueAtCells' values bit for bit: inside cells, on cell faces
 // and nodes, on the box's faces and its upper border (the last cell), for
-// an odd count (the last point alone) and for none. A sign-changing,
-// non-linear field, so every corner weight matters.
+// an odd count (the last point alone) and for none; the batched look-up
+// with gradients gives valueAndGradientAtCells' values and gradients. A
+// sign-changing, non-linear field, so every corner weight matters.
 template <int D>
 void checkBatchedLookupsAgree() {
   Index<D> dims;
@@ -383,6 +384,22 @@ void checkBatchedLookupsAgree() {
   double untouched = 7.0;
   g.valuesAtCells(points.data(), 0, &untouched);
   EXPECT_EQ(untouched, 7.0);
+  // With the gradients: valueAndGradientAtCells' value and gradient bit for
+  // bit, also written over the points themselves (as the narrow phase does).
+  std::vector<Vec<D>> grads(points.size(), Vec<D>::Constant(-1.0)), inPlace = points;
+  std::vector<double> values(points.size(), -1.0), valuesInPlace(points.size(), -1.0);
+  g.valuesAndGradientsAtCells(points.data(), points.size(), values.data(), grads.data());
+  g.valuesAndGradientsAtCells(inPlace.data(), inPlace.size(), valuesInPlace.data(), inPlace.data());
+  for (std::size_t j = 0; j < points.size(); ++j) {
+    Vec<D> grad;
+    const double value = g.valueAndGradientAtCells(points[j], grad);
+    ASSERT_EQ(values[j], value) << "point " << j;
+    ASSERT_EQ(valuesInPlace[j], value) << "point " << j;
+    for (int a = 0; a < D; ++a) {
+      ASSERT_EQ(grads[j][a], grad[a]) << "point " << j << " axis " << a;
+      ASSERT_EQ(inPlace[j][a], grad[a]) << "point " << j << " axis " << a << " (in place)";
+    }
+  }
 }
 TEST(Grid, BatchedLookupsAgreeBitForBit2D) { checkBatchedLookupsAgree<2>(); }
 TEST(Grid, BatchedLookupsAgreeBitForBit3D) { checkBatchedLookupsAgree<3>(); }

@@ -226,7 +226,7 @@ struct alignas(64) ThreadBuffers {
   Records<PairContact<D>> pairs;
   Records<PairDashpot<D>> dashpots;  ///< aligned with pairs
   Records<NodeContact<D>> nodes;
-  std::vector<NodeWork<D>> work;         ///< aligned with nodes
+  Records<NodeWork<D>> work;             ///< aligned with nodes
   Records<Vec<D>> shear;                 ///< aligned with nodes: shear displacement after this step, world frame, m
   Records<double> preload;               ///< aligned with nodes: the spring's rest overlap (markNewborn), m
   Records<std::uint32_t> keys;           ///< aligned with nodes: their node keys (owner bit, node index)

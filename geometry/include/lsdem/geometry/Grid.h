@@ -128,6 +128,15 @@ class Grid {
   /// and adds, e.g. -march=native with FMA, may fuse the two versions
   /// differently: the test Grid.BatchedLookupsAgreeBitForBit* checks a build.)
   void valuesAtCells(const Vec<D>* g, std::size_t n, double* out) const;
+  /// @brief valueAndGradientAtCells() at the n points g[0, n): values into
+  /// values[0, n), gradients per cell length into grads[0, n); the same bit
+  /// for bit, two points at a time as valuesAtCells(). For callers whose
+  /// points mostly lie inside, which need the gradient of most of them:
+  /// one pass over the corners instead of a value and then a second
+  /// look-up for the gradient (the narrow phase's retests of nodes near
+  /// contact). `grads` may be `g` itself: each point is read before its
+  /// gradient is written.
+  void valuesAndGradientsAtCells(const Vec<D>* g, std::size_t n, double* values, Vec<D>* grads) const;
   /// @brief valueAtCells() and the gradient per cell length (divide by
   /// spacing() for world units); the same value bit for bit.
   [[gnu::always_inline]] double valueAndGradientAtCells(const Vec<D>& g, Vec<D>& gradCells) const {
@@ -204,6 +213,10 @@ class Grid {
   [[gnu::always_inline]] inline double interpolateCubic(const Vec<D>& g, Vec<D>* gradCells, double threshold) const;
   /// Grid coordinates g clamped into the node box.
   Vec<D> clampToBox(const Vec<D>& g) const;
+#ifdef __SSE2__
+  template <class Pair>
+  [[gnu::always_inline]] inline std::size_t forPointPairs(const Vec<D>* g, std::size_t n, Pair&& pair) const;
+#endif
 
   Index<D> dims_ = Index<D>::Zero();
   Vec<D> origin_ = Vec<D>::Zero();
@@ -268,16 +281,20 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells, double th
   }
 }
 
-template <int D>
-inline void Grid<D>::valuesAtCells(const Vec<D>* g, std::size_t n, double* out) const {
-  std::size_t j = 0;
 #ifdef __SSE2__
+// The batched look-ups' common part: the points g[0, n) two at a time,
+// pair(j, t, corner) for points j and j + 1, with t[a] both points'
+// fractions along axis a and corner(offset) both cells' corner `offset`
+// (from the cell's lowest corner), widened to double; lane 0 is point j.
+// Returns how many points it took (an odd count leaves the last one).
+template <int D>
+template <class Pair>
+[[gnu::always_inline]] inline std::size_t Grid<D>::forPointPairs(const Vec<D>* g, std::size_t n, Pair&& pair) const {
   const float* const v = values_.data();
-  const std::size_t sy = std::size_t(dims_[0]);
-  [[maybe_unused]] const std::size_t sz = sy * std::size_t(dims_[1]);
   const __m128d zero = _mm_setzero_pd();
   __m128d lastCell[D];
   for (int a = 0; a < D; ++a) lastCell[a] = _mm_set1_pd(double(dims_[a] - 2));
+  std::size_t j = 0;
   for (; j + 2 <= n; j += 2) {
     // Per axis, both points: the cell clamp(int(g), 0, dims - 2) of
     // interpolate(), taken as int(max(min(g, dims - 2), 0)), the same cell
@@ -295,25 +312,81 @@ inline void Grid<D>::valuesAtCells(const Vec<D>* g, std::size_t n, double* out) 
     for (int a = 0; a < D; ++a) i0[a] = c0[a], i1[a] = c1[a];
     const float* const p0 = v + linear(i0);
     const float* const p1 = v + linear(i1);
-    // Corner `offset` of both cells, widened to double.
     const auto corner = [p0, p1](std::size_t offset) {
       return _mm_cvtps_pd(_mm_unpacklo_ps(_mm_load_ss(p0 + offset), _mm_load_ss(p1 + offset)));
     };
-    // x + s (y - x): interpolate()'s step.
-    const auto lerp = [](__m128d x, __m128d y, __m128d s) { return _mm_add_pd(x, _mm_mul_pd(s, _mm_sub_pd(y, x))); };
-    if constexpr (D == 2) {
-      const __m128d a0 = lerp(corner(0), corner(1), t[0]);
-      const __m128d a1 = lerp(corner(sy), corner(sy + 1), t[0]);
-      _mm_storeu_pd(out + j, lerp(a0, a1, t[1]));
-    } else {
-      const __m128d x00 = lerp(corner(0), corner(1), t[0]), x10 = lerp(corner(sy), corner(sy + 1), t[0]);
-      const __m128d x01 = lerp(corner(sz), corner(sz + 1), t[0]), x11 = lerp(corner(sz + sy), corner(sz + sy + 1), t[0]);
-      const __m128d y0 = lerp(x00, x10, t[1]), y1 = lerp(x01, x11, t[1]);
-      _mm_storeu_pd(out + j, lerp(y0, y1, t[2]));
-    }
+    pair(j, t, corner);
   }
+  return j;
+}
+
+namespace detail {
+/// x + s (y - x) on both lanes: interpolate()'s step.
+[[gnu::always_inline]] inline __m128d lerp2(__m128d x, __m128d y, __m128d s) {
+  return _mm_add_pd(x, _mm_mul_pd(s, _mm_sub_pd(y, x)));
+}
+}  // namespace detail
+#endif
+
+template <int D>
+inline void Grid<D>::valuesAtCells(const Vec<D>* g, std::size_t n, double* out) const {
+  std::size_t j = 0;
+#ifdef __SSE2__
+  const std::size_t sy = std::size_t(dims_[0]);
+  [[maybe_unused]] const std::size_t sz = sy * std::size_t(dims_[1]);
+  using detail::lerp2;
+  j = forPointPairs(g, n, [&](std::size_t k, const __m128d* t, const auto& corner) {
+    if constexpr (D == 2) {
+      const __m128d a0 = lerp2(corner(0), corner(1), t[0]);
+      const __m128d a1 = lerp2(corner(sy), corner(sy + 1), t[0]);
+      _mm_storeu_pd(out + k, lerp2(a0, a1, t[1]));
+    } else {
+      const __m128d x00 = lerp2(corner(0), corner(1), t[0]), x10 = lerp2(corner(sy), corner(sy + 1), t[0]);
+      const __m128d x01 = lerp2(corner(sz), corner(sz + 1), t[0]), x11 = lerp2(corner(sz + sy), corner(sz + sy + 1), t[0]);
+      const __m128d y0 = lerp2(x00, x10, t[1]), y1 = lerp2(x01, x11, t[1]);
+      _mm_storeu_pd(out + k, lerp2(y0, y1, t[2]));
+    }
+  });
 #endif
   for (; j < n; ++j) out[j] = valueAtCells(g[j]);
+}
+
+template <int D>
+inline void Grid<D>::valuesAndGradientsAtCells(const Vec<D>* g, std::size_t n, double* values, Vec<D>* grads) const {
+  std::size_t j = 0;
+#ifdef __SSE2__
+  const std::size_t sy = std::size_t(dims_[0]);
+  [[maybe_unused]] const std::size_t sz = sy * std::size_t(dims_[1]);
+  using detail::lerp2;
+  j = forPointPairs(g, n, [&](std::size_t k, const __m128d* t, const auto& corner) {
+    // Lane 0 to point k, lane 1 to point k + 1 (after both were read).
+    const auto put = [&](int a, __m128d x) {
+      _mm_storel_pd(&grads[k][a], x);
+      _mm_storeh_pd(&grads[k + 1][a], x);
+    };
+    if constexpr (D == 2) {
+      const __m128d v00 = corner(0), v10 = corner(1), v01 = corner(sy), v11 = corner(sy + 1);
+      const __m128d a0 = lerp2(v00, v10, t[0]), a1 = lerp2(v01, v11, t[0]);
+      _mm_storeu_pd(values + k, lerp2(a0, a1, t[1]));
+      put(0, lerp2(_mm_sub_pd(v10, v00), _mm_sub_pd(v11, v01), t[1]));
+      put(1, _mm_sub_pd(a1, a0));
+    } else {
+      const __m128d v000 = corner(0), v100 = corner(1), v010 = corner(sy), v110 = corner(sy + 1);
+      const __m128d v001 = corner(sz), v101 = corner(sz + 1), v011 = corner(sz + sy), v111 = corner(sz + sy + 1);
+      const __m128d x00 = lerp2(v000, v100, t[0]), x10 = lerp2(v010, v110, t[0]);
+      const __m128d x01 = lerp2(v001, v101, t[0]), x11 = lerp2(v011, v111, t[0]);
+      const __m128d y0 = lerp2(x00, x10, t[1]), y1 = lerp2(x01, x11, t[1]);
+      _mm_storeu_pd(values + k, lerp2(y0, y1, t[2]));
+      // interpolate()'s gradient, step for step.
+      const __m128d d00 = _mm_sub_pd(v100, v000), d10 = _mm_sub_pd(v110, v010);
+      const __m128d d01 = _mm_sub_pd(v101, v001), d11 = _mm_sub_pd(v111, v011);
+      put(0, lerp2(lerp2(d00, d10, t[1]), lerp2(d01, d11, t[1]), t[2]));
+      put(1, lerp2(_mm_sub_pd(x10, x00), _mm_sub_pd(x11, x01), t[2]));
+      put(2, _mm_sub_pd(y1, y0));
+    }
+  });
+#endif
+  for (; j < n; ++j) values[j] = valueAndGradientAtCells(g[j], grads[j]);
 }
 
 namespace detail {
