@@ -616,8 +616,9 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // records of those inside are appended; with certificates each one's
   // margin (testNode's return) goes to margins[j]. With Gradients, one
   // look-up gives every candidate's value and gradient (Grid::
-  // valuesAndGradientsAtCells), for nodes that mostly lie inside; else the
-  // values first, and the gradients of those inside from a second look-up.
+  // valuesAndGradientsAtCells), so those inside need no second one; else
+  // the values first, and the gradients of those inside from a second
+  // look-up.
   const auto testNodes = [&]<bool Gradients>(const std::uint32_t* ks, std::uint32_t n, double* margins) __attribute__((noinline)) {
     std::uint32_t* const live = buf.batchLive.data();
     Vec<D>* const at = buf.batchPoints.data();
@@ -647,6 +648,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       // (margins, where given, are batchValues[0, n): the values go after them.)
       double* const values = buf.batchValues.data() + nodeSpace;
       if constexpr (Gradients) {
+        // (Written over the points: at[c] is candidate c's gradient from here.)
         grid.valuesAndGradientsAtCells(at, candidates, values, at);
       } else {
         grid.valuesAtCells(at, candidates, values);
