@@ -213,10 +213,8 @@ class Grid {
   [[gnu::always_inline]] inline double interpolateCubic(const Vec<D>& g, Vec<D>* gradCells, double threshold) const;
   /// Grid coordinates g clamped into the node box.
   Vec<D> clampToBox(const Vec<D>& g) const;
-#ifdef __SSE2__
-  template <class Pair>
-  [[gnu::always_inline]] inline std::size_t forPointPairs(const Vec<D>* g, std::size_t n, Pair&& pair) const;
-#endif
+  template <bool Gradients>
+  inline void interpolateBatch(const Vec<D>* g, std::size_t n, double* values, Vec<D>* grads) const;
 
   Index<D> dims_ = Index<D>::Zero();
   Vec<D> origin_ = Vec<D>::Zero();
@@ -281,20 +279,36 @@ inline double Grid<D>::interpolate(const Vec<D>& g, Vec<D>* gradCells, double th
   }
 }
 
-#ifdef __SSE2__
-// The batched look-ups' common part: the points g[0, n) two at a time,
-// pair(j, t, corner) for points j and j + 1, with t[a] both points'
-// fractions along axis a and corner(offset) both cells' corner `offset`
-// (from the cell's lowest corner), widened to double; lane 0 is point j.
-// Returns how many points it took (an odd count leaves the last one).
 template <int D>
-template <class Pair>
-[[gnu::always_inline]] inline std::size_t Grid<D>::forPointPairs(const Vec<D>* g, std::size_t n, Pair&& pair) const {
+inline void Grid<D>::valuesAtCells(const Vec<D>* g, std::size_t n, double* out) const {
+  interpolateBatch<false>(g, n, out, nullptr);
+}
+
+template <int D>
+inline void Grid<D>::valuesAndGradientsAtCells(const Vec<D>* g, std::size_t n, double* values, Vec<D>* grads) const {
+  interpolateBatch<true>(g, n, values, grads);
+}
+
+// The batched look-ups: interpolate() at the points g[0, n), two at a time
+// where the target has SSE2 (every x86-64 does), each instruction making
+// interpolate()'s operation on both points (lane 0 point j, lane 1 point
+// j + 1) in its order, so the values and gradients are the same bit for
+// bit; the last point of an odd count alone. With Gradients also the
+// gradients per cell length, into grads (which may be g: a pair's points
+// are read before their gradients are written).
+template <int D>
+template <bool Gradients>
+inline void Grid<D>::interpolateBatch(const Vec<D>* g, std::size_t n, double* values, Vec<D>* grads) const {
+  std::size_t j = 0;
+#ifdef __SSE2__
   const float* const v = values_.data();
+  const std::size_t sy = std::size_t(dims_[0]);
+  [[maybe_unused]] const std::size_t sz = sy * std::size_t(dims_[1]);
   const __m128d zero = _mm_setzero_pd();
   __m128d lastCell[D];
   for (int a = 0; a < D; ++a) lastCell[a] = _mm_set1_pd(double(dims_[a] - 2));
-  std::size_t j = 0;
+  // x + s (y - x): interpolate()'s step.
+  const auto lerp = [](__m128d x, __m128d y, __m128d s) { return _mm_add_pd(x, _mm_mul_pd(s, _mm_sub_pd(y, x))); };
   for (; j + 2 <= n; j += 2) {
     // Per axis, both points: the cell clamp(int(g), 0, dims - 2) of
     // interpolate(), taken as int(max(min(g, dims - 2), 0)), the same cell
@@ -312,81 +326,47 @@ template <class Pair>
     for (int a = 0; a < D; ++a) i0[a] = c0[a], i1[a] = c1[a];
     const float* const p0 = v + linear(i0);
     const float* const p1 = v + linear(i1);
+    // Corner `offset` of both cells, widened to double.
     const auto corner = [p0, p1](std::size_t offset) {
       return _mm_cvtps_pd(_mm_unpacklo_ps(_mm_load_ss(p0 + offset), _mm_load_ss(p1 + offset)));
     };
-    pair(j, t, corner);
-  }
-  return j;
-}
-
-namespace detail {
-/// x + s (y - x) on both lanes: interpolate()'s step.
-[[gnu::always_inline]] inline __m128d lerp2(__m128d x, __m128d y, __m128d s) {
-  return _mm_add_pd(x, _mm_mul_pd(s, _mm_sub_pd(y, x)));
-}
-}  // namespace detail
-#endif
-
-template <int D>
-inline void Grid<D>::valuesAtCells(const Vec<D>* g, std::size_t n, double* out) const {
-  std::size_t j = 0;
-#ifdef __SSE2__
-  const std::size_t sy = std::size_t(dims_[0]);
-  [[maybe_unused]] const std::size_t sz = sy * std::size_t(dims_[1]);
-  using detail::lerp2;
-  j = forPointPairs(g, n, [&](std::size_t k, const __m128d* t, const auto& corner) {
-    if constexpr (D == 2) {
-      const __m128d a0 = lerp2(corner(0), corner(1), t[0]);
-      const __m128d a1 = lerp2(corner(sy), corner(sy + 1), t[0]);
-      _mm_storeu_pd(out + k, lerp2(a0, a1, t[1]));
-    } else {
-      const __m128d x00 = lerp2(corner(0), corner(1), t[0]), x10 = lerp2(corner(sy), corner(sy + 1), t[0]);
-      const __m128d x01 = lerp2(corner(sz), corner(sz + 1), t[0]), x11 = lerp2(corner(sz + sy), corner(sz + sy + 1), t[0]);
-      const __m128d y0 = lerp2(x00, x10, t[1]), y1 = lerp2(x01, x11, t[1]);
-      _mm_storeu_pd(out + k, lerp2(y0, y1, t[2]));
-    }
-  });
-#endif
-  for (; j < n; ++j) out[j] = valueAtCells(g[j]);
-}
-
-template <int D>
-inline void Grid<D>::valuesAndGradientsAtCells(const Vec<D>* g, std::size_t n, double* values, Vec<D>* grads) const {
-  std::size_t j = 0;
-#ifdef __SSE2__
-  const std::size_t sy = std::size_t(dims_[0]);
-  [[maybe_unused]] const std::size_t sz = sy * std::size_t(dims_[1]);
-  using detail::lerp2;
-  j = forPointPairs(g, n, [&](std::size_t k, const __m128d* t, const auto& corner) {
-    // Lane 0 to point k, lane 1 to point k + 1 (after both were read).
-    const auto put = [&](int a, __m128d x) {
-      _mm_storel_pd(&grads[k][a], x);
-      _mm_storeh_pd(&grads[k + 1][a], x);
+    // Gradient component a: lane 0 to point j, lane 1 to point j + 1.
+    [[maybe_unused]] const auto put = [grads, j](int a, __m128d x) {
+      _mm_storel_pd(&grads[j][a], x);
+      _mm_storeh_pd(&grads[j + 1][a], x);
     };
     if constexpr (D == 2) {
       const __m128d v00 = corner(0), v10 = corner(1), v01 = corner(sy), v11 = corner(sy + 1);
-      const __m128d a0 = lerp2(v00, v10, t[0]), a1 = lerp2(v01, v11, t[0]);
-      _mm_storeu_pd(values + k, lerp2(a0, a1, t[1]));
-      put(0, lerp2(_mm_sub_pd(v10, v00), _mm_sub_pd(v11, v01), t[1]));
-      put(1, _mm_sub_pd(a1, a0));
+      const __m128d a0 = lerp(v00, v10, t[0]), a1 = lerp(v01, v11, t[0]);
+      _mm_storeu_pd(values + j, lerp(a0, a1, t[1]));
+      if constexpr (Gradients) {
+        put(0, lerp(_mm_sub_pd(v10, v00), _mm_sub_pd(v11, v01), t[1]));
+        put(1, _mm_sub_pd(a1, a0));
+      }
     } else {
       const __m128d v000 = corner(0), v100 = corner(1), v010 = corner(sy), v110 = corner(sy + 1);
       const __m128d v001 = corner(sz), v101 = corner(sz + 1), v011 = corner(sz + sy), v111 = corner(sz + sy + 1);
-      const __m128d x00 = lerp2(v000, v100, t[0]), x10 = lerp2(v010, v110, t[0]);
-      const __m128d x01 = lerp2(v001, v101, t[0]), x11 = lerp2(v011, v111, t[0]);
-      const __m128d y0 = lerp2(x00, x10, t[1]), y1 = lerp2(x01, x11, t[1]);
-      _mm_storeu_pd(values + k, lerp2(y0, y1, t[2]));
-      // interpolate()'s gradient, step for step.
-      const __m128d d00 = _mm_sub_pd(v100, v000), d10 = _mm_sub_pd(v110, v010);
-      const __m128d d01 = _mm_sub_pd(v101, v001), d11 = _mm_sub_pd(v111, v011);
-      put(0, lerp2(lerp2(d00, d10, t[1]), lerp2(d01, d11, t[1]), t[2]));
-      put(1, lerp2(_mm_sub_pd(x10, x00), _mm_sub_pd(x11, x01), t[2]));
-      put(2, _mm_sub_pd(y1, y0));
+      const __m128d x00 = lerp(v000, v100, t[0]), x10 = lerp(v010, v110, t[0]);
+      const __m128d x01 = lerp(v001, v101, t[0]), x11 = lerp(v011, v111, t[0]);
+      const __m128d y0 = lerp(x00, x10, t[1]), y1 = lerp(x01, x11, t[1]);
+      _mm_storeu_pd(values + j, lerp(y0, y1, t[2]));
+      if constexpr (Gradients) {
+        const __m128d d00 = _mm_sub_pd(v100, v000), d10 = _mm_sub_pd(v110, v010);
+        const __m128d d01 = _mm_sub_pd(v101, v001), d11 = _mm_sub_pd(v111, v011);
+        put(0, lerp(lerp(d00, d10, t[1]), lerp(d01, d11, t[1]), t[2]));
+        put(1, lerp(_mm_sub_pd(x10, x00), _mm_sub_pd(x11, x01), t[2]));
+        put(2, _mm_sub_pd(y1, y0));
+      }
     }
-  });
+  }
 #endif
-  for (; j < n; ++j) values[j] = valueAndGradientAtCells(g[j], grads[j]);
+  for (; j < n; ++j) {
+    if constexpr (Gradients) {
+      values[j] = valueAndGradientAtCells(g[j], grads[j]);
+    } else {
+      values[j] = valueAtCells(g[j]);
+    }
+  }
 }
 
 namespace detail {
