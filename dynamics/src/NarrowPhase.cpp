@@ -461,8 +461,10 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       const double length = normalOf(grad, normal);
       if (!(length > 0.0)) continue;
       const std::uint32_t i = tree.order[ks[at[c]]];
-      buf.nodes[n] = contactOf(i, phi, normal, length);
-      buf.work[n] = workOf(i, length);
+      // (Made where they go: assigned, they were made in a temporary and
+      // then copied.)
+      ::new (static_cast<void*>(&buf.nodes[n])) NodeContact<D>(contactOf(i, phi, normal, length));
+      ::new (static_cast<void*>(&buf.work[n])) NodeWork<D>(workOf(i, length));
       ++n;
     }
     buf.nodes.resize(n);
@@ -803,21 +805,25 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       return;
     }
     const typename geometry::NodeTree<D>::Cell& cell = tree.cells[old.cell];
-    detail::KeptLeaf kept = old;
+    float cellMargin = old.cellMargin;
     if (!(movedBound < -cellClear)) {
       ++buf.cellChecks;
       double clear = 0.0;
       if (cellRejected(cell, clear)) {
         if (rebase) return addFrontier(old.cell, clear);
-        kept.cellMargin = lowered(clear - measuredLoss);
-        buf.leaves.push_back(kept);
+        buf.leaves.push_back(old);
+        buf.leaves.back().cellMargin = lowered(clear - measuredLoss);
         clearLeaves = std::min(clearLeaves, clear - measuredLoss);
         return;
       }
-      kept.cellMargin = -lowered(clear - measuredLoss);
+      cellMargin = -lowered(clear - measuredLoss);
     } else if (rebase) {
-      kept.cellMargin = -lowered(-cellClear - carried);
+      cellMargin = -lowered(-cellClear - carried);
     }
+    // (Changed in the list's own copy: a local one written field by field,
+    // then copied whole, had its copy wait for those stores to land.)
+    detail::KeptLeaf& kept = buf.leaves.emplace_back(old);
+    kept.cellMargin = cellMargin;
     const std::uint32_t slots = std::min(cell.end - cell.begin, kSlots);
     if (movedBound < double(old.leastNode)) {
       // Every node's margin holds: none is tested. (The least of the
@@ -829,9 +835,9 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
         for (std::uint32_t j = 0; j < slots; ++j) kept.nodeMargin[j] = lowered(double(old.nodeMargin[j]) - carried);
         kept.leastNode = lowered(m);
       }
-      buf.leaves.push_back(kept);
       return;
     }
+    const std::size_t index = buf.leaves.size() - 1;
     for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
       const std::uint32_t j = k - cell.begin;
       if (j < kSlots && movedBound < double(old.nodeMargin[j])) {
@@ -843,12 +849,11 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       ++tested;
       // (Its margin comes with the batch, below: none until then.)
       if (j < kSlots) kept.nodeMargin[j] = std::numeric_limits<float>::infinity();
-      queue(k, buf.leaves.size());
+      queue(k, index);
     }
     float least = leastNodeFrom(cell);
     for (std::uint32_t j = 0; j < slots; ++j) least = std::min(least, kept.nodeMargin[j]);
     kept.leastNode = least;
-    buf.leaves.push_back(kept);
   };
   if (!rebase) {
     // A leaf walk: the frontier holds, as it is.
@@ -877,7 +882,9 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     for (const detail::RejectedCell& old : oldFrontier) {
       const double m = double(old.margin);
       const bool carry = movedBound + moved < m;
-      carriedTo[carriedCount] = {old.cell, lowered(m - carried)};
+      // (lowered(m - carried) for a cell carried, whose m - carried is
+      // above movedBound > 0 and below 1e30; written for every cell.)
+      carriedTo[carriedCount] = {old.cell, float((m - carried) * (1.0 - 0x1p-20))};
       carriedCount += carry;
       rootsTo[roots] = old.cell;
       roots += !carry;

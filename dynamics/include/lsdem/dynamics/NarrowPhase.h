@@ -239,7 +239,9 @@ struct alignas(64) ThreadBuffers {
   /// The leaves and frontiers of the certificates made this step (and the
   /// last step's, read by any thread this step).
   std::vector<KeptLeaf> leaves, previousLeaves;
-  std::vector<RejectedCell> frontier, previousFrontier;
+  /// (A rebasing walk grows the frontier by the old one's size and writes
+  /// the entries it carries: Records leaves the resize unwritten.)
+  Records<RejectedCell> frontier, previousFrontier;
   // Scratch of the walks made in batches (NarrowPhase.cpp): cell and node
   // lists, survivors, leaves, the points tested, margins and look-ups.
   std::vector<std::uint32_t> batchCells, batchLive, batchLeaves, batchNodes, batchOwners;
