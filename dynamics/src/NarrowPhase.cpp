@@ -205,36 +205,6 @@ void copyInShares(std::size_t runCount, std::size_t total, std::size_t threads, 
   }
 }
 
-// Depth-first walk over the cells of a node tree below cell `root` (the
-// tree's root: all of it), as plane walks make it (a level-set walk goes
-// level by level in batches: collectLevelSet): `reject(cell)` true skips the cell and
-// everything below it; `leaf(index)` gets the index of each leaf that
-// survives. Returns the cells tested.
-template <int D, class Reject, class Leaf>
-std::uint64_t walkTree(const geometry::NodeTree<D>& tree, const Reject& reject, const Leaf& leaf,
-                       std::uint32_t root = 0) {
-  if (tree.cells.empty()) return 0;
-  // Depth-first with children pushed in pairs: at most depth + 2 entries.
-  constexpr int kStack = 128;
-  std::array<std::uint32_t, kStack> stack;
-  int top = 0;
-  stack[top++] = root;
-  std::uint64_t tested = 0;
-  while (top > 0) {
-    const std::uint32_t index = stack[--top];
-    const typename geometry::NodeTree<D>::Cell& cell = tree.cells[index];
-    ++tested;
-    if (reject(cell)) continue;
-    if (cell.child == 0) {
-      leaf(index);
-    } else {
-      stack[top++] = cell.child + 1;
-      stack[top++] = cell.child;
-    }
-  }
-  return tested;
-}
-
 // The walk's ids, the certificate the last compute() left for them (null:
 // none) and the slot this compute() leaves its own in (cleared by the caller).
 template <int D>
@@ -954,33 +924,69 @@ std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>
   const std::vector<Vec<D>>& nodes = owner.nodes().positions;
   const std::vector<double>& weights = owner.nodes().weights;
   const std::size_t first = buf.nodes.size();
-  std::uint64_t tested = 0;
-  const auto reject = [&](const typename geometry::NodeTree<D>::Cell& cell) {
-    return offset + nb.dot(cell.centre) > cell.radius * (1.0 + 1e-12);
-  };
-  const auto leaf = [&](std::uint32_t begin, std::uint32_t end) {
-    tested += end - begin;
-    for (std::uint32_t k = begin; k < end; ++k) {
-      const std::uint32_t i = tree.order[k];
-      const Vec<D>& x = nodes[i];
-      const double distance = offset + nb.dot(x);
-      if (!(distance < 0.0)) continue;
-      NodeContact<D> c;
-      c.point = Ro * x + xo;
-      c.normal = plane.normal;
-      c.overlap = -distance;
-      c.node = i;
-      c.ownerIsB = 0;
-      buf.nodes.push_back(c);
-      NodeWork<D> w;
-      w.stiffness = stiffnessFactor<Formulation>(weights[i], weightToFactor);
-      w.area = weights[i];
-      buf.work.push_back(w);
+  if (tree.cells.empty()) return 0;
+  // Level by level, as the level-set walks (collectLevelSet's walkCells):
+  // a level's loop takes no branch on a cell's test, so a resting grain's
+  // walk, whose cells pass and fail in no pattern, does not stall on
+  // mispredicted branches. Scratch: each list holds a cell or node at most
+  // once.
+  const std::size_t cellSpace = tree.cells.size() + 2;
+  if (buf.batchCells.size() < 2 * cellSpace) buf.batchCells.resize(2 * cellSpace);
+  if (buf.batchLeaves.size() < cellSpace) buf.batchLeaves.resize(cellSpace);
+  if (buf.batchLive.size() < nodes.size()) buf.batchLive.resize(nodes.size());
+  std::uint32_t* level = buf.batchCells.data();
+  std::uint32_t* next = level + cellSpace;
+  std::uint32_t* const leaves = buf.batchLeaves.data();
+  const typename geometry::NodeTree<D>::Cell* const cells = tree.cells.data();
+  const Vec<D> nb_ = nb;
+  const double offset_ = offset;
+  std::uint32_t count = 1, leafCount = 0;
+  level[0] = 0;
+  // A cell is skipped when its sphere lies wholly on the free side.
+  while (count > 0) {
+    buf.cellChecks += count;
+    std::uint32_t nextCount = 0;
+    for (std::uint32_t j = 0; j < count; ++j) {
+      const typename geometry::NodeTree<D>::Cell& cell = cells[level[j]];
+      const bool passed = !(offset_ + nb_.dot(cell.centre) > cell.radius * (1.0 + 1e-12)), leaf = cell.child == 0;
+      leaves[leafCount] = level[j];
+      leafCount += passed & leaf;
+      next[nextCount] = cell.child;
+      next[nextCount + 1] = cell.child + 1;
+      nextCount += 2 * std::uint32_t(passed & !leaf);
     }
-  };
-  buf.cellChecks += walkTree<D>(tree, reject, [&](std::uint32_t index) {
-    leaf(tree.cells[index].begin, tree.cells[index].end);
-  });
+    std::swap(level, next);
+    count = nextCount;
+  }
+  // The passed leaves' nodes below the plane (tree positions), then their records.
+  std::uint32_t* const inside = buf.batchLive.data();
+  std::uint32_t insideCount = 0;
+  std::uint64_t tested = 0;
+  const Vec<D>* const positions = nodes.data();
+  const std::uint32_t* const order = tree.order.data();
+  for (std::uint32_t l = 0; l < leafCount; ++l) {
+    const typename geometry::NodeTree<D>::Cell& cell = cells[leaves[l]];
+    tested += cell.end - cell.begin;
+    for (std::uint32_t k = cell.begin; k < cell.end; ++k) {
+      inside[insideCount] = k;
+      insideCount += offset_ + nb_.dot(positions[order[k]]) < 0.0;
+    }
+  }
+  std::size_t n = buf.nodes.size();
+  buf.nodes.resize(n + insideCount);
+  buf.work.resize(n + insideCount);
+  for (std::uint32_t c = 0; c < insideCount; ++c, ++n) {
+    const std::uint32_t i = order[inside[c]];
+    const Vec<D>& x = positions[i];
+    NodeContact<D>& record = *::new (static_cast<void*>(&buf.nodes[n])) NodeContact<D>();
+    record.point = Ro * x + xo;
+    record.normal = plane.normal;
+    record.overlap = -(offset_ + nb_.dot(x));
+    record.node = i;
+    NodeWork<D>& w = *::new (static_cast<void*>(&buf.work[n])) NodeWork<D>();
+    w.stiffness = stiffnessFactor<Formulation>(weights[i], weightToFactor);
+    w.area = weights[i];
+  }
   sortByNode(buf, first);
   return tested;
 }
