@@ -205,6 +205,13 @@ void copyInShares(std::size_t runCount, std::size_t total, std::size_t threads, 
   }
 }
 
+// Grows scratch `v` to at least n entries (never shrinks it: the walks'
+// scratch keeps the largest size any walk needed).
+template <class V>
+void atLeast(V& v, std::size_t n) {
+  if (v.size() < n) v.resize(n);
+}
+
 // The walk's ids, the certificate the last compute() left for them (null:
 // none) and the slot this compute() leaves its own in (cleared by the caller).
 template <int D>
@@ -499,9 +506,6 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   const std::size_t cellSpace = tree.cells.size() + 2, nodeSpace = std::max(cellSpace, nodes.size());
   // (Sized by the walks that use them: a leaf walk does not.)
   const auto sizeScratch = [&] {
-    const auto atLeast = [](auto& v, std::size_t n) {
-      if (v.size() < n) v.resize(n);
-    };
     atLeast(buf.batchCells, 2 * cellSpace);
     atLeast(buf.batchLeaves, cellSpace);
     atLeast(buf.batchLive, nodeSpace);
@@ -781,8 +785,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       double clear = 0.0;
       if (cellRejected(cell, clear)) {
         if (rebase) return addFrontier(old.cell, clear);
-        buf.leaves.push_back(old);
-        buf.leaves.back().cellMargin = lowered(clear - measuredLoss);
+        buf.leaves.emplace_back(old).cellMargin = lowered(clear - measuredLoss);
         clearLeaves = std::min(clearLeaves, clear - measuredLoss);
         return;
       }
@@ -931,9 +934,9 @@ std::uint64_t collectPlane(const Shape<D>& owner, const Mat<D>& Ro, const Vec<D>
   // mispredicted branches. Scratch: each list holds a cell or node at most
   // once.
   const std::size_t cellSpace = tree.cells.size() + 2;
-  if (buf.batchCells.size() < 2 * cellSpace) buf.batchCells.resize(2 * cellSpace);
-  if (buf.batchLeaves.size() < cellSpace) buf.batchLeaves.resize(cellSpace);
-  if (buf.batchLive.size() < nodes.size()) buf.batchLive.resize(nodes.size());
+  atLeast(buf.batchCells, 2 * cellSpace);
+  atLeast(buf.batchLeaves, cellSpace);
+  atLeast(buf.batchLive, nodes.size());
   std::uint32_t* level = buf.batchCells.data();
   std::uint32_t* next = level + cellSpace;
   std::uint32_t* const leaves = buf.batchLeaves.data();
