@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <map>
 
@@ -36,13 +37,46 @@ using Clock = std::chrono::steady_clock;
 // distributed run's engine says which process does.
 bool writesOutputs(const RunOptions& options) { return !options.engine || options.engine->writesOutputs; }
 
+// A number in a message, to 3 significant digits.
+std::string roughly(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.3g", v);
+  return buf;
+}
+
+// What a world's state says of a run that failed in a step: the particle
+// with a non-finite position or velocity, else the one that moves farthest
+// per step against its own bounding radius where that exceeds the radius
+// (no contact law holds such a step: the simulation diverged); "" when
+// neither.
+template <int D>
+std::string divergenceNote(const dynamics::World<D>& w) {
+  const dynamics::Particles<D>& p = w.particles();
+  std::size_t worst = p.size();
+  double worstRatio = 1.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!p.position[i].allFinite() || !p.velocity[i].allFinite()) {
+      return "the simulation diverged: particle " + std::to_string(p.id[i]) + " has a non-finite position or velocity";
+    }
+    const double ratio = p.velocity[i].norm() * w.dt() / p.shape[i]->boundingRadius();
+    if (ratio > worstRatio) {
+      worstRatio = ratio;
+      worst = i;
+    }
+  }
+  if (worst == p.size()) return "";
+  return "the simulation diverged: particle " + std::to_string(p.id[worst]) + " moves " + roughly(worstRatio) +
+         " times its bounding radius in one step (speed " + roughly(p.velocity[worst].norm()) + " m/s, dt = " +
+         roughly(w.dt()) + " s): the time step is too long for the contact stiffness or for the speeds";
+}
+
 template <int D>
 class Runner {
  public:
   Runner(SceneDef<D> scene, std::string sceneText, const RunOptions& options, const fs::path& out,
          std::unique_ptr<OutputLock> lock)
       : scene_(std::move(scene)), sceneText_(std::move(sceneText)), options_(options), lock_(std::move(lock)),
-        context_{scene_, sw_, out, {}, Clock::now(), false, options.note, {}} {}
+        context_{scene_, sw_, out, {}, Clock::now(), false, options.note, {}, {}} {}
 
   RunResult run(bool resume) {
     if (options_.check) {
@@ -125,6 +159,7 @@ class Runner {
     Clock::time_point lastReport = Clock::now();
     std::uint64_t stepsAtReport = world.steps();
     bool stopped = false;
+    try {
     while (!end_.finished(world.time(), world.steps())) {
       bool stop = options_.stop && options_.stop->load();
       if (engine_) stop = engine_->anyStop(stop);
@@ -163,6 +198,9 @@ class Runner {
         stepsAtReport = world.steps();
       }
     }
+    } catch (const std::exception& e) {
+      failed(e);
+    }
 
     // The end (or an early stop): the checkpoint first, so that a resumed run
     // drops what follows (it is not on any schedule), then every recorder's last
@@ -198,6 +236,31 @@ class Runner {
  private:
   using World = dynamics::World<D>;
 
+  // A step (or a record of it) that failed: the error says where, and what
+  // the state says (divergenceNote); the summary records it (stopped early,
+  // with the error) from the state as it is. The outputs keep what was
+  // written; the checkpoint stays the last one written, of a sound state.
+  [[noreturn]] void failed(const std::exception& e) {
+    const World& w = *stepped().world;
+    std::string what = e.what();
+    // (An input error, or an error that already says the run diverged, is left as it is.)
+    if (dynamic_cast<const InputError*>(&e)) throw;
+    if (what.find("diverged") == std::string::npos) {
+      const std::string note = divergenceNote(w);
+      if (!note.empty()) what = note + " (the step failed: " + what + ")";
+    }
+    const std::string message = "step " + std::to_string(w.steps()) + " (t = " + roughly(w.time()) + " s): " + what;
+    if (writes_) {
+      context_.stopped = true;
+      context_.failure = message;
+      try {
+        recorders_.back()->record(*sw_.world, now());
+      } catch (const std::exception&) {
+        // (The summary could not be written: the error below still says what failed.)
+      }
+    }
+    throw std::runtime_error(message);
+  }
   static double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
   fs::path checkpointFile() const { return context_.out / outputs::kCheckpoint; }
   // The world this process steps.

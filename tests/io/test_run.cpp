@@ -677,6 +677,39 @@ history_rows = 3000
   const std::string history = readFile(dir.path / "out" / "history.csv");
   EXPECT_GT(lines(history).size(), 10u) << "the rows before the divergence stay";
   for (const char* bad : {"inf", "nan"}) EXPECT_EQ(history.find(bad), std::string::npos) << bad;
+  // The summary says the run stopped, and why.
+  const std::string summary = readFile(dir.path / "out" / "summary.json");
+  EXPECT_NE(summary.find("\"stopped_early\": true"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"error\": \"step "), std::string::npos) << summary;
+}
+
+// A diverging run with breakage: the splits of grains flung to 1e8 m fail
+// (their cut's two points coincide in floating point) before any value is
+// infinite. The error says the run diverged, which particle and how fast,
+// with the failed split's own message after it; the summary records it.
+TEST(Run, ADivergedRunWithBreakageSaysItDiverged) {
+  TempDir dir("diverged_breakage");
+  std::string text = readFile(fs::path(LSDEM_SOURCE_DIR) / "apps/scenes/three_grains/three_grains_2d.toml");
+  text = editScene(text, "dt = \"auto\"", "dt = 2e-4\nforce_dt = true");
+  io::RunOptions o;
+  o.scene = writeScene(dir.path, text).string();
+  o.outDir = (dir.path / "out").string();
+  o.steps = 3000;
+  std::string message;
+  try {
+    io::runScene(o);
+  } catch (const io::InputError& e) {
+    FAIL() << "not an input error: " << e.what();
+  } catch (const std::runtime_error& e) {
+    message = e.what();
+  }
+  ASSERT_FALSE(message.empty()) << "a diverging run must stop with an error";
+  EXPECT_EQ(message.rfind("step ", 0), 0u) << message;
+  EXPECT_NE(message.find("the simulation diverged: particle "), std::string::npos) << message;
+  EXPECT_NE(message.find("times its bounding radius in one step"), std::string::npos) << message;
+  const std::string summary = readFile(dir.path / "out" / "summary.json");
+  EXPECT_NE(summary.find("\"stopped_early\": true"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("the simulation diverged"), std::string::npos) << summary;
 }
 
 // A resume that fails (an output missing or damaged) changes none of the

@@ -50,6 +50,7 @@ struct RunContext {
   bool stopped = false;                               ///< stopped early (known at the end)
   std::function<void(const std::string&)> note;       ///< what a resume repaired, for the user
   RanksSummary ranks;                                 ///< a distributed run's, at its last view
+  std::string failure;                                ///< the error that stopped the run ("" for none)
 
   /// kg that entered the run: the initial particles and what feeds dropped.
   double massIn() const;

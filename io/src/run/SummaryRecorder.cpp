@@ -81,7 +81,9 @@ void SummaryRecorder<D>::writeSummary(const World& w, bool final) const {
   writeRunSummary<D>(w, c.wallSeconds(), s, [&](JsonWriter& j) {
     const double in = c.massIn(), outMass = w.particleMass() + w.removedMass();
     j.field("scene", c.scene.file);
-    j.field("stopped_early", final && c.stopped);
+    j.field("stopped_early", (final && c.stopped) || !c.failure.empty());
+    // A run that failed (Run.cpp): what stopped it, and where.
+    if (!c.failure.empty()) j.field("error", c.failure);
     j.key("mass_balance").beginObject()
         .field("initial", c.basis.initialMass)
         .field("fed", in - c.basis.initialMass)
