@@ -138,6 +138,14 @@ void runCommand(const RunArgs& a) {
   const io::RunResult r = io::runScene(o);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+  if (r.alreadyFinished) {
+    // (Said also with --quiet: a script that resumes until done learns it is.)
+    if (speaks) {
+      std::cerr << "lsdem: " << r.outDir << ": the run is already at its end (" << r.steps << " steps, t = " << r.time
+                << " s); nothing to resume, nothing written (give --steps N to run N more steps)\n";
+    }
+    return;
+  }
   if (!a.quiet && speaks) {
     std::cout << (mpiRanks() > 1 ? "on " + std::to_string(mpiRanks()) + " MPI ranks, " : std::string())
               << (r.stopped ? "stopped" : "finished") << ": " << r.steps << " steps, t = " << r.time << " s, "
@@ -156,7 +164,10 @@ void addRunCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("run", "run a scene file (docs/scenes.md); outputs in docs/outputs.md");
   cmd->add_option("scene", args->scene, "scene file (TOML)");
   cmd->add_option("--out,-o", args->out, "output folder (default: the scene's [output] dir)");
-  cmd->add_option("--steps", args->steps, "run this many steps instead of the scene's duration")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--steps", args->steps,
+                  "run this many steps instead of the scene's duration (with --resume: this many more steps; a "
+                  "resumed run without it ends where the run it continues would have)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--threads", args->threads, "OpenMP threads (0: all cores; default: the scene's)")
       ->check(CLI::NonNegativeNumber);
   CLI::Option* resume = cmd->add_option(

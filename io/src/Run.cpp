@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <exception>
 #include <map>
+#include <optional>
 
 #ifdef LSDEM_HAVE_OPENMP
 #include <omp.h>
@@ -32,6 +33,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
+
+// The checkpoint's section of the run's own state (its end, its wall time).
+constexpr const char* kRunSection = "run";
 
 // Whether this process writes the run's outputs: a one-process run does; a
 // distributed run's engine says which process does.
@@ -76,7 +80,7 @@ class Runner {
   Runner(SceneDef<D> scene, std::string sceneText, const RunOptions& options, const fs::path& out,
          std::unique_ptr<OutputLock> lock)
       : scene_(std::move(scene)), sceneText_(std::move(sceneText)), options_(options), lock_(std::move(lock)),
-        context_{scene_, sw_, out, {}, Clock::now(), false, options.note, {}, {}} {}
+        context_{scene_, sw_, out, {}, Clock::now(), false, options.note, {}, {}, 0.0} {}
 
   RunResult run(bool resume) {
     if (options_.check) {
@@ -113,6 +117,20 @@ class Runner {
       if (scene_.specimen) context_.basis.specimenHeight = specimenHeight(*scene_.specimen, world);
     }
     end_ = runEnd(scene_, options_, world);
+    if (resume) {
+      const SavedRun saved = readRunState(runState);
+      context_.wallBefore = saved.wallSeconds;
+      // The run's own end (its `--steps`), kept by its checkpoint: resumed
+      // without --steps it ends there, as it would have run on (a forced
+      // resume takes the scene's end as it is now).
+      if (saved.end && !options_.steps && !options_.force) end_ = *saved.end;
+      if (end_.finished(world.time(), world.steps())) {
+        // Nothing to run: nothing is written.
+        RunResult r = result(false);
+        r.alreadyFinished = true;
+        return r;
+      }
+    }
     if (!resume) checkRunLimits(scene_, options_, world, end_, sw_.initialMass);
     checkpoints_ = checkpointSchedule(scene_, end_, world);
     // (Every process keeps the schedules; only the one that writes records.)
@@ -212,18 +230,24 @@ class Runner {
     if (writes_) {
       for (auto& r : recorders_) r->finish(*sw_.world, now());
     }
-    const double wall = context_.wallSeconds();
-    if (writes_ && options_.progress) report(double(world.steps()) / std::max(wall, 1e-9), true);
+    if (writes_ && options_.progress) report(double(world.steps()) / std::max(context_.wallSeconds(), 1e-9), true);
 
-    // (A process of a distributed run that does not write the outputs
-    // reports its own part.)
+    return result(stopped);
+  }
+
+ private:
+  using World = dynamics::World<D>;
+
+  // The run's result as the view holds it. (A process of a distributed run
+  // that does not write the outputs reports its own part.)
+  RunResult result(bool stopped) const {
     const World& view = *sw_.world;
     RunResult r;
     r.outDir = context_.out.string();
     r.dimension = D;
     r.steps = view.steps();
     r.time = view.time();
-    r.wallSeconds = wall;
+    r.wallSeconds = context_.wallSeconds();
     r.stopped = stopped;
     r.particles = view.particles().size();
     r.breakages = sw_.breakage ? sw_.breakage->breakages() : 0;
@@ -232,10 +256,6 @@ class Runner {
     r.massBalanceError = r.massIn > 0.0 ? (r.massOut - r.massIn) / r.massIn : 0.0;
     return r;
   }
-
- private:
-  using World = dynamics::World<D>;
-
   // A step (or a record of it) that failed: the error says where, and what
   // the state says (divergenceNote); the summary records it (stopped early,
   // with the error) from the state as it is. The outputs keep what was
@@ -344,33 +364,75 @@ class Runner {
     s.put(context_.basis.initialMass);
     s.put(context_.basis.specimenHeight);
     checkpoints_.save(s);
-    s.put(std::uint64_t(recorders_.size()));
+    s.put(std::uint64_t(recorders_.size() + 1));
     for (auto& r : recorders_) {
       dynamics::StateWriter section;
       r->save(section);
       s.putString(r->name());
       s.putVector(section.bytes());
     }
+    // The run's end and the wall seconds so far (readRunState; checkpoints
+    // of earlier releases have no such section).
+    dynamics::StateWriter run;
+    run.put(std::uint8_t(end_.byTime));
+    run.put(end_.endTime);
+    run.put(end_.endStep);
+    run.put(end_.span);
+    run.put(context_.wallSeconds());
+    s.putString(kRunSection);
+    s.putVector(run.bytes());
     io::writeCheckpoint<D>(checkpointFile(), scene_.file, sceneHash(sceneText_), *sw_.world,
                            std::string(s.bytes().begin(), s.bytes().end()));
     recorders_.back()->record(*sw_.world, now());  // the summary stays current with the checkpoints
   }
 
-  void loadRunState(const std::string& bytes) {
+  // A checkpoint's run state (writeCheckpoint), read whole.
+  struct SavedRun {
+    RunBasis basis;
+    std::string schedule;  // the checkpoints' schedule, as saved
+    std::map<std::string, std::vector<char>> sections;
+    std::optional<RunEnd> end;  // absent in checkpoints of earlier releases
+    double wallSeconds = 0.0;
+  };
+  SavedRun readRunState(const std::string& bytes) const {
+    SavedRun saved;
     asCheckpointError(checkpointFile().string(), [&] {
       dynamics::StateReader s(bytes.data(), bytes.size());
       s.expectTag("run");
-      context_.basis.initialMass = s.get<double>();
-      context_.basis.specimenHeight = s.get<double>();
-      checkpoints_.load(s);
-      std::map<std::string, std::vector<char>> sections;
+      saved.basis.initialMass = s.get<double>();
+      saved.basis.specimenHeight = s.get<double>();
+      Schedule schedule;
+      schedule.load(s);
+      dynamics::StateWriter scheduleBytes;
+      schedule.save(scheduleBytes);
+      saved.schedule.assign(scheduleBytes.bytes().begin(), scheduleBytes.bytes().end());
       for (std::uint64_t k = s.get<std::uint64_t>(); k > 0; --k) {
         const std::string name = s.getString();
-        s.getVector(sections[name]);
+        s.getVector(saved.sections[name]);
       }
+      const auto run = saved.sections.find(kRunSection);
+      if (run != saved.sections.end()) {
+        dynamics::StateReader r(run->second.data(), run->second.size());
+        RunEnd end;
+        end.byTime = r.get<std::uint8_t>() != 0;
+        end.endTime = r.get<double>();
+        end.endStep = r.get<std::uint64_t>();
+        end.span = r.get<double>();
+        saved.end = end;
+        saved.wallSeconds = r.get<double>();
+      }
+    });
+    return saved;
+  }
+  void loadRunState(const std::string& bytes) {
+    const SavedRun saved = readRunState(bytes);
+    asCheckpointError(checkpointFile().string(), [&] {
+      context_.basis = saved.basis;
+      dynamics::StateReader schedule(saved.schedule.data(), saved.schedule.size());
+      checkpoints_.load(schedule);
       for (auto& r : recorders_) {
-        const auto it = sections.find(r->name());
-        if (it == sections.end()) {
+        const auto it = saved.sections.find(r->name());
+        if (it == saved.sections.end()) {
           throw InputError(checkpointFile().string(), 0, "",
                            "holds no state of the " + r->name() +
                                " output, which this scene writes (a forced resume with other [output] keys)");

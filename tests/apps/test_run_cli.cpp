@@ -303,7 +303,11 @@ TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
   const fs::path out = dir / "history";
   const lsdem::test::ProcessResult history = runLimited(out, 200000);
   EXPECT_EQ(history.code, 1) << history.output;
-  EXPECT_EQ(history.output, "lsdem: error: cannot write " + (out / "history.csv").string() + ": File too large\n");
+  // One line: the step it stopped at, then the file.
+  const std::string tail = "cannot write " + (out / "history.csv").string() + ": File too large\n";
+  EXPECT_EQ(history.output.rfind("lsdem: error: step ", 0), 0u) << history.output;
+  EXPECT_TRUE(history.output.ends_with(" s): " + tail)) << history.output;
+  EXPECT_EQ(std::count(history.output.begin(), history.output.end(), '\n'), 1) << history.output;
   EXPECT_EQ(fs::file_size(out / "history.csv"), 200000u);
   EXPECT_FALSE(fs::exists(out / "lsdem.lock"));
   EXPECT_EQ(temporaryFiles(out), 0u);

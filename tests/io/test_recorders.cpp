@@ -91,7 +91,7 @@ struct Run2 {
       : dir(lsdem::test::tempPath("recorders_" + name)),
         scene(read(dir)),
         sw(buildWorld(scene)),
-        context{scene, sw, dir, {sw.initialMass, 0.0021}, std::chrono::steady_clock::now(), false, {}, {}, {}} {}
+        context{scene, sw, dir, {sw.initialMass, 0.0021}, std::chrono::steady_clock::now(), false, {}, {}, {}, 0.0} {}
 
   static SceneDef<2> read(const fs::path& dir) {
     fs::remove_all(dir);

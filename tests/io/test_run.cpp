@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -858,4 +859,60 @@ TEST(Run, ResumeWithAnotherSceneIsRefusedUnlessForced) {
   next.resumeDir = outA.string();
   next.scene = sceneB.string();
   EXPECT_EQ(refusal(next), "resumed");
+}
+
+// A run given --steps and stopped part-way ends, resumed without --steps,
+// where the uninterrupted run ends (its checkpoint keeps its end), with the
+// same outputs; resumed again, it is at its end: nothing is run or written.
+// The wall time of the summary is that of both processes.
+TEST(Run, AResumedRunEndsWhereItsOwnStepsSaid) {
+  TempDir dir("resume_steps");
+  const std::string scene =
+      writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 2\nhistory_rows = 40\nprogress_seconds = 1e-9"))
+          .string();
+  constexpr std::uint64_t kSteps = 300;
+
+  io::RunOptions straight;
+  straight.scene = scene;
+  straight.outDir = (dir.path / "straight").string();
+  straight.steps = kSteps;
+  const io::RunResult a = io::runScene(straight);
+  ASSERT_EQ(a.steps, kSteps);
+
+  std::atomic<bool> stop{false};
+  io::RunOptions first = straight;
+  first.outDir = (dir.path / "resumed").string();
+  first.stop = &stop;
+  first.progress = [&](const io::RunProgress& p) {
+    if (p.steps >= 200) stop = true;
+  };
+  const io::RunResult b1 = io::runScene(first);
+  ASSERT_TRUE(b1.stopped);
+  ASSERT_LT(b1.steps, kSteps);
+  io::RunOptions second;
+  second.resumeDir = first.outDir;
+  const auto start = std::chrono::steady_clock::now();
+  const io::RunResult b = io::runScene(second);
+  const double secondSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_FALSE(b.alreadyFinished);
+  EXPECT_EQ(b.steps, kSteps) << "not the scene's own end (32 steps)";
+  // (The first process's up to its checkpoint, two thirds of the steps.)
+  EXPECT_GT(b.wallSeconds, secondSeconds) << "the wall time of both processes";
+  for (const char* file : {"history.csv", "psd.csv", "particles.pvd"}) {
+    EXPECT_EQ(readFile(dir.path / "straight" / file), readFile(dir.path / "resumed" / file)) << file;
+  }
+
+  // Again: at its end already. Nothing changes, not even the summary.
+  const std::string summary = readFile(dir.path / "resumed" / "summary.json");
+  const std::string checkpoint = readFile(dir.path / "resumed" / "checkpoint.lsc");
+  const io::RunResult c = io::runScene(second);
+  EXPECT_TRUE(c.alreadyFinished);
+  EXPECT_EQ(c.steps, kSteps);
+  EXPECT_EQ(readFile(dir.path / "resumed" / "summary.json"), summary);
+  EXPECT_EQ(readFile(dir.path / "resumed" / "checkpoint.lsc"), checkpoint);
+
+  // With --steps, that many more.
+  io::RunOptions more = second;
+  more.steps = 50;
+  EXPECT_EQ(io::runScene(more).steps, kSteps + 50);
 }

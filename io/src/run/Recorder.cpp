@@ -16,7 +16,7 @@ double RunContext<D>::massIn() const {
 
 template <int D>
 double RunContext<D>::wallSeconds() const {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return wallBefore + std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
 }
 
 template <int D>

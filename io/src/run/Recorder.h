@@ -51,10 +51,11 @@ struct RunContext {
   std::function<void(const std::string&)> note;       ///< what a resume repaired, for the user
   RanksSummary ranks;                                 ///< a distributed run's, at its last view
   std::string failure;                                ///< the error that stopped the run ("" for none)
+  double wallBefore = 0.0;                            ///< wall seconds of the processes before this one (a resumed run)
 
   /// kg that entered the run: the initial particles and what feeds dropped.
   double massIn() const;
-  /// Wall seconds since `started`.
+  /// Wall seconds of the run: those before this process (`wallBefore`) and since `started`.
   double wallSeconds() const;
 };
 

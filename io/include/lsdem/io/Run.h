@@ -134,6 +134,7 @@ struct RunResult {
   double time = 0.0;              ///< simulated, s
   double wallSeconds = 0.0;
   bool stopped = false;           ///< stopped early by `stop`
+  bool alreadyFinished = false;   ///< a resume of a run already at its end: nothing was run or written
   std::size_t particles = 0;
   std::size_t breakages = 0;
   double massIn = 0.0;            ///< initial + fed mass, kg
