@@ -5,7 +5,35 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+#include <string>
+
 namespace lsdem::apps {
+
+/// An option's check: a whole number (Integer) or a finite number of at
+/// least `least`. Its error names the value as given ("--steps: must be a
+/// whole number >= 1, got -5"); CLI11's own range checks print the largest
+/// double in full.
+template <bool Integer>
+CLI::Validator atLeast(double least) {
+  const std::string bound = Integer ? std::to_string(static_cast<long long>(least)) : CLI::detail::to_string(least);
+  const std::string kind = Integer ? "a whole number" : "a number";
+  return CLI::Validator(
+      [least, bound, kind](const std::string& text) {
+        double v = 0.0;
+        std::size_t used = 0;
+        try {
+          v = Integer ? double(std::stoll(text, &used)) : std::stod(text, &used);
+        } catch (const std::exception&) {
+          used = 0;
+        }
+        if (used == 0 || used != text.size() || !std::isfinite(v) || v < least) {
+          return "must be " + kind + " >= " + bound + ", got '" + text + "'";
+        }
+        return std::string();
+      },
+      (Integer ? "INT >= " : "NUMBER >= ") + bound);
+}
 
 /// The MPI ranks `lsdem` runs on (1 unless started by mpirun with -np > 1, in
 /// a build with LSDEM_MPI), and this process's rank.

@@ -165,7 +165,11 @@ void addParaviewCommand(CLI::App& app) {
       throw io::InputError(opts->dir, 0, "",
                            "not a run folder (none of particles.pvd, surfaces.pvd, boundaries.pvd, contacts.pvd)");
     }
-    if (opts->time && !std::isfinite(*opts->time)) throw io::InputError("--time", 0, "", "must be a finite number");
+    if (opts->time && !(std::isfinite(*opts->time) && *opts->time >= 0.0)) {
+      std::ostringstream given;
+      given << *opts->time;
+      throw io::InputError("--time", 0, "", "must be a finite number >= 0 (s), got " + given.str());
+    }
     if (!opts->screenshot.empty() && !opts->state.empty()) {
       throw io::InputError("--state", 0, "", "give either --screenshot or --state, not both");
     }

@@ -167,9 +167,9 @@ void addRunCommand(CLI::App& app) {
   cmd->add_option("--steps", args->steps,
                   "run this many steps instead of the scene's duration (with --resume: this many more steps; a "
                   "resumed run without it ends where the run it continues would have)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(atLeast<true>(1));
   cmd->add_option("--threads", args->threads, "OpenMP threads (0: all cores; default: the scene's)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(atLeast<true>(0));
   CLI::Option* resume = cmd->add_option(
       "--resume", args->resume,
       "continue the run whose outputs are in DIR from its checkpoint (with the scene given, or the checkpoint's)");

@@ -79,6 +79,8 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
     enclosed.push_back(geometry::enclosedVolume<D>(f.shape->grid()));
     correctedSum += f.volume;
   }
+  // (A plane that does not split the shape leaves it whole: its volume.)
+  if (!result.isSplit) correctedSum = result.parentVolume;
   auto centroidOf = [&](const breakage::Fragment<D>& f) { return toGrid.apply(f.childToParent.translation); };
 
   if (opts.json) {
@@ -104,7 +106,9 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
         .endObject();
     return;
   }
-  std::printf("split %s (%dD) by n.x = d with n = %s, d = %g\n", opts.file.c_str(), D, opts.plane.c_str(), d);
+  std::printf("split %s (%dD) by n.x = d with n = (", opts.file.c_str(), D);
+  for (int a = 0; a < D; ++a) std::printf("%s%g", a ? ", " : "", n[a]);
+  std::printf("), d = %g\n", d);
   std::printf("  parent %s %.9g\n", D == 2 ? "area" : "volume", result.parentVolume);
   if (!result.isSplit) std::printf("  the plane does not split the shape\n");
   for (std::size_t k = 0; k < result.fragments.size(); ++k) {
@@ -128,7 +132,7 @@ void addSplitCommand(CLI::App& app) {
   cmd->add_option("--plane", opts->plane, "the plane n.x = d as nx,ny[,nz],d in the shape's frame, metres")->required();
   cmd->add_option("--regrid-cells", opts->regridCells,
                   "re-grid a fragment thinner than this many parent cells ([effects.breakage] regrid_cells; 0: off)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(atLeast<false>(0));
   cmd->add_flag("--json", opts->json, "Print JSON instead of text");
   cmd->callback([opts] {
     const io::ShapeDecl decl = io::readShapeFile(opts->file);

@@ -107,6 +107,17 @@ int main(int argc, char** argv) {
   lsdem::apps::addStabilityBench(*bench);
   lsdem::apps::addAccuracyBench(*bench);
 
+  // A first word that names no command: said so (CLI11 says only that a
+  // command is required).
+  if (argc >= 2 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      known = known || sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) return mpi.fail(2, "lsdem: unknown command '" + std::string(argv[1]) + "' (the commands: " + names + ")", true);
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {

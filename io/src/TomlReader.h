@@ -8,8 +8,10 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <initializer_list>
 #include <optional>
@@ -39,6 +41,23 @@ class TomlReader {
     throw InputError(file_, line, key.empty() ? path_ : dotted(key), what);
   }
 
+  /// @brief The error for a required key that is absent; where the table
+  /// has a key not read yet one typo away (keys of 5 characters or more),
+  /// it is named as a likely misspelling.
+  [[noreturn]] void missing(const std::string& key) const {
+    std::string hint;
+    if (key.size() >= 5) {
+      for (const auto& [k, v] : table_) {
+        const std::string other(k.str());
+        if (!used_.count(other) && editDistance(other, key) <= 1) {
+          hint = " ('" + other + "' on line " + std::to_string(k.source().begin.line) + ": misspelt?)";
+          break;
+        }
+      }
+    }
+    fail("", "missing key '" + key + "'" + hint);
+  }
+
   /// @brief A number (integers accepted), finite; `nullopt` when absent.
   std::optional<double> optionalNumber(const std::string& key) {
     const toml::node* n = take(key);
@@ -50,7 +69,7 @@ class TomlReader {
   }
   double number(const std::string& key) {
     const auto v = optionalNumber(key);
-    if (!v) fail("", "missing key '" + key + "'");
+    if (!v) missing(key);
     return *v;
   }
   double number(const std::string& key, double fallback) { return optionalNumber(key).value_or(fallback); }
@@ -76,7 +95,7 @@ class TomlReader {
   }
   std::int64_t integer(const std::string& key) {
     const auto v = optionalInteger(key);
-    if (!v) fail("", "missing key '" + key + "'");
+    if (!v) missing(key);
     return *v;
   }
   std::int64_t integer(const std::string& key, std::int64_t fallback) { return optionalInteger(key).value_or(fallback); }
@@ -90,7 +109,7 @@ class TomlReader {
   }
   std::string string(const std::string& key) {
     const auto v = optionalString(key);
-    if (!v) fail("", "missing key '" + key + "'");
+    if (!v) missing(key);
     return *v;
   }
   std::string string(const std::string& key, const std::string& fallback) { return optionalString(key).value_or(fallback); }
@@ -109,14 +128,14 @@ class TomlReader {
   /// @brief An array of exactly `count` finite numbers (count < 0: any length >= 1).
   std::vector<double> numbers(const std::string& key, int count) {
     const toml::node* n = take(key);
-    if (!n) fail("", "missing key '" + key + "'");
+    if (!n) missing(key);
     return numbersOf(key, *n, count);
   }
 
   /// @brief An array of arrays of `count` numbers each (polygon vertices).
   std::vector<std::vector<double>> numberRows(const std::string& key, int count) {
     const toml::node* n = take(key);
-    if (!n) fail("", "missing key '" + key + "'");
+    if (!n) missing(key);
     const toml::array* a = n->as_array();
     if (!a || a->empty()) fail(key, "expected an array of [" + std::to_string(count) + " numbers] rows");
     std::vector<std::vector<double>> rows;
@@ -194,6 +213,21 @@ class TomlReader {
     return table_.get(key);
   }
   std::string dotted(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  // Edits (insert, delete, replace a character) from a to b.
+  static std::size_t editDistance(const std::string& a, const std::string& b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= b.size(); ++j) {
+        const std::size_t above = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0u : 1u)});
+        diagonal = above;
+      }
+    }
+    return row[b.size()];
+  }
   double checkPositive(const std::string& key, double v) const {
     if (!(v > 0.0)) fail(key, "must be positive, got " + toString(v));
     return v;
@@ -242,6 +276,9 @@ class TomlReader {
 
 /// @brief Parses a TOML file, turning syntax errors and unreadable files into InputError.
 inline toml::table parseTomlFile(const std::string& path) {
+  // (A folder reads as an empty file: its tables would then be missing.)
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, 0, "", "is a folder, not a TOML file");
   try {
     return toml::parse_file(path);
   } catch (const toml::parse_error& e) {

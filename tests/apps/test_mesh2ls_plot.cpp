@@ -2,7 +2,7 @@
 // a cube STL becomes a grain file with the cube's volume and centroid, broken
 // meshes and bad options end in one line and exit code 2, and `lsdem plot`
 // draws PNG files, says when gnuplot is missing (exit 3) and when the folder
-// has nothing to plot (exit 2).
+// holds no CSV file (exit 2) or none with rows (exit 3).
 
 #include "support/Files.h"
 #include "support/Json.h"
@@ -165,4 +165,11 @@ TEST(Plot, RunFolderToPngs) {
   ASSERT_EQ(d.code, 0) << d.output;
   EXPECT_TRUE(isPng(dir / "plots" / "stress_strain.png"));
   EXPECT_NE(d.output.find("wrote " + (dir / "plots" / "void_ratio.png").string()), std::string::npos) << d.output;
+
+  // CSV files without rows: nothing drawn, exit 3.
+  const fs::path headerOnly = tempDir("header_only");
+  std::ofstream(headerOnly / "history.csv") << "step,time_s,particles,contacts,breakages,kinetic_J\n";
+  const Result h = run("plot " + headerOnly.string());
+  EXPECT_EQ(h.code, 3) << h.output;
+  EXPECT_NE(h.output.find("lsdem plot: nothing to plot in " + headerOnly.string()), std::string::npos) << h.output;
 }

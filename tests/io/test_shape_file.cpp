@@ -91,6 +91,9 @@ TEST(ShapeFile, BadInputNamesFileLineAndKey) {
   EXPECT_NE(std::string(errorOf(head + "radius = -0.5\nspacing = 0.05\n", 4, "shape.radius").what()).find("must be positive"),
             std::string::npos);
   errorOf(head + "radius = 0.5\nspacing = 0.05\nradus = 1\n", 6, "shape.radus");            // unknown key (typo)
+  // A required key misspelt: missing, with the misspelling named.
+  EXPECT_STREQ(errorOf(head + "radus = 0.5\nspacing = 0.05\n", 1, "shape").what(),
+               (writeFile("bad.toml", "") + ":1: shape: missing key 'radius' ('radus' on line 4: misspelt?)").c_str());
   errorOf(head + "radius = \"big\"\nspacing = 0.05\n", 4, "shape.radius");                  // wrong type
   errorOf(head + "radius = nan\nspacing = 0.05\n", 4, "shape.radius");                      // NaN
   errorOf(head + "radius = 0.5\n", 1, "shape");                                             // no resolution
