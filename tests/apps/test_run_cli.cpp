@@ -17,6 +17,7 @@
 #include <regex>
 #include <sstream>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -333,5 +334,37 @@ TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
   EXPECT_FALSE(fs::exists(small / "frames" / "surfaces_000000.vtp"));
   EXPECT_EQ(temporaryFiles(small), 0u);
   EXPECT_FALSE(fs::exists(small / "lsdem.lock"));
+  fs::remove_all(dir);
+}
+
+// Command-line mistakes end in exit code 2 with a message naming what was
+// given, and nothing written: a step count or thread count that is not a
+// whole number in range, an unknown command, a folder given as the scene.
+TEST(RunCli, CommandLineMistakesNameWhatWasGiven) {
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_mistakes");
+  const fs::path scene = longScene(dir);
+  const fs::path out = dir / "out";
+  const auto run = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), LSDEM_BINARY);
+    return runCaptured(args);
+  };
+  for (const auto& [option, value, expected] :
+       {std::tuple{"--steps", "0", "--steps: must be a whole number >= 1, got '0'"},
+        std::tuple{"--steps", "-5", "--steps: must be a whole number >= 1, got '-5'"},
+        std::tuple{"--steps", "2.5", "--steps: must be a whole number >= 1, got '2.5'"},
+        std::tuple{"--threads", "abc", "--threads: must be a whole number >= 0, got 'abc'"}}) {
+    const lsdem::test::ProcessResult r = run({"run", scene.string(), "--out", out.string(), option, value});
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_EQ(r.output.rfind(expected, 0), 0u) << r.output;
+    EXPECT_FALSE(fs::exists(out)) << option << ' ' << value;
+  }
+  const lsdem::test::ProcessResult unknown = run({"frobnicate"});
+  EXPECT_EQ(unknown.code, 2);
+  EXPECT_EQ(unknown.output.rfind("lsdem: unknown command 'frobnicate' (the commands: run, ", 0), 0u) << unknown.output;
+  EXPECT_EQ(lineCount(unknown.output), 1u) << unknown.output;
+  const lsdem::test::ProcessResult folder = run({"run", dir.string(), "--out", out.string()});
+  EXPECT_EQ(folder.code, 2);
+  EXPECT_EQ(folder.output, "lsdem: " + dir.string() + ": is a folder, not a TOML file\n");
+  EXPECT_FALSE(fs::exists(out));
   fs::remove_all(dir);
 }
