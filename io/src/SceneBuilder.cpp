@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <numbers>
 #include <random>
+#include <sstream>
 #include <unordered_map>
 
 namespace lsdem::io {
@@ -79,6 +80,29 @@ class PlacementIndex {
     maxRadius_ = std::max(maxRadius_, shape->boundingRadius());
   }
   bool overlaps(const Vec<D>& x, const geometry::Shape<D>& shape, const Mat<D>& R) const {
+    return near(x, shape, [&](std::size_t k) {
+      const geometry::Shape<D>& other = *shapes_[k];
+      const double clearance = 0.5 * std::max(shape.grid().spacing(), other.grid().spacing());
+      return nodesReach(shape, R, x, other, rotations_[k], centres_[k], clearance) ||
+             nodesReach(other, rotations_[k], centres_[k], shape, R, x, clearance);
+    }) >= 0;
+  }
+  /// The placed particle whose body holds the centroid `x` of a particle of
+  /// `shape` posed R, or whose own centroid that particle's body would hold
+  /// (a deep overlap: no contact law pushes such grains apart in proportion);
+  /// its index in the order of add(), or -1.
+  std::ptrdiff_t holdingCentroid(const Vec<D>& x, const geometry::Shape<D>& shape, const Mat<D>& R) const {
+    return near(x, shape, [&](std::size_t k) {
+      return shapes_[k]->value(rotations_[k].transpose() * (x - centres_[k])) < 0.0 ||
+             shape.value(R.transpose() * (centres_[k] - x)) < 0.0;
+    });
+  }
+
+ private:
+  // The first placed particle whose bounding sphere meets that of `shape`
+  // at x and for which test(k) holds, or -1.
+  template <class Test>
+  std::ptrdiff_t near(const Vec<D>& x, const geometry::Shape<D>& shape, const Test& test) const {
     const double r = shape.boundingRadius();
     const int reach = int(std::ceil((r + maxRadius_) / cell_));
     Eigen::Array<std::int64_t, D, 1> c = cellOf(x);
@@ -88,23 +112,16 @@ class PlacementIndex {
       const auto it = cells_.find(hash(c + o));
       if (it != cells_.end()) {
         for (std::size_t k : it->second) {
-          const geometry::Shape<D>& other = *shapes_[k];
-          if ((centres_[k] - x).norm() >= other.boundingRadius() + r) continue;
-          const double clearance = 0.5 * std::max(shape.grid().spacing(), other.grid().spacing());
-          if (nodesReach(shape, R, x, other, rotations_[k], centres_[k], clearance) ||
-              nodesReach(other, rotations_[k], centres_[k], shape, R, x, clearance)) {
-            return true;
-          }
+          if ((centres_[k] - x).norm() >= shapes_[k]->boundingRadius() + r) continue;
+          if (test(k)) return std::ptrdiff_t(k);
         }
       }
       int a = 0;
       while (a < D && ++o[a] > reach) o[a++] = -reach;
       if (a == D) break;
     }
-    return false;
+    return -1;
   }
-
- private:
   Eigen::Array<std::int64_t, D, 1> cellOf(const Vec<D>& x) const {
     return (x.array() / cell_).floor().template cast<std::int64_t>();
   }
@@ -266,7 +283,36 @@ class Builder {
       } else {
         if (!g.rotations.empty()) q = Eigen::Quaterniond(g.rotations[k]).normalized();
       }
-      add(g, shapeFor(g, k, rng), g.positions[k], q);
+      const auto shape = shapeFor(g, k, rng);
+      checkListed(g, k, *shape, q);
+      add(g, shape, g.positions[k], q);
+    }
+  }
+
+  // A listed position that cannot be meant: behind a plane (its centroid on
+  // the side the normal points away from), or with its centroid inside a
+  // particle placed before it, or that particle's inside it. Either makes
+  // forces no time step resolves, and silent garbage (grains flung apart,
+  // breakage of everything they touch).
+  void checkListed(const ParticleGroupDef<D>& g, std::size_t k, const geometry::Shape<D>& shape,
+                   const dynamics::Orientation<D>& q) const {
+    const Vec<D>& x = g.positions[k];
+    const auto where = [&] {
+      std::ostringstream s;
+      s << "positions[" << k << "] = (";
+      for (int a = 0; a < D; ++a) s << (a ? ", " : "") << x[a];
+      s << ")";
+      return s.str();
+    };
+    for (const auto& p : scene_.planes) {
+      if (p.plane.signedDistance(x) < 0.0) {
+        fail(g, where() + " lies behind plane '" + p.name + "' (on the side its normal points away from)");
+      }
+    }
+    const std::ptrdiff_t other = index_->holdingCentroid(x, shape, dynamics::Rotation<D>::matrix(q));
+    if (other >= 0) {
+      fail(g, where() + " overlaps particle " + std::to_string(other) +
+                  " (ids count from 0 in the order placed) so deeply that one holds the other's centroid");
     }
   }
 

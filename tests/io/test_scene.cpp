@@ -330,6 +330,14 @@ TEST(Scene, UnsurvivableValuesNamesAndConflictsAreRefused) {
       // 1e308 whose stiffness overflows is fuzz/regressions/fuzz_scene/).
       {"dt_above_critical", edit("steps = 10\n", "steps = 10\ndt = 1.0\n"), 4, "simulation.dt",
        "exceeds the critical time step"},
+      // Listed positions that cannot be meant: two grains at one place (one
+      // holds the other's centroid; touching grains are fine: the base scene
+      // and next_to below), a grain behind a plane.
+      {"same_place", edit("[[0.0, 0.05], [0.03, 0.05]]", "[[0.0, 0.05], [0.005, 0.05]]"), 16, "particles",
+       "positions[1] = (0.005, 0.05) overlaps particle 0"},
+      {"behind_plane",
+       std::string(kBase) + "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.055]\nnormal = [0.0, 1.0]\n", 16,
+       "particles", "positions[0] = (0, 0.05) lies behind plane 'floor'"},
   };
   for (const BadCase& c : cases) {
     const fs::path file = writeScene(c.name, c.scene);
@@ -343,6 +351,13 @@ TEST(Scene, UnsurvivableValuesNamesAndConflictsAreRefused) {
       EXPECT_NE(e.problem().find(c.message), std::string::npos) << c.name << ": " << e.what();
     }
   }
+  // Grains that overlap without holding each other's centroid, and a grain
+  // across a plane with its centroid in front of it, are placed as listed.
+  EXPECT_NO_THROW(io::buildWorld(as<2>(io::readScene(
+      writeScene("next_to", edit("[[0.0, 0.05], [0.03, 0.05]]",
+                                 "[[0.0, 0.05], [0.015, 0.05]]") +
+                                "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.045]\nnormal = [0.0, 1.0]\n")
+          .string()))));
   // A key_frames tool whose own pose is its first frame's is accepted (the demolition scene).
   std::string agreeing = std::string(kBase) + tool;
   agreeing.replace(agreeing.find("position = [0.1, 0.3]"), 21, "position = [0.2, 0.3]");
