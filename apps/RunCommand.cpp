@@ -30,11 +30,20 @@ namespace {
 std::atomic<bool> gStop{false};
 std::atomic<int> gSignal{0};  // the signal that asked the run to stop
 
+std::atomic<bool> gAnnounce{false};  // say that the run will stop (not with --quiet)
+
 extern "C" void onStopSignal(int signal) {
   gSignal.store(signal);
   gStop.store(true);
   // A second one ends the program at once.
   std::signal(signal, SIG_DFL);
+  // (write: the only output a signal handler may make. The set-up of a
+  // large scene does not look at the flag, so the run may take a while to
+  // stop: it says so at once.)
+  if (gAnnounce.load()) {
+    static const char kNote[] = "\nlsdem: stopping at the next step (again to quit at once)\n";
+    [[maybe_unused]] const auto written = ::write(2, kNote, sizeof(kNote) - 1);
+  }
 }
 
 std::string duration(double s) {
@@ -133,11 +142,16 @@ void runCommand(const RunArgs& a) {
   }
   gStop.store(false);
   gSignal.store(0);
+  gAnnounce.store(!a.quiet && speaks);
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   const io::RunResult r = io::runScene(o);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+  if (r.nothingWritten && r.stopped) {
+    if (speaks) std::cerr << "lsdem: stopped during the set-up; nothing written\n";
+    throw CLI::RuntimeError(128 + (gSignal.load() != 0 ? gSignal.load() : SIGINT));
+  }
   if (r.alreadyFinished) {
     // (Said also with --quiet: a script that resumes until done learns it is.)
     if (speaks) {

@@ -128,6 +128,7 @@ class Runner {
         // Nothing to run: nothing is written.
         RunResult r = result(false);
         r.alreadyFinished = true;
+        r.nothingWritten = true;
         return r;
       }
     }
@@ -143,6 +144,13 @@ class Runner {
       if (frames_) frames_->usePieces(engine->ranks);
     }
     if (resume) loadRunState(runState);
+    // Stopped while the scene was set up (placing and remeshing grains can
+    // take a while): nothing has been written, and nothing is.
+    if (options_.stop && options_.stop->load() && !engine) {
+      RunResult r = result(true);
+      r.nothingWritten = true;
+      return r;
+    }
     if (engine) engine_ = makeEngine(*engine);
     if (writes_) {
       claimOutputFolder(resume);

@@ -916,3 +916,20 @@ TEST(Run, AResumedRunEndsWhereItsOwnStepsSaid) {
   more.steps = 50;
   EXPECT_EQ(io::runScene(more).steps, kSteps + 50);
 }
+
+// A stop asked for before the set-up is done (Ctrl-C while grains are
+// placed): the run ends without a step and without writing anything, not
+// even the output folder.
+TEST(Run, AStopDuringTheSetUpWritesNothing) {
+  TempDir dir("stop_in_setup");
+  std::atomic<bool> stop{true};
+  io::RunOptions o;
+  o.scene = writeScene(dir.path, kDiscScene).string();
+  o.outDir = (dir.path / "out").string();
+  o.stop = &stop;
+  const io::RunResult r = io::runScene(o);
+  EXPECT_TRUE(r.stopped);
+  EXPECT_TRUE(r.nothingWritten);
+  EXPECT_EQ(r.steps, 0u);
+  EXPECT_FALSE(fs::exists(dir.path / "out"));
+}

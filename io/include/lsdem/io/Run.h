@@ -135,6 +135,7 @@ struct RunResult {
   double wallSeconds = 0.0;
   bool stopped = false;           ///< stopped early by `stop`
   bool alreadyFinished = false;   ///< a resume of a run already at its end: nothing was run or written
+  bool nothingWritten = false;    ///< no output changed (already finished, or stopped during the set-up)
   std::size_t particles = 0;
   std::size_t breakages = 0;
   double massIn = 0.0;            ///< initial + fed mass, kg
