@@ -117,8 +117,9 @@ class Runner {
       if (scene_.specimen) context_.basis.specimenHeight = specimenHeight(*scene_.specimen, world);
     }
     end_ = runEnd(scene_, options_, world);
+    SavedRun saved;
     if (resume) {
-      const SavedRun saved = readRunState(runState);
+      saved = readRunState(runState);
       context_.wallBefore = saved.wallSeconds;
       // The run's own end (its `--steps`), kept by its checkpoint: resumed
       // without --steps it ends there, as it would have run on (a forced
@@ -143,7 +144,7 @@ class Runner {
       }
       if (frames_) frames_->usePieces(engine->ranks);
     }
-    if (resume) loadRunState(runState);
+    if (resume) loadRunState(saved);
     // Stopped while the scene was set up (placing and remeshing grains can
     // take a while): nothing has been written, and nothing is.
     if (options_.stop && options_.stop->load() && !engine) {
@@ -179,20 +180,43 @@ class Runner {
       advanceSchedules();
     }
 
-    // The loop: one step, then the records due, then a checkpoint if due. The
-    // schedules move past this step before the checkpoint saves them: a run
-    // resumed from it (after a kill) serves the next instants, as this run does.
-    Clock::time_point lastReport = Clock::now();
-    std::uint64_t stepsAtReport = world.steps();
+    // The steps; a step (or a record of it) that fails ends the run here (failed()).
     bool stopped = false;
     try {
+      stopped = stepToEnd(world);
+    } catch (const std::exception& e) {
+      failed(e);
+    }
+
+    // The end (or an early stop): the checkpoint first, so that a resumed run
+    // drops what follows (it is not on any schedule), then every recorder's last
+    // record; the summary is the last of them.
+    updateView();
+    writeCheckpoint();
+    context_.stopped = stopped;
+    if (frames_) writeFramePieces(frames_->recordsAtFinish(now()));
+    if (writes_) {
+      for (auto& r : recorders_) r->finish(*sw_.world, now());
+    }
+    if (writes_ && options_.progress) report(double(world.steps()) / std::max(context_.wallSeconds(), 1e-9), true);
+
+    return result(stopped);
+  }
+
+ private:
+  using World = dynamics::World<D>;
+
+  // The steps to the end, or to a stop (true). The loop: one step, then
+  // the records due, then a checkpoint if due. The schedules move past this
+  // step before the checkpoint saves them: a run resumed from it (after a
+  // kill) serves the next instants, as this run does.
+  bool stepToEnd(World& world) {
+    Clock::time_point lastReport = Clock::now();
+    std::uint64_t stepsAtReport = world.steps();
     while (!end_.finished(world.time(), world.steps())) {
       bool stop = options_.stop && options_.stop->load();
       if (engine_) stop = engine_->anyStop(stop);
-      if (stop) {
-        stopped = true;
-        break;
-      }
+      if (stop) return true;
       if (engine_) {
         engine_->step();
       } else {
@@ -224,27 +248,8 @@ class Runner {
         stepsAtReport = world.steps();
       }
     }
-    } catch (const std::exception& e) {
-      failed(e);
-    }
-
-    // The end (or an early stop): the checkpoint first, so that a resumed run
-    // drops what follows (it is not on any schedule), then every recorder's last
-    // record; the summary is the last of them.
-    updateView();
-    writeCheckpoint();
-    context_.stopped = stopped;
-    if (frames_) writeFramePieces(frames_->recordsAtFinish(now()));
-    if (writes_) {
-      for (auto& r : recorders_) r->finish(*sw_.world, now());
-    }
-    if (writes_ && options_.progress) report(double(world.steps()) / std::max(context_.wallSeconds(), 1e-9), true);
-
-    return result(stopped);
+    return false;
   }
-
- private:
-  using World = dynamics::World<D>;
 
   // The run's result as the view holds it. (A process of a distributed run
   // that does not write the outputs reports its own part.)
@@ -432,8 +437,7 @@ class Runner {
     });
     return saved;
   }
-  void loadRunState(const std::string& bytes) {
-    const SavedRun saved = readRunState(bytes);
+  void loadRunState(const SavedRun& saved) {
     asCheckpointError(checkpointFile().string(), [&] {
       context_.basis = saved.basis;
       dynamics::StateReader schedule(saved.schedule.data(), saved.schedule.size());
