@@ -36,9 +36,10 @@ void addPlotCommand(CLI::App& app) {
     const io::RunPlots plots = io::plotRunFolder(opts->dir, out);
     for (const std::string& png : plots.written) std::cout << "wrote " << png << '\n';
     for (const std::string& why : plots.skipped) std::cout << "skipped " << why << '\n';
-    // Nothing drawn (CSV files without rows): exit 3, as without gnuplot.
+    // Nothing drawn (CSV files without rows, or without the columns drawn;
+    // the reasons are above): exit 3, as without gnuplot.
     if (plots.written.empty()) {
-      std::cerr << "lsdem plot: nothing to plot in " << opts->dir << " (no CSV file has rows with numbers)\n";
+      std::cerr << "lsdem plot: nothing to plot in " << opts->dir << "; nothing drawn\n";
       throw CLI::RuntimeError(3);
     }
   });

@@ -156,7 +156,8 @@ void runCommand(const RunArgs& a) {
     // (Said also with --quiet: a script that resumes until done learns it is.)
     if (speaks) {
       std::cerr << "lsdem: " << r.outDir << ": the run is already at its end (" << r.steps << " steps, t = " << r.time
-                << " s); nothing to resume, nothing written (give --steps N to run N more steps)\n";
+                << " s); nothing to resume, nothing written (give --steps N to run N more steps, or --force with "
+                   "a scene that ends later)\n";
     }
     return;
   }

@@ -305,7 +305,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
     // Spared? Most walks of a settled or slow bed are, so the test comes
     // before anything else a walk needs, and takes the map as turn and
     // offset times 1 / h: within a few units of round-off of map and shift
-    // (divided by h: 12 divisions, which held up every walk), far inside
+    // (divided by h: 12 divisions in 3D, which held up every walk), far inside
     // the certificate's slack.
     const double perCell = 1.0 / h;
     const double bound = (turn * perCell - previous->map).norm() * rho + (offset * perCell - previous->shift).norm();

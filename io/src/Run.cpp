@@ -117,14 +117,29 @@ class Runner {
       if (scene_.specimen) context_.basis.specimenHeight = specimenHeight(*scene_.specimen, world);
     }
     end_ = runEnd(scene_, options_, world);
+    // The run's own end, which its checkpoints keep: the scene's, or where
+    // its first `--steps` put it. A resume's `--steps` sets this process's
+    // end only.
+    RunOptions sceneEnd = options_;
+    sceneEnd.steps.reset();
+    runEnd_ = options_.steps && !resume ? end_ : runEnd(scene_, sceneEnd, world);
     SavedRun saved;
     if (resume) {
       saved = readRunState(runState);
+      context_.basis = saved.basis;
       context_.wallBefore = saved.wallSeconds;
-      // The run's own end (its `--steps`), kept by its checkpoint: resumed
-      // without --steps it ends there, as it would have run on (a forced
-      // resume takes the scene's end as it is now).
-      if (saved.end && !options_.steps && !options_.force) end_ = *saved.end;
+      // Resumed without --steps, the run ends at its own end, as it would
+      // have run on (a forced resume takes the scene's end as it is now,
+      // if the outputs are counted on the same clock: the checkpoint's
+      // schedules hold seconds or steps).
+      if (saved.end && !options_.force) runEnd_ = *saved.end;
+      if (saved.end && options_.force && !options_.steps && saved.end->byTime != runEnd_.byTime) {
+        throw InputError(checkpointFile().string(), 0, "",
+                         std::string("the run's outputs are scheduled in ") + (saved.end->byTime ? "seconds" : "steps") +
+                             " and the scene's end is in " + (runEnd_.byTime ? "seconds" : "steps") +
+                             "; resume it with --steps N (N more steps)");
+      }
+      if (!options_.steps) end_ = runEnd_;
       if (end_.finished(world.time(), world.steps())) {
         // Nothing to run: nothing is written.
         RunResult r = result(false);
@@ -184,6 +199,8 @@ class Runner {
     bool stopped = false;
     try {
       stopped = stepToEnd(world);
+    } catch (const InputError&) {
+      throw;
     } catch (const std::exception& e) {
       failed(e);
     }
@@ -276,8 +293,7 @@ class Runner {
   [[noreturn]] void failed(const std::exception& e) {
     const World& w = *stepped().world;
     std::string what = e.what();
-    // (An input error, or an error that already says the run diverged, is left as it is.)
-    if (dynamic_cast<const InputError*>(&e)) throw;
+    // (An error that already says the run diverged is left as it is.)
     if (what.find("diverged") == std::string::npos) {
       const std::string note = divergenceNote(w);
       if (!note.empty()) what = note + " (the step failed: " + what + ")";
@@ -387,10 +403,10 @@ class Runner {
     // The run's end and the wall seconds so far (readRunState; checkpoints
     // of earlier releases have no such section).
     dynamics::StateWriter run;
-    run.put(std::uint8_t(end_.byTime));
-    run.put(end_.endTime);
-    run.put(end_.endStep);
-    run.put(end_.span);
+    run.put(std::uint8_t(runEnd_.byTime));
+    run.put(runEnd_.endTime);
+    run.put(runEnd_.endStep);
+    run.put(runEnd_.span);
     run.put(context_.wallSeconds());
     s.putString(kRunSection);
     s.putVector(run.bytes());
@@ -439,7 +455,6 @@ class Runner {
   }
   void loadRunState(const SavedRun& saved) {
     asCheckpointError(checkpointFile().string(), [&] {
-      context_.basis = saved.basis;
       dynamics::StateReader schedule(saved.schedule.data(), saved.schedule.size());
       checkpoints_.load(schedule);
       for (auto& r : recorders_) {
@@ -493,7 +508,8 @@ class Runner {
   std::uint64_t changesAtView_ = 0;       // engine_->particleSetChanges() at the last view
   FrameRecorder<D>* frames_ = nullptr;    // a distributed run's frames in per-rank pieces (in recorders_)
   RunContext<D> context_;
-  RunEnd end_;
+  RunEnd end_;     // this process's end
+  RunEnd runEnd_;  // the run's own end (writeCheckpoint keeps it)
   Schedule checkpoints_;
   std::vector<std::unique_ptr<Recorder<D>>> recorders_;  // the summary last
 };

@@ -908,13 +908,17 @@ TEST(Run, AResumedRunEndsWhereItsOwnStepsSaid) {
   const io::RunResult c = io::runScene(second);
   EXPECT_TRUE(c.alreadyFinished);
   EXPECT_EQ(c.steps, kSteps);
+  EXPECT_EQ(c.massIn, b.massIn);
   EXPECT_EQ(readFile(dir.path / "resumed" / "summary.json"), summary);
   EXPECT_EQ(readFile(dir.path / "resumed" / "checkpoint.lsc"), checkpoint);
 
-  // With --steps, that many more.
+  // With --steps, that many more; the run's own end stays where it was.
   io::RunOptions more = second;
   more.steps = 50;
   EXPECT_EQ(io::runScene(more).steps, kSteps + 50);
+  const io::RunResult d = io::runScene(second);
+  EXPECT_TRUE(d.alreadyFinished);
+  EXPECT_EQ(d.steps, kSteps + 50);
 }
 
 // A stop asked for before the set-up is done (Ctrl-C while grains are

@@ -331,8 +331,8 @@ TEST(Scene, UnsurvivableValuesNamesAndConflictsAreRefused) {
       {"dt_above_critical", edit("steps = 10\n", "steps = 10\ndt = 1.0\n"), 4, "simulation.dt",
        "exceeds the critical time step"},
       // Listed positions that cannot be meant: two grains at one place (one
-      // holds the other's centroid; touching grains are fine: the base scene
-      // and next_to below), a grain behind a plane.
+      // holds the other's centroid; overlapping short of that is fine:
+      // next_to below), a grain behind a plane.
       {"same_place", edit("[[0.0, 0.05], [0.03, 0.05]]", "[[0.0, 0.05], [0.005, 0.05]]"), 16, "particles",
        "positions[1] = (0.005, 0.05) overlaps particle 0"},
       {"behind_plane",

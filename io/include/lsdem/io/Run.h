@@ -91,7 +91,7 @@ struct RunProgress {
   double endTime = 0.0;           ///< simulated time at the end, s (estimate for step-count runs)
   double fraction = 0.0;          ///< done, in [0, 1]
   double stepsPerSecond = 0.0;    ///< over the last report interval
-  double wallSeconds = 0.0;       ///< since the run (or the resumed part) started
+  double wallSeconds = 0.0;       ///< of the run: this process's, and a resumed run's earlier processes' up to their last checkpoint
   double etaSeconds = 0.0;        ///< estimate of the wall time left: the steps left at the current dt over the current steps per second
   std::size_t particles = 0;
   std::size_t contacts = 0;
@@ -106,11 +106,11 @@ inline constexpr double kCheckSplitEnergyLimit = 0.05;
 struct RunOptions {
   std::string scene;                        ///< scene file; when resuming, empty: the checkpoint's (or its copy in the folder)
   std::string outDir;                       ///< output folder; empty: the scene's [output] dir
-  std::optional<std::uint64_t> steps;       ///< run this many steps (from the start or the checkpoint) instead of the scene's end
+  std::optional<std::uint64_t> steps;       ///< run this many steps (from the start or the checkpoint) instead of to the run's end (a new run: the scene's; a resume: the checkpoint's)
   int threads = -1;                         ///< OpenMP threads; < 0: the scene's; 0: all cores
   std::string resumeDir;                    ///< non-empty: continue the run whose outputs are in this folder
   bool overwrite = false;                   ///< a new run replaces another run's outputs in its folder (else refused)
-  bool force = false;                       ///< resume even with a scene that is not the checkpoint's (else refused)
+  bool force = false;                       ///< resume even with a scene that is not the checkpoint's (else refused), to the scene's end
   /// Checks that cannot be fooled (`lsdem run --check`): every particle's
   /// position, orientation, velocities, force and torque are checked for
   /// NaN/Inf each step (WorldDef::checkFinite), and a split whose fragments
