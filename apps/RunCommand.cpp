@@ -155,7 +155,7 @@ void runCommand(const RunArgs& a) {
   if (r.alreadyFinished) {
     // (Said also with --quiet: a script that resumes until done learns it is.)
     if (speaks) {
-      std::cerr << "lsdem: " << r.outDir << ": the run is already at its end (" << r.steps << " steps, t = " << r.time
+      std::cerr << "lsdem: " << r.outDir << ": the run is already at its end (step " << r.steps << ", t = " << r.time
                 << " s); nothing to resume, nothing written (give --steps N to run N more steps, or --force with "
                    "a scene that ends later)\n";
     }

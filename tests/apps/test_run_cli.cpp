@@ -368,3 +368,26 @@ TEST(RunCli, CommandLineMistakesNameWhatWasGiven) {
   EXPECT_FALSE(fs::exists(out));
   fs::remove_all(dir);
 }
+
+// The smallest values the checks let through run (one step, all cores), and
+// a run at its end resumed again says so in one line, exit 0, also with
+// --quiet, and leaves every file as it was.
+TEST(RunCli, AFinishedRunResumedAgainSaysSoAndWritesNothing) {
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_finished");
+  const fs::path scene = longScene(dir);
+  const fs::path out = dir / "out";
+  ASSERT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--steps", "1", "--threads", "0",
+                       "--quiet"}),
+            0);
+  const std::string summary = readFile(out / "summary.json");
+  EXPECT_NE(summary.find("\"steps\": 1,"), std::string::npos) << summary;
+  for (const char* quiet : {"--quiet", "--threads=1"}) {
+    const lsdem::test::ProcessResult again = runCaptured({LSDEM_BINARY, "run", "--resume", out.string(), quiet});
+    EXPECT_EQ(again.code, 0) << again.output;
+    EXPECT_EQ(lineCount(again.output), 1u) << again.output;
+    EXPECT_EQ(again.output.rfind("lsdem: " + out.string() + ": the run is already at its end (step 1, t = ", 0), 0u)
+        << again.output;
+    EXPECT_EQ(readFile(out / "summary.json"), summary);
+  }
+  fs::remove_all(dir);
+}
