@@ -710,9 +710,8 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // A margin m > 0 stored as a float no larger than it (a float rounds
   // within 2^-24 of m; none certifies more than 1e30 cells); 0 for m <= 0
   // (and NaN), which certifies nothing.
-  const auto lowered = [](double m) {
-    return m > 0.0 ? float(std::min(m * (1.0 - 0x1p-20), 1e30)) : 0.0f;
-  };
+  constexpr double kLowering = 1.0 - 0x1p-20;
+  const auto lowered = [](double m) { return m > 0.0 ? float(std::min(m * kLowering, 1e30)) : 0.0f; };
   const bool rebase = previous == nullptr || !(moved + kCertificateSlack < previous->restClearance);
   // A frontier walk refines the lists and never merges them back: once they
   // hold more than twice the entries of the last whole walk, walk it whole.
@@ -866,7 +865,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       const bool carry = movedBound + moved < m;
       // (lowered(m - carried) for a cell carried, whose m - carried is
       // above movedBound > 0 and below 1e30; written for every cell.)
-      carriedTo[carriedCount] = {old.cell, float((m - carried) * (1.0 - 0x1p-20))};
+      carriedTo[carriedCount] = {old.cell, float((m - carried) * kLowering)};
       carriedCount += carry;
       rootsTo[roots] = old.cell;
       roots += !carry;

@@ -117,22 +117,23 @@ class Runner {
       if (scene_.specimen) context_.basis.specimenHeight = specimenHeight(*scene_.specimen, world);
     }
     end_ = runEnd(scene_, options_, world);
-    // The run's own end, which its checkpoints keep: the scene's, or where
-    // its first `--steps` put it. A resume's `--steps` sets this process's
-    // end only.
-    RunOptions sceneEnd = options_;
-    sceneEnd.steps.reset();
-    runEnd_ = options_.steps && !resume ? end_ : runEnd(scene_, sceneEnd, world);
+    // The run's own end, which its checkpoints keep: a new run's (the
+    // scene's, or where its `--steps` put it); a resumed run's, the
+    // checkpoint's (a resume's `--steps` sets this process's end only).
+    runEnd_ = end_;
     SavedRun saved;
     if (resume) {
       saved = readRunState(runState);
       context_.basis = saved.basis;
       context_.wallBefore = saved.wallSeconds;
       // Resumed without --steps, the run ends at its own end, as it would
-      // have run on (a forced resume takes the scene's end as it is now,
-      // if the outputs are counted on the same clock: the checkpoint's
-      // schedules hold seconds or steps).
-      if (saved.end && !options_.force) runEnd_ = *saved.end;
+      // have run on (a forced resume, or a checkpoint of an earlier
+      // release, takes the scene's end as it is now, if the outputs are
+      // counted on the same clock: the checkpoint's schedules hold seconds
+      // or steps).
+      RunOptions sceneEnd = options_;
+      sceneEnd.steps.reset();
+      runEnd_ = saved.end && !options_.force ? *saved.end : runEnd(scene_, sceneEnd, world);
       if (saved.end && options_.force && !options_.steps && saved.end->byTime != runEnd_.byTime) {
         throw InputError(checkpointFile().string(), 0, "",
                          std::string("the run's outputs are scheduled in ") + (saved.end->byTime ? "seconds" : "steps") +
