@@ -113,7 +113,12 @@ void printText(const ShapeReport& r, const std::string& file) {
     std::printf("  %-22s %s m^5\n", "principal inertia", vec(r.inertiaPrincipal).c_str());
   }
   std::printf("  %-22s %.6g %s\n", two ? "perimeter" : "surface area", r.surfaceArea, two ? "m" : "m^2");
-  std::printf("  %-22s %.6g\n", two ? "circularity" : "sphericity", r.circularity);
+  // (Measured from the grid's volume and the nodes' perimeter or area, it can
+  // come out a little above 1 for a circle or sphere.)
+  std::printf("  %-22s %.6g%s\n", two ? "circularity" : "sphericity", r.circularity,
+              r.circularity > 1.0 ? (two ? " (over 1 from the discretised area and perimeter; a circle is 1)"
+                                         : " (over 1 from the discretised volume and area; a sphere is 1)")
+                                  : "");
   std::printf("  %-22s %.6g\n", "aspect ratio", r.aspectRatio);
   std::printf("  %-22s %.6g m\n", "equivalent diameter", r.equivalentDiameter);
   std::printf("  %-22s %.6g m\n", "sieve size", r.sieveSize);

@@ -117,10 +117,15 @@ std::vector<Vec<D>> surfacePointsAtCells(const geometry::Grid<D>& grid) {
 // history, damping); items = node checks. Argument 4: separation
 // certificates on (1) or off (0: every pass walks every pair's trees whole,
 // as a flowing bed does where the motion outruns the certificates).
+// Argument 5 (optional): 1 leaves friction and damping out of the law (a
+// linear spring per node contact, the law at its cheapest): what the pass
+// costs besides them.
 template <int D>
 void BM_NarrowPhase(benchmark::State& state) {
   const Cluster<D> c = makeCluster<D>(int(state.range(0)), double(state.range(1)), 0.01 * double(state.range(2)));
-  ContactSolver<D> solver(ContactLawDef{});
+  ContactLawDef law;
+  if (state.range_size() > 4 && state.range(4) == 1) law.hasFriction = law.hasDamping = false;
+  ContactSolver<D> solver(law);
   solver.setSeparationCertificates(state.range(3) != 0);
   // Two steps before timing: the solver's double-buffered outputs have then
   // both grown to the problem's size (a run's steady state).
@@ -157,7 +162,8 @@ void BM_NarrowPhase(benchmark::State& state) {
   // coordinates, for 50 ms each after the timed passes: one at a time
   // (Grid::valueAtCells, "raw look-ups/s") and in one batch
   // (Grid::valuesAtCells, two per instruction, as the batched walks make
-  // theirs: "raw batched look-ups/s"). One line prints all three.
+  // theirs: "raw batched look-ups/s"), and one at a time with the gradient
+  // below zero ("raw look-ups with gradient/s"). One line prints them all.
   {
     const geometry::Grid<D>& grid = p.shape[0]->grid();
     const std::vector<Vec<D>> points = surfacePointsAtCells(grid);
@@ -176,6 +182,14 @@ void BM_NarrowPhase(benchmark::State& state) {
     double sum = 0.0;
     state.counters["raw look-ups/s"] = rate([&] {
       for (const Vec<D>& g : points) sum += grid.valueAtCells(g);
+    });
+    benchmark::DoNotOptimize(sum);
+    // With the gradient where the value is negative (what a contact node
+    // takes: Grid::valueAtCellsGradientBelow), about half of these points.
+    Vec<D> grad = Vec<D>::Zero();
+    state.counters["raw look-ups with gradient/s"] = rate([&] {
+      for (const Vec<D>& g : points) sum += grid.valueAtCellsGradientBelow(g, 0.0, grad);
+      benchmark::DoNotOptimize(grad);
     });
     benchmark::DoNotOptimize(sum);
     state.counters["raw batched look-ups/s"] = rate([&] {
@@ -497,6 +511,8 @@ BENCHMARK(BM_NarrowPhase<3>)
     ->Args({10, 20, 90, 1})
     ->Args({10, 20, 97, 1})
     ->Args({10, 20, 97, 0})
+    ->Args({10, 20, 97, 1, 1})
+    ->Args({10, 20, 97, 0, 1})
     ->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_NarrowPhase<2>)->Args({16, 20, 90, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
 

@@ -5,6 +5,7 @@
 #include "lsdem/geometry/Primitives.h"
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -90,9 +91,10 @@ Grid<3> meshGrid(const ShapeDef<3>& def, const TriangleMesh& mesh) {
   const double h = spacingFor(def, smallest);
   // 2 to 1e4 cells across the smallest extent, as cells_across allows.
   if (!(smallest / h >= 2.0 && smallest / h <= 1e4)) {
-    throw std::invalid_argument("spacing " + std::to_string(h) + " gives " + std::to_string(smallest / h) +
-                                " cells across the mesh's smallest extent " + std::to_string(smallest) +
-                                "; it must give 2 to 1e4");
+    std::ostringstream what;
+    what << "gives " << smallest / h << " cells across the mesh's smallest extent (" << smallest << " at spacing "
+         << h << "); it must give 2 to 1e4";
+    throw ResolutionError(what.str());
   }
   return meshToLevelSet(mesh, h, kDefaultPaddingCells, def.meshFile);
 }

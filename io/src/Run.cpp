@@ -209,12 +209,18 @@ class Runner {
     // The end (or an early stop): the checkpoint first, so that a resumed run
     // drops what follows (it is not on any schedule), then every recorder's last
     // record; the summary is the last of them.
-    updateView();
-    writeCheckpoint();
-    context_.stopped = stopped;
-    if (frames_) writeFramePieces(frames_->recordsAtFinish(now()));
-    if (writes_) {
-      for (auto& r : recorders_) r->finish(*sw_.world, now());
+    try {
+      updateView();
+      writeCheckpoint();
+      context_.stopped = stopped;
+      if (frames_) writeFramePieces(frames_->recordsAtFinish(now()));
+      if (writes_) {
+        for (auto& r : recorders_) r->finish(*sw_.world, now());
+      }
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      stopWith(where() + e.what());
     }
     if (writes_ && options_.progress) report(double(world.steps()) / std::max(context_.wallSeconds(), 1e-9), true);
 
@@ -292,14 +298,24 @@ class Runner {
   // with the error) from the state as it is. The outputs keep what was
   // written; the checkpoint stays the last one written, of a sound state.
   [[noreturn]] void failed(const std::exception& e) {
-    const World& w = *stepped().world;
     std::string what = e.what();
     // (An error that already says the run diverged is left as it is.)
     if (what.find("diverged") == std::string::npos) {
-      const std::string note = divergenceNote(w);
+      const std::string note = divergenceNote(*stepped().world);
       if (!note.empty()) what = note + " (the step failed: " + what + ")";
     }
-    const std::string message = "step " + std::to_string(w.steps()) + " (t = " + roughly(w.time()) + " s): " + what;
+    stopWith(where() + what);
+  }
+  // Where the run is, as a failure's message begins: the world's count is
+  // that of the steps it finished, so a failure inside a step comes after
+  // the last of them, as does one in their records.
+  std::string where() const {
+    const World& w = *stepped().world;
+    return "after step " + std::to_string(w.steps()) + " (t = " + roughly(w.time()) + " s): ";
+  }
+  // Ends the run with `message`: the summary records it (stopped early,
+  // with the error) from the state as it is, then it is thrown.
+  [[noreturn]] void stopWith(const std::string& message) {
     if (writes_) {
       context_.stopped = true;
       context_.failure = message;

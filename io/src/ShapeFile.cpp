@@ -38,6 +38,9 @@ std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& de
                            .what());
     }
     return shape;
+  } catch (const geometry::ResolutionError& e) {
+    throw InputError(decl.file, decl.resolutionLine > 0 ? decl.resolutionLine : decl.line,
+                     decl.resolutionKey.empty() ? decl.key : decl.resolutionKey, e.what());
   } catch (const geometry::MeshError& e) {
     throw InputError(decl.file, decl.line, decl.key, e.what());
   } catch (const std::invalid_argument& e) {

@@ -131,7 +131,8 @@ ShapeDecl readOfDimension(TomlReader& r, const std::string& file, int line, cons
     r.fail("mass_method", "must be \"extrapolated\" or \"paper\", got \"" + method + "\"");
   }
   r.finish();
-  return ShapeDecl{def, file, line, path};
+  const std::string resolution = r.has("spacing") ? "spacing" : "cells_across";
+  return ShapeDecl{def, file, line, path, r.lineOf(resolution), r.pathOf(resolution)};
 }
 
 }  // namespace

@@ -306,7 +306,7 @@ TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
   EXPECT_EQ(history.code, 1) << history.output;
   // One line: the step it stopped at, then the file.
   const std::string tail = "cannot write " + (out / "history.csv").string() + ": File too large\n";
-  EXPECT_EQ(history.output.rfind("lsdem: error: step ", 0), 0u) << history.output;
+  EXPECT_EQ(history.output.rfind("lsdem: error: after step ", 0), 0u) << history.output;
   EXPECT_TRUE(history.output.ends_with(" s): " + tail)) << history.output;
   EXPECT_EQ(std::count(history.output.begin(), history.output.end(), '\n'), 1) << history.output;
   EXPECT_EQ(fs::file_size(out / "history.csv"), 200000u);
@@ -334,6 +334,25 @@ TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
   EXPECT_FALSE(fs::exists(small / "frames" / "surfaces_000000.vtp"));
   EXPECT_EQ(temporaryFiles(small), 0u);
   EXPECT_FALSE(fs::exists(small / "lsdem.lock"));
+
+  // 8 kB: every output of the first step fits, the checkpoint of the run's
+  // end (15 kB) does not. The run stops with that, and its summary says so.
+  text = kLongScene;
+  text.replace(text.find("frames = 100000"), 15, "frames = 0\ndistributions = 1");
+  text.replace(text.find("history_rows = 100000"), 21, "history_rows = 2");
+  std::ofstream(scene, std::ios::trunc) << text;
+  const fs::path last = dir / "last";
+  const lsdem::test::ProcessResult end =
+      runCaptured({LSDEM_BINARY, "run", scene.string(), "--out", last.string(), "--quiet", "--steps", "5"}, 8192);
+  EXPECT_EQ(end.code, 1) << end.output;
+  const std::string checkpointError =
+      "after step 5 (t = 0.0013 s): cannot write '" + (last / "checkpoint.lsc").string() + "': File too large";
+  EXPECT_EQ(end.output, "lsdem: error: " + checkpointError + "\n");
+  const std::string summary = readFile(last / "summary.json");
+  EXPECT_NE(summary.find("\"stopped_early\": true"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"error\": \"" + checkpointError + "\""), std::string::npos) << summary;
+  EXPECT_EQ(temporaryFiles(last), 0u);
+  EXPECT_FALSE(fs::exists(last / "lsdem.lock"));
   fs::remove_all(dir);
 }
 

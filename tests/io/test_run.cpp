@@ -627,6 +627,34 @@ TEST(Run, OutputIntervalsBelowTheStepStayBounded) {
   EXPECT_EQ(lines(readFile(dir.path / "out" / "history.csv")).size(), 1u + 1u + r.steps);
 }
 
+// A run of a number of steps records as many intervals as it asks for when
+// they do not divide the steps: 300 steps in 80 frames and 7 history rows
+// (before, intervals rounded down to whole steps made 100 frames and 8 rows).
+TEST(Run, RecordsOnAStepClockAreAsManyAsAskedFor) {
+  TempDir dir("step_clock_records");
+  io::RunOptions o;
+  o.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 80\nhistory_rows = 7")).string();
+  o.outDir = (dir.path / "out").string();
+  o.steps = 300;
+  const io::RunResult r = io::runScene(o);
+  ASSERT_EQ(r.steps, 300u);
+  const std::string pvd = readFile(dir.path / "out" / "particles.pvd");
+  std::size_t frames = 0;
+  for (std::size_t at = pvd.find("<DataSet"); at != std::string::npos; at = pvd.find("<DataSet", at + 1)) ++frames;
+  EXPECT_EQ(frames, 81u);  // the first, then one per interval (the last at the end)
+  // The header, the first row, then one per interval.
+  const auto rows = lines(readFile(dir.path / "out" / "history.csv"));
+  ASSERT_EQ(rows.size(), 1u + 1u + 7u);
+  // Row k is at the first step at or after k 300 / 7 (a whole step count).
+  const std::vector<std::string> header = split(rows[0]);
+  const std::size_t stepColumn = std::size_t(std::find(header.begin(), header.end(), "step") - header.begin());
+  ASSERT_LT(stepColumn, header.size()) << rows[0];
+  for (int k = 0; k <= 7; ++k) {
+    EXPECT_EQ(std::stoul(split(rows[std::size_t(k) + 1])[stepColumn]), std::size_t(std::ceil(300.0 * k / 7.0 - 1e-9)))
+        << rows[std::size_t(k) + 1];
+  }
+}
+
 // A diverging run (a stiff contact with a forced, far too large step) stops
 // with an error at the first non-finite value; no row holding one is written.
 TEST(Run, ADivergedRunStopsBeforeWritingANonFiniteRow) {
@@ -681,7 +709,7 @@ history_rows = 3000
   // The summary says the run stopped, and why.
   const std::string summary = readFile(dir.path / "out" / "summary.json");
   EXPECT_NE(summary.find("\"stopped_early\": true"), std::string::npos) << summary;
-  EXPECT_NE(summary.find("\"error\": \"step "), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"error\": \"after step "), std::string::npos) << summary;
 }
 
 // A diverging run with breakage: the splits of grains flung to 1e8 m fail
@@ -705,7 +733,7 @@ TEST(Run, ADivergedRunWithBreakageSaysItDiverged) {
     message = e.what();
   }
   ASSERT_FALSE(message.empty()) << "a diverging run must stop with an error";
-  EXPECT_EQ(message.rfind("step ", 0), 0u) << message;
+  EXPECT_EQ(message.rfind("after step ", 0), 0u) << message;
   EXPECT_NE(message.find("the simulation diverged: particle "), std::string::npos) << message;
   EXPECT_NE(message.find("times its bounding radius in one step"), std::string::npos) << message;
   const std::string summary = readFile(dir.path / "out" / "summary.json");
@@ -722,7 +750,7 @@ TEST(Run, AFailedResumeLeavesTheOutputsAsTheyWere) {
     io::RunOptions run;
     run.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 2\nhistory_rows = 2")).string();
     run.outDir = (dir.path / "out").string();
-    run.steps = 7;  // rows at steps 0, 3, 6, the checkpoint, then the last row at step 7
+    run.steps = 7;  // rows at steps 0, 4 (the first at or after 3.5) and 7, then the checkpoint
     io::runScene(run);
     const fs::path out = dir.path / "out";
     if (damage == "psd.csv missing") {
@@ -734,7 +762,7 @@ TEST(Run, AFailedResumeLeavesTheOutputsAsTheyWere) {
     for (const char* file : {"history.csv", "shape_stats.csv", "removed.csv", "breakage_log.csv", "particles.pvd"}) {
       before[file] = readFile(out / file);
     }
-    ASSERT_EQ(lines(before["history.csv"]).size(), 1u + 4u);
+    ASSERT_EQ(lines(before["history.csv"]).size(), 1u + 3u);
     io::RunOptions resume;
     resume.resumeDir = run.outDir;
     resume.steps = 2;

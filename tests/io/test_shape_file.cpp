@@ -1,5 +1,7 @@
 #include "support/Files.h"
+#include "support/Meshes.h"
 #include "support/Threads.h"
+#include "lsdem/geometry/MeshIO.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/ShapeFile.h"
 
@@ -130,6 +132,24 @@ TEST(ShapeFile, GeometryProblemsBecomeInputErrors) {
   }
   // A 2D declaration asked for as 3D.
   EXPECT_THROW(io::buildDeclaredShape<3>(decl), io::InputError);
+
+  // A mesh's spacing is checked against the mesh once it is read: 0.5 m
+  // gives 0.6 cells across a box 0.3 m thick. The error names the key's line.
+  const std::string boxFile = writeFile("thin_box.stl", "");
+  geometry::writeStl(lsdem::test::boxMesh(geometry::Vec<3>::Zero(), geometry::Vec<3>(0.5, 0.4, 0.15)), boxFile);
+  const std::string meshToml =
+      writeFile("coarse.toml", "[shape]\ndimension = 3\nkind = \"mesh\"\nfile = \"thin_box.stl\"\n\nspacing = 0.5\n");
+  try {
+    io::buildDeclaredShape<3>(io::readShapeFile(meshToml));
+    ADD_FAILURE() << "a spacing coarser than the mesh was accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.file(), meshToml);
+    EXPECT_EQ(e.line(), 6) << e.what();
+    EXPECT_EQ(e.key(), "shape.spacing") << e.what();
+    EXPECT_NE(std::string(e.what()).find("gives 0.6 cells across the mesh's smallest extent (0.3 at spacing 0.5)"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // A scene's shapes are built several at a time (buildDeclaredShapes): each

@@ -53,8 +53,12 @@ double RunEnd::stepsLeft(double time, std::uint64_t steps, double dt) const {
 }
 
 double RunEnd::every(std::uint64_t n) const {
+  // On a step clock the interval may be fractional: record k falls on the
+  // first step at or after k span / n, so n intervals cover the span (a
+  // whole-step interval rounded down would make more: 300 steps in 80
+  // frames at every 3 steps made 100).
   const double v = n > 0 ? span / double(n) : 0.0;
-  return byTime || v <= 0.0 ? v : std::max(1.0, std::floor(v));
+  return byTime || v <= 0.0 ? v : std::max(1.0, v);
 }
 
 template <int D>

@@ -27,8 +27,9 @@ struct RunEnd {
   double fraction(double time, std::uint64_t steps) const;
   /// Steps left at a step of `dt`.
   double stepsLeft(double time, std::uint64_t steps, double dt) const;
-  /// The interval of `n` records spread over the span (whole steps, at least
-  /// one, on a step clock); 0 for n = 0.
+  /// The interval of `n` records spread over the span (at least one step on
+  /// a step clock, where a record falls on the first step at or after its
+  /// instant); 0 for n = 0.
   double every(std::uint64_t n) const;
 };
 

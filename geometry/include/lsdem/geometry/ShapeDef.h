@@ -11,6 +11,7 @@
 #include "lsdem/geometry/Types.h"
 
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,14 @@ SurfaceFunction<D> exactSurface(const ShapeDef<D>& def);
 template <int D>
 double smallestDimension(const ShapeDef<D>& def);
 
+/// @brief A resolution (spacing or cells across) that cannot resolve the
+/// shape: what buildGrid and buildShape throw when only the shape's own
+/// size shows it (a mesh's, read from its file).
+class ResolutionError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
 /// @brief The grid spacing the definition asks for (world units).
 /// @note Throws std::invalid_argument unless exactly one of spacing and
 /// cellsAcross is positive.
@@ -82,6 +91,8 @@ double resolvedSpacing(const ShapeDef<D>& def);
 /// keep their file coordinates, scaled).
 /// @param meshReport when given and the shape is a mesh: what reading it left
 /// out (readMesh).
+/// @note Throws ResolutionError when a mesh's spacing gives fewer than 2 or
+/// more than 1e4 cells across its smallest extent.
 template <int D>
 Grid<D> buildGrid(const ShapeDef<D>& def, MeshImportReport* meshReport = nullptr);
 

@@ -21,6 +21,11 @@ struct ShapeDecl {
   std::string file;  ///< the file it came from
   int line = 0;      ///< line of its table
   std::string key;   ///< dotted path of its table ("shape")
+  /// Where its resolution is given (`spacing` or `cells_across`): the line
+  /// and dotted key an error only the built shape shows names (a mesh's
+  /// spacing against the mesh's size).
+  int resolutionLine = 0;
+  std::string resolutionKey;
   int dimension() const { return def.index() == 0 ? 2 : 3; }
 };
 
