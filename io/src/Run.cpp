@@ -208,7 +208,8 @@ class Runner {
 
     // The end (or an early stop): the checkpoint first, so that a resumed run
     // drops what follows (it is not on any schedule), then every recorder's last
-    // record; the summary is the last of them.
+    // record; the summary is the last of them. (A write that fails here
+    // stops the run as a failed step does: the summary records the error.)
     try {
       updateView();
       writeCheckpoint();
