@@ -173,7 +173,6 @@ class SceneReader {
       }
     }
     scene_.world.dtSafety = r.inRange("dt_safety", 1e-6, 1.0, 0.2);
-    if (!(scene_.world.dtSafety > 0.0)) r.fail("dt_safety", "must be in (0, 1]");
     scene_.world.forceDt = r.boolean("force_dt", false);
     const std::int64_t threads = r.integer("threads", 0);
     if (threads < 0 || threads > 4096) r.fail("threads", "must be in [0, 4096] (0: all cores), got " + std::to_string(threads));
@@ -236,19 +235,23 @@ class SceneReader {
     } else {
       law.youngsModulus = r.positive("youngs_modulus");
       law.poissonRatio = r.inRange("poisson_ratio", 0.0, 0.499, 0.25);
-      law.kn = r.positive("kn", 1.0);
+      if (r.has("kn")) {
+        r.fail("kn", "has no meaning under model = \"hertz\" (its stiffness comes from youngs_modulus and "
+                     "poisson_ratio)");
+      }
+      law.kn = 1.0;  // (unused by the Hertz law; ContactLawDef wants it positive)
     }
     // Friction and damping exist only when declared.
     law.hasFriction = r.has("friction");
     law.friction = r.number("friction", 0.0);
-    if (law.friction < 0.0) r.fail("friction", "must be >= 0, got " + std::to_string(law.friction));
+    if (law.friction < 0.0) r.fail("friction", "must be >= 0, got " + numberText(law.friction));
     if (r.has("friction_from") && !law.hasFriction) r.fail("friction_from", "needs `friction`");
     law.frictionFrom = r.number("friction_from", 0.0);
     if (law.frictionFrom < 0.0) {
-      r.fail("friction_from", "must be >= 0 s, got " + std::to_string(law.frictionFrom));
+      r.fail("friction_from", "must be >= 0 s, got " + numberText(law.frictionFrom));
     }
     law.ks = r.number("ks", 0.8 * law.kn);
-    if (law.ks < 0.0) r.fail("ks", "must be >= 0 N/m, got " + std::to_string(law.ks));
+    if (law.ks < 0.0) r.fail("ks", "must be >= 0 N/m, got " + numberText(law.ks));
     // The friction spring: Hertz without ks takes Mindlin's, from the material.
     const bool hertz = law.normal == dynamics::NormalModel::Hertz;
     const std::string tangential = r.string("tangential", hertz && !r.has("ks") ? "mindlin" : "linear");
@@ -257,6 +260,10 @@ class SceneReader {
       if (r.has("ks")) r.fail("ks", "has no meaning with tangential = \"mindlin\" (drop it, or choose \"linear\")");
       law.tangential = dynamics::TangentialModel::Mindlin;
     } else if (tangential == "linear") {
+      // (Under Hertz there is no kn to take a default ks from.)
+      if (hertz && law.hasFriction && !r.has("ks")) {
+        r.fail("tangential", "\"linear\" under model = \"hertz\" needs `ks` (N/m)");
+      }
       law.tangential = dynamics::TangentialModel::Linear;
     } else {
       r.fail("tangential", "must be \"linear\" or \"mindlin\", got \"" + tangential + "\"");
@@ -264,7 +271,7 @@ class SceneReader {
     law.hasDamping = r.has("damping_ratio");
     law.dampingRatio = r.number("damping_ratio", 0.0);
     if (law.dampingRatio < 0.0 || law.dampingRatio >= 1.0) {
-      r.fail("damping_ratio", "must be in [0, 1), got " + std::to_string(law.dampingRatio));
+      r.fail("damping_ratio", "must be in [0, 1), got " + numberText(law.dampingRatio));
     }
     r.finish();
   }
@@ -387,7 +394,7 @@ class SceneReader {
         m.youngsModulus = r.positive("youngs_modulus");
         m.poissonRatio = r.number("poisson_ratio");
         if (!(m.poissonRatio >= 0.0 && m.poissonRatio <= 0.499)) {
-          r.fail("poisson_ratio", "must be in [0, 0.499], got " + std::to_string(m.poissonRatio));
+          r.fail("poisson_ratio", "must be in [0, 0.499], got " + numberText(m.poissonRatio));
         }
       } else {
         m.kn = r.positive("kn");
@@ -400,7 +407,7 @@ class SceneReader {
     if (r.has("friction")) {
       if (!law.hasFriction) r.fail("friction", "needs `friction` in [contact] (0 for frictionless grains)");
       m.friction = r.number("friction");
-      if (*m.friction < 0.0) r.fail("friction", "must be >= 0, got " + std::to_string(*m.friction));
+      if (*m.friction < 0.0) r.fail("friction", "must be >= 0, got " + numberText(*m.friction));
     }
     r.finish();
     return m;
@@ -421,10 +428,8 @@ class SceneReader {
       if (shapes.size() != 1) r.fail("shape", "a tool has exactly one shape");
       tool.shape = scene_.shapes[shapes[0]];
       const toml::table* m = r.optionalTable("motion");
-      const std::string type = m ? std::string(m->get("type") && m->get("type")->is_string()
-                                                    ? *m->get("type")->value<std::string>()
-                                                    : std::string("?"))
-                                 : std::string("fixed");
+      // (Read first: the jaw crusher's motion poses it. No motion table: fixed.)
+      const std::string type = m ? TomlReader(*m, file_, r.pathOf("motion")).string("type") : std::string("fixed");
       // Where the shape's build frame sits at the start (not for the jaw crusher,
       // whose motion defines its pose).
       Vec<D> p0 = Vec<D>::Zero();
@@ -750,14 +755,17 @@ class SceneReader {
       } else if (placement == "cloud" || placement == "grid") {
         group.placement = placement == "cloud" ? Placement::Cloud : Placement::Grid;
         group.region = box<D>(r, "region");
-        const std::int64_t count = r.integer("count", placement == "grid" ? 0 : -1);
+        const std::int64_t count = placement == "grid" ? r.integer("count", 0) : r.integer("count");
         if (count < 0 || count > 10000000) r.fail("count", "must be in [1, 1e7] (grid: 0 fills the region)");
         if (placement == "cloud" && count == 0) r.fail("count", "must be positive");
         group.count = std::uint64_t(count);
         group.randomOrientation = r.boolean("random_orientation", false);
         if (placement == "grid") {
           group.gridSpacing = r.number("spacing", 0.0);
-          if (group.gridSpacing < 0.0) r.fail("spacing", "must be > 0 m (absent: the largest bounding diameter)");
+          if (group.gridSpacing < 0.0) {
+            r.fail("spacing", "must be >= 0 m (0 or absent: the largest bounding diameter), got " +
+                                  numberText(group.gridSpacing));
+          }
         }
       } else if (placement == "feed") {
         group.placement = Placement::Feed;
@@ -803,7 +811,7 @@ class SceneReader {
     p.balanceByTime = r.choice("balance", {"nodes", "time"}, p.balanceByTime ? "time" : "nodes") == "time";
     p.rebalanceImbalance = r.number("rebalance_imbalance", p.rebalanceImbalance);
     if (!(p.rebalanceImbalance == 0.0 || p.rebalanceImbalance >= 1.0) || !std::isfinite(p.rebalanceImbalance)) {
-      r.fail("rebalance_imbalance", "must be >= 1 (or 0: never rebalance), got " + std::to_string(p.rebalanceImbalance));
+      r.fail("rebalance_imbalance", "must be >= 1 (or 0: never rebalance), got " + numberText(p.rebalanceImbalance));
     }
     const std::int64_t every = r.integer("rebalance_every", std::int64_t(p.rebalanceEvery));
     if (every < 1) r.fail("rebalance_every", "must be >= 1 step, got " + std::to_string(every));
@@ -855,7 +863,7 @@ class SceneReader {
       }
     }
     o.shapeMinCells = r.number("shape_min_cells", o.shapeMinCells);
-    if (o.shapeMinCells < 0.0) r.fail("shape_min_cells", "must be >= 0 cells, got " + std::to_string(o.shapeMinCells));
+    if (o.shapeMinCells < 0.0) r.fail("shape_min_cells", "must be >= 0 cells, got " + numberText(o.shapeMinCells));
     o.checkpointEvery = r.number("checkpoint_every", 0.0);
     scene_.keyLines[r.pathOf("checkpoint_every")] = r.lineOf("checkpoint_every");
     if (o.checkpointEvery < 0.0) r.fail("checkpoint_every", "must be >= 0 s");
@@ -883,10 +891,12 @@ class SceneReader {
       spec.top = sr.string("top");
       spec.bottom = sr.string("bottom");
       spec.width = sr.positive(D == 2 ? "width" : "area");
-      for (const std::string* name : {&spec.top, &spec.bottom}) {
-        if (!boundaryNames_.count(*name)) {
-          sr.fail(name == &spec.top ? "top" : "bottom", "no plane or tool named '" + *name + "'");
-        }
+      if (!boundaryNames_.count(spec.top)) sr.fail("top", "no plane or tool named '" + spec.top + "'");
+      // (The height and the stress are measured along the bottom plane's normal.)
+      if (std::none_of(scene_.planes.begin(), scene_.planes.end(),
+                       [&](const dynamics::PlaneDef<D>& p) { return p.name == spec.bottom; })) {
+        sr.fail("bottom", "no plane named '" + spec.bottom + "'" +
+                              (boundaryNames_.count(spec.bottom) ? " (a tool cannot be the bottom)" : ""));
       }
       sr.finish();
       scene_.specimen = spec;

@@ -43,15 +43,15 @@ Vec<D> positiveVector(TomlReader& r, const std::string& key) {
 }
 
 template <int D>
-ShapeDecl readOfDimension(TomlReader& r, const std::string& file, int line, const std::string& path) {
+ShapeDecl readOfDimension(TomlReader& r, const std::string& file, int line, const std::string& path, bool inScene) {
   ShapeDef<D> def;
   const std::string kindName = r.string("kind");
   const std::optional<ShapeKind> kind = kindFromName(kindName, D);
   if (!kind) {
     r.fail("kind", "unknown " + std::to_string(D) + "D kind '" + kindName + "' (" +
-                       (D == 2 ? "circle, ellipse, rectangle, superellipse, polygon, random_grain"
+                       (D == 2 ? "circle, ellipse, rectangle or box, superellipse, polygon, random_grain"
                                : "sphere, ellipsoid, box, superellipsoid, random_grain, mesh") +
-                       ")");
+                       (inScene ? ", grain_file, grain_folder" : "") + ")");
   }
   def.kind = *kind;
 
@@ -144,8 +144,9 @@ ShapeDecl readShapeTable(const toml::table& table, const std::string& file, cons
   if (sceneDimension != 0 && dimension != sceneDimension) {
     r.fail("dimension", "is " + std::to_string(dimension) + " in a " + std::to_string(sceneDimension) + "D scene");
   }
-  if (dimension == 2) return readOfDimension<2>(r, file, line, path);
-  if (dimension == 3) return readOfDimension<3>(r, file, line, path);
+  // (A scene's shapes may also be grain files, which the scene reader takes first.)
+  if (dimension == 2) return readOfDimension<2>(r, file, line, path, sceneDimension != 0);
+  if (dimension == 3) return readOfDimension<3>(r, file, line, path, sceneDimension != 0);
   r.fail("dimension", "must be 2 or 3, got " + std::to_string(dimension));
 }
 

@@ -238,6 +238,22 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
       {"scaling_factor_below_one",
        edit("steps = 10", "steps = 10\ndensity_scaling_below = 0.001\ndensity_scaling_max = 0.5"), 5,
        "simulation.density_scaling_max", "must be >= 1"},
+      // Keys a model does not read, and what one cannot do without.
+      {"hertz_with_kn", edit("kn = 1e5", "model = \"hertz\"\nyoungs_modulus = 1e9\nkn = 1e5"), 8, "contact.kn",
+       "has no meaning under model = \"hertz\""},
+      {"hertz_linear_spring_without_ks",
+       edit("kn = 1e5", "model = \"hertz\"\nyoungs_modulus = 1e9\nfriction = 0.4\ntangential = \"linear\""), 9,
+       "contact.tangential", "\"linear\" under model = \"hertz\" needs `ks`"},
+      {"motion_without_type", std::string(kBase) + "[[tools]]\nshape = \"disc\"\n[tools.motion]\nrpm = 3.0\n", 23,
+       "tools[0].motion", "missing key 'type'"},
+      {"cloud_without_count",
+       edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
+            "placement = \"cloud\"\nregion = { min = [0.0, 0.0], max = [1.0, 1.0] }"),
+       16, "particles[0]", "missing key 'count'"},
+      {"specimen_on_a_tool",
+       std::string(kBase) + "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.0]\n[[tools]]\nname = \"ram\"\nshape = \"disc\"\n"
+                            "[output.specimen]\ntop = \"floor\"\nbottom = \"ram\"\nwidth = 0.1\n",
+       29, "output.specimen.bottom", "no plane named 'ram' (a tool cannot be the bottom)"},
       {"scaling_factor_alone", edit("steps = 10", "steps = 10\ndensity_scaling_max = 5.0"), 4,
        "simulation.density_scaling_max", "needs `density_scaling_below`"},
       // Tracked particles.
@@ -264,6 +280,18 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
       EXPECT_NE(e.problem().find(c.message), std::string::npos) << c.name << ": " << e.what();
       EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << c.name;
     }
+  }
+}
+
+// A value out of range is quoted as it was written (the docs' example):
+// the shortest text of the number, not six decimals.
+TEST(Scene, AValueOutOfRangeIsQuotedAsWritten) {
+  try {
+    io::readScene(writeScene("friction_digits", edit("kn = 1e5", "kn = 1e5\nfriction = -0.2")).string());
+    FAIL() << "a negative friction was accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.key(), "contact.friction");
+    EXPECT_EQ(e.problem(), "must be >= 0, got -0.2");
   }
 }
 
