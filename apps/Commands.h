@@ -6,20 +6,24 @@
 #include <CLI/CLI.hpp>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace lsdem::apps {
 
 /// An option's check: a whole number (Integer) or a finite number of at
-/// least `least`. Its error names the value as given ("--steps: must be a
-/// whole number >= 1, got -5"); CLI11's own range checks print the largest
-/// double in full.
+/// least `least` (and at most `most`). Its error names the value as given
+/// ("--steps: must be a whole number >= 1, got -5"); CLI11's own range
+/// checks print the largest double in full.
 template <bool Integer>
-CLI::Validator atLeast(double least) {
-  const std::string bound = Integer ? std::to_string(static_cast<long long>(least)) : CLI::detail::to_string(least);
+CLI::Validator atLeast(double least, double most = std::numeric_limits<double>::infinity()) {
+  const auto text = [](double v) {
+    return Integer ? std::to_string(static_cast<long long>(v)) : CLI::detail::to_string(v);
+  };
+  const std::string bound = std::isfinite(most) ? "in [" + text(least) + ", " + text(most) + "]" : ">= " + text(least);
   const std::string kind = Integer ? "a whole number" : "a number";
   return CLI::Validator(
-      [least, bound, kind](const std::string& text) {
+      [least, most, bound, kind](const std::string& text) {
         double v = 0.0;
         std::size_t used = 0;
         try {
@@ -27,12 +31,12 @@ CLI::Validator atLeast(double least) {
         } catch (const std::exception&) {
           used = 0;
         }
-        if (used == 0 || used != text.size() || !std::isfinite(v) || v < least) {
-          return "must be " + kind + " >= " + bound + ", got '" + text + "'";
+        if (used == 0 || used != text.size() || !std::isfinite(v) || v < least || v > most) {
+          return "must be " + kind + " " + bound + ", got '" + text + "'";
         }
         return std::string();
       },
-      (Integer ? "INT >= " : "NUMBER >= ") + bound);
+      (Integer ? "INT " : "NUMBER ") + bound);
 }
 
 /// The MPI ranks `lsdem` runs on (1 unless started by mpirun with -np > 1, in

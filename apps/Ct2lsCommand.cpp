@@ -320,10 +320,11 @@ void addCt2lsCommand(CLI::App& app) {
                   "TIFF slices, or raw with --raw-dims")
       ->required();
   cmd->add_option("-o,--out", opts->outDir, "folder for the grain files, grains.csv and particles.toml")->required();
-  cmd->add_option("--cells-across", opts->cellsAcross,
-                  "grid cells across the smallest extent of each grain's voxel box (default 20)");
+  CLI::Option* cellsAcross = cmd->add_option("--cells-across", opts->cellsAcross,
+                                             "grid cells across the smallest extent of each grain's voxel box (default 20)");
   cmd->add_option("--grid-spacing", opts->gridSpacing,
-                  "grid spacing in metres for every grain (instead of --cells-across)");
+                  "grid spacing in metres for every grain (instead of --cells-across)")
+      ->excludes(cellsAcross);
   cmd->add_option("--spacing", opts->spacing, "voxel size SX[,SY,SZ] in image units (overrides the file's)")
       ->delimiter(',');
   cmd->add_option("--origin", opts->origin, "centre of the first voxel X,Y,Z in image units (overrides the file's)")

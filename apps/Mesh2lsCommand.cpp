@@ -11,6 +11,7 @@
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/MeshToLevelSet.h"
 #include "lsdem/geometry/Shape.h"
+#include "lsdem/geometry/ShapeDef.h"
 #include "lsdem/geometry/SurfaceNodes.h"
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/InputError.h"
@@ -71,6 +72,11 @@ void run(const Mesh2lsOptions& o) {
   if (!report.ok()) throw io::InputError(o.mesh, 0, "", "mesh " + report.describe());
 
   // Level set, shape (mass properties, principal frame, nodes) and the grain file.
+  try {
+    geometry::checkMeshResolution(mesh, o.spacing);
+  } catch (const geometry::ResolutionError& e) {
+    throw io::InputError("--spacing", 0, "", e.what());
+  }
   geometry::Grid<3> grid;
   try {
     grid = geometry::meshToLevelSet(mesh, o.spacing, geometry::kDefaultPaddingCells, o.mesh);

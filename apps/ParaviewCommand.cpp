@@ -173,6 +173,15 @@ void addParaviewCommand(CLI::App& app) {
     if (!opts->screenshot.empty() && !opts->state.empty()) {
       throw io::InputError("--state", 0, "", "give either --screenshot or --state, not both");
     }
+    // The file's folder must exist (as for render): a typo is not a new folder.
+    for (const auto& [option, file] : {std::pair{"--screenshot", &opts->screenshot}, std::pair{"--state", &opts->state}}) {
+      if (file->empty()) continue;
+      const fs::path folder = fs::absolute(fs::path(*file)).parent_path();
+      std::error_code ec;
+      if (!fs::is_directory(folder, ec)) {
+        throw io::InputError(option, 0, "", "folder '" + folder.string() + "' does not exist");
+      }
+    }
 
     const std::optional<fs::path> pvpython = findPvpython();
     if (!pvpython) {

@@ -7,6 +7,7 @@
 #include "Commands.h"
 
 #include "lsdem/io/Run.h"
+#include "lsdem/io/Scene.h"
 
 #ifdef LSDEM_HAVE_MPI
 #include "lsdem/parallel/DistributedRun.h"
@@ -184,7 +185,7 @@ void addRunCommand(CLI::App& app) {
                   "resumed run without it ends where the run it continues would have)")
       ->check(atLeast<true>(1));
   cmd->add_option("--threads", args->threads, "OpenMP threads (0: all cores; default: the scene's)")
-      ->check(atLeast<true>(0));
+      ->check(atLeast<true>(0, io::kMaxThreads));
   CLI::Option* resume = cmd->add_option(
       "--resume", args->resume,
       "continue the run whose outputs are in DIR from its checkpoint (with the scene given, or the checkpoint's)");

@@ -83,19 +83,22 @@ double resolvedSpacing(const ShapeDef<D>& def) {
   return spacingFor(def, def.cellsAcross > 0.0 ? smallestDimension(def) : 0.0);
 }
 
+void checkMeshResolution(const TriangleMesh& mesh, double spacing) {
+  const double smallest = mesh.bounds().size().minCoeff();
+  if (!(smallest / spacing >= 2.0 && smallest / spacing <= 1e4)) {
+    std::ostringstream what;
+    what << "gives " << smallest / spacing << " cells across the mesh's smallest extent (" << smallest
+         << " at spacing " << spacing << "); it must give 2 to 1e4";
+    throw ResolutionError(what.str());
+  }
+}
+
 namespace {
 
 // The level set of a mesh definition's mesh (read by the caller, scaled).
 Grid<3> meshGrid(const ShapeDef<3>& def, const TriangleMesh& mesh) {
-  const double smallest = mesh.bounds().size().minCoeff();
-  const double h = spacingFor(def, smallest);
-  // 2 to 1e4 cells across the smallest extent, as cells_across allows.
-  if (!(smallest / h >= 2.0 && smallest / h <= 1e4)) {
-    std::ostringstream what;
-    what << "gives " << smallest / h << " cells across the mesh's smallest extent (" << smallest << " at spacing "
-         << h << "); it must give 2 to 1e4";
-    throw ResolutionError(what.str());
-  }
+  const double h = spacingFor(def, mesh.bounds().size().minCoeff());
+  checkMeshResolution(mesh, h);
   return meshToLevelSet(mesh, h, kDefaultPaddingCells, def.meshFile);
 }
 

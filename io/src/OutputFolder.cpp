@@ -4,6 +4,7 @@
 
 #include "OutputFolder.h"
 #include "OutputNames.h"
+#include "run/Checkpoint.h"
 
 #include "lsdem/io/InputError.h"
 
@@ -121,10 +122,19 @@ std::vector<std::string> runOutputsIn(const fs::path& dir) {
   return found;
 }
 
-void checkOutputFolder(const fs::path& dir, bool overwrite) {
-  if (overwrite) return;
+void checkOutputFolder(const fs::path& dir, bool overwrite, const std::string& sceneText) {
   const std::vector<std::string> found = runOutputsIn(dir);
-  if (found.empty()) return;
+  // A scene.toml in a folder without a run's outputs is the user's own file
+  // (a run writes its scene's copy there): it is not replaced, --overwrite
+  // or not, unless it is the very scene being run.
+  std::error_code ec;
+  const fs::path copy = dir / "scene.toml";
+  if (found.empty() && fs::exists(copy, ec) && readWholeFile(copy.string(), false) != sceneText) {
+    throw InputError(copy.string(), 0, "",
+                     "is not a run's copy of its scene, and a run writes its scene's copy there; choose another "
+                     "output folder (--out)");
+  }
+  if (overwrite || found.empty()) return;
   std::string files;
   for (std::size_t k = 0; k < found.size() && k < 3; ++k) files += (k > 0 ? ", " : "") + found[k];
   if (found.size() > 3) files += ", ...";

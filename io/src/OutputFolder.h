@@ -44,8 +44,11 @@ std::vector<std::string> runOutputsIn(const std::filesystem::path& dir);
 
 /// @brief Refuses a new run into `dir` when it holds another run's outputs
 /// and `overwrite` is false: InputError naming the folder, the files and the
-/// way out (--overwrite, --resume).
-void checkOutputFolder(const std::filesystem::path& dir, bool overwrite);
+/// way out (--overwrite, --resume). Refuses it also, `overwrite` or not, when
+/// it holds a scene.toml but no run's outputs, other than `sceneText` (the
+/// scene of the new run): the user's own file, which the run's copy of its
+/// scene would replace.
+void checkOutputFolder(const std::filesystem::path& dir, bool overwrite, const std::string& sceneText);
 
 /// @brief Removes the outputs of a previous run from `dir` (those of
 /// runOutputsIn and their temporary files, the frames in frames/); other files

@@ -135,10 +135,18 @@ class Runner {
       sceneEnd.steps.reset();
       runEnd_ = saved.end && !options_.force ? *saved.end : runEnd(scene_, sceneEnd, world);
       if (saved.end && options_.force && !options_.steps && saved.end->byTime != runEnd_.byTime) {
+        // (How far the scene's end is, in steps: at the current step for a
+        // duration, which a step that changes would move.)
+        const double left = runEnd_.byTime ? std::ceil((runEnd_.endTime - world.time()) / world.dt())
+                                           : double(runEnd_.endStep) - double(world.steps());
+        const std::string away =
+            left > 0.0 ? "; the scene's end is " + std::string(runEnd_.byTime ? "about " : "") + std::to_string(std::uint64_t(left)) +
+                             " steps away" + (runEnd_.byTime ? " at dt = " + roughly(world.dt()) + " s" : "")
+                       : "; the run is past the scene's end";
         throw InputError(checkpointFile().string(), 0, "",
                          std::string("the run's outputs are scheduled in ") + (saved.end->byTime ? "seconds" : "steps") +
                              " and the scene's end is in " + (runEnd_.byTime ? "seconds" : "steps") +
-                             "; resume it with --steps N (N more steps)");
+                             ": resume it with --steps N (N more steps)" + away);
       }
       if (!options_.steps) end_ = runEnd_;
       if (end_.finished(world.time(), world.steps())) {
@@ -398,7 +406,7 @@ class Runner {
     if (ec) throw std::runtime_error("cannot create the output folder " + context_.out.string() + ": " + ec.message());
     if (!lock_) lock_ = std::make_unique<OutputLock>(context_.out);
     if (resume) return;
-    checkOutputFolder(context_.out, options_.overwrite);
+    checkOutputFolder(context_.out, options_.overwrite, sceneText_);
     removeRunOutputs(context_.out);
   }
 
@@ -540,7 +548,7 @@ RunResult runOf(SceneDef<D> scene, std::string sceneText, const RunOptions& opti
   // in it is refused at once.
   if (writesOutputs(options) && !lock && fs::is_directory(out)) {
     lock = std::make_unique<OutputLock>(out);
-    checkOutputFolder(out, options.overwrite);
+    checkOutputFolder(out, options.overwrite, sceneText);
   }
 #ifdef LSDEM_HAVE_OPENMP
   // The command line's threads are set already (runScene); else the scene's.

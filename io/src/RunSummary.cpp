@@ -96,10 +96,18 @@ void writeRunSummary(const dynamics::World<D>& world, double wallSeconds, std::o
 
   // The time step over the run and what limited it.
   const auto& changes = world.timeStepChanges();
+  // The step the first step took: the last of the changes made before it
+  // (the set-up may change it several times at the start, as grains are
+  // placed).
+  double first = world.dt();
+  for (const dynamics::TimeStepChange& c : changes) {
+    if (c.time > changes.front().time) break;
+    first = c.dt;
+  }
   w.key("time_step").beginObject()
       .field("automatic", !(world.def().dt > 0.0))
       .field("safety", world.def().dtSafety)
-      .field("first", changes.empty() ? world.dt() : changes.front().dt)
+      .field("first", first)
       .field("now", world.dt())
       .field("changes", changes.size());
   w.key("limit");

@@ -175,7 +175,9 @@ class SceneReader {
     scene_.world.dtSafety = r.inRange("dt_safety", 1e-6, 1.0, 0.2);
     scene_.world.forceDt = r.boolean("force_dt", false);
     const std::int64_t threads = r.integer("threads", 0);
-    if (threads < 0 || threads > 4096) r.fail("threads", "must be in [0, 4096] (0: all cores), got " + std::to_string(threads));
+    if (threads < 0 || threads > kMaxThreads) {
+      r.fail("threads", "must be in [0, " + std::to_string(kMaxThreads) + "] (0: all cores), got " + std::to_string(threads));
+    }
     scene_.threads = int(threads);
     const std::int64_t seed = r.integer("seed", 1);
     if (seed < 0) r.fail("seed", "must be >= 0");
@@ -194,7 +196,7 @@ class SceneReader {
       dynamics::DensityScalingDef ds;
       ds.belowDiameter = r.positive("density_scaling_below");
       ds.maxFactor = r.number("density_scaling_max", ds.maxFactor);
-      if (!(ds.maxFactor >= 1.0)) r.fail("density_scaling_max", "must be >= 1, got " + std::to_string(ds.maxFactor));
+      if (!(ds.maxFactor >= 1.0)) r.fail("density_scaling_max", "must be >= 1, got " + numberText(ds.maxFactor));
       scene_.world.densityScaling = ds;
     }
     r.finish();
@@ -400,7 +402,7 @@ class SceneReader {
         m.kn = r.positive("kn");
         if (r.has("ks")) {
           m.ks = r.number("ks");
-          if (*m.ks < 0.0) r.fail("ks", "must be >= 0 N/m, got " + std::to_string(*m.ks));
+          if (*m.ks < 0.0) r.fail("ks", "must be >= 0 N/m, got " + numberText(*m.ks));
         }
       }
     }
@@ -665,7 +667,7 @@ class SceneReader {
     }
     const auto openUnit = [&](const char* key, double fallback) {
       const double v = r.number(key, fallback);
-      if (!(v > 0.0 && v < 1.0)) r.fail(key, "must be in (0, 1), got " + std::to_string(v));
+      if (!(v > 0.0 && v < 1.0)) r.fail(key, "must be in (0, 1), got " + numberText(v));
       return v;
     };
     if (c.depth == breakage::ChipDepthMode::Fraction) {

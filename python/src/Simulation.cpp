@@ -11,6 +11,7 @@
 #include "lsdem/breakage/GrainStress.h"
 #include "lsdem/io/BreakageLog.h"
 #include "lsdem/io/Run.h"
+#include "lsdem/io/Scene.h"
 #include "lsdem/io/RunSummary.h"
 #include "lsdem/io/Vtk.h"
 
@@ -205,7 +206,10 @@ class Simulation {
 
   int threads() const { return threads_; }
   void setThreads(int threads) {
-    if (threads < 0) throw py::value_error("threads must be >= 0 (0: all cores), got " + std::to_string(threads));
+    if (threads < 0 || threads > io::kMaxThreads) {
+      throw py::value_error("threads must be in [0, " + std::to_string(io::kMaxThreads) + "] (0: all cores), got " +
+                            std::to_string(threads));
+    }
     threads_ = threads;
   }
   double wallSeconds() const { return wallSeconds_; }

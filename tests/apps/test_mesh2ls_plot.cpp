@@ -123,6 +123,13 @@ TEST(Mesh2ls, BadInputEndsInOneLineAndExitCode2) {
   const Result c = run("mesh2ls " + (dir / "cube.stl").string() + " --spacing 0.1 --scale -2 -o x.lsg");
   EXPECT_EQ(c.code, 2);
   EXPECT_EQ(c.output, "lsdem: --scale: must be positive, got -2\n");
+  // A spacing that cannot resolve the cube (0.5 cells across it), as a
+  // scene's mesh shape is refused.
+  const Result coarse = run("mesh2ls " + (dir / "cube.stl").string() + " --spacing 2 -o " + (dir / "x.lsg").string());
+  EXPECT_EQ(coarse.code, 2);
+  EXPECT_EQ(coarse.output,
+            "lsdem: --spacing: gives 0.5 cells across the mesh's smallest extent (1 at spacing 2); it must give 2 to 1e4\n");
+  EXPECT_FALSE(fs::exists(dir / "x.lsg"));
   // A required option missing: CLI11's usage error, non-zero.
   EXPECT_NE(run("mesh2ls " + (dir / "cube.stl").string() + " -o x.lsg").code, 0);
 }

@@ -655,6 +655,36 @@ TEST(Run, RecordsOnAStepClockAreAsManyAsAskedFor) {
   }
 }
 
+// A folder holding a user's own scene.toml (and no run's outputs) is not
+// written into, --overwrite or not: the run's copy of its scene would replace
+// the file. Running that very scene into its own folder is fine.
+TEST(Run, AUsersOwnSceneTomlIsNotReplaced) {
+  TempDir dir("own_scene");
+  const std::string own = editScene(kDiscScene, "frames = 2", "frames = 0");
+  std::ofstream(dir.path / "scene.toml") << own;
+  fs::create_directories(dir.path / "scenes");
+  io::RunOptions o;
+  o.scene = writeScene(dir.path / "scenes", kDiscScene).string();
+  o.outDir = dir.path.string();
+  o.steps = 2;
+  for (const bool overwrite : {false, true}) {
+    o.overwrite = overwrite;
+    try {
+      io::runScene(o);
+      ADD_FAILURE() << "ran into a folder holding another scene.toml";
+    } catch (const io::InputError& e) {
+      EXPECT_EQ(e.file(), (dir.path / "scene.toml").string());
+      EXPECT_NE(e.problem().find("is not a run's copy of its scene"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(readFile(dir.path / "scene.toml"), own);
+    EXPECT_FALSE(fs::exists(dir.path / "summary.json"));
+  }
+  o.scene = (dir.path / "scene.toml").string();
+  o.overwrite = false;
+  EXPECT_EQ(io::runScene(o).steps, 2u);
+  EXPECT_EQ(readFile(dir.path / "scene.toml"), own);
+}
+
 // A diverging run (a stiff contact with a forced, far too large step) stops
 // with an error at the first non-finite value; no row holding one is written.
 TEST(Run, ADivergedRunStopsBeforeWritingANonFiniteRow) {

@@ -18,6 +18,7 @@
 namespace lsdem::geometry {
 
 struct MeshImportReport;  // MeshIO.h
+struct TriangleMesh;      // TriangleMesh.h
 
 /// The kinds of shape lsdem builds. Sphere is the circle in 2D, Ellipsoid the
 /// ellipse, Box the rectangle, Superellipsoid the superellipse.
@@ -80,6 +81,10 @@ class ResolutionError : public std::invalid_argument {
  public:
   using std::invalid_argument::invalid_argument;
 };
+
+/// @brief Throws ResolutionError unless `spacing` gives 2 to 1e4 cells across
+/// the smallest extent of `mesh`'s box (the range cells_across allows).
+void checkMeshResolution(const TriangleMesh& mesh, double spacing);
 
 /// @brief The grid spacing the definition asks for (world units).
 /// @note Throws std::invalid_argument unless exactly one of spacing and

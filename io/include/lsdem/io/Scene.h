@@ -102,6 +102,9 @@ struct ParallelDef {
   std::uint64_t rebalanceEvery = 200;  ///< steps between two checks of the imbalance
 };
 
+/// The most OpenMP threads a scene, the command line or Python may ask for.
+inline constexpr int kMaxThreads = 4096;
+
 /// A whole scene of dimension D.
 template <int D>
 struct SceneDef {
