@@ -589,11 +589,9 @@ Scene.from_dict takes) or a path.
 threads: OpenMP threads for step() (None: the scene's; 0: all cores). check:
 the checks of `lsdem run --check`.
 
-Particle arrays (positions, velocities, ...) are read-only numpy views of the
-world's own storage, in store order: no copy, but valid only until the world
-next changes (step(), a callback's return, refresh_contacts()); keep a copy
-(np.array(sim.positions)) to hold values across steps. Methods (rotations(),
-contacts(), ...) return fresh copies.
+Particle arrays (positions, velocities, ...) are copies of the world's
+storage as it is when read, in store order: read them again after stepping.
+Methods (rotations(), contacts(), ...) return fresh copies too.
 )doc");
   c.def(py::init([](const py::object& scene, const py::object& threads, bool check) {
           return makeSimulation(scene, threads.is_none() ? -1 : threads.cast<int>(), check);
@@ -623,25 +621,27 @@ handle for remove_callback.)doc")
       .def_property_readonly("scene_path", &Simulation::scenePath, "The scene file the world was built from.")
       .def("__len__", &Simulation::particleCount, "Number of particles.");
 
+  // Copies: a view of the world's storage would read freed memory once a
+  // breakage, removal or insertion moved it (silently wrong numbers).
   const auto field = [&](const char* name, Field f, const char* doc) {
     c.def_property_readonly(
-        name, [f](py::object self) { return self.cast<const Simulation&>().view(f, self); }, doc);
+        name, [f](py::object self) { return self.cast<const Simulation&>().view(f, self).attr("copy")(); }, doc);
   };
-  field("positions", Field::Position, "(n, D) float64 view: centroids, world frame, m.");
-  field("velocities", Field::Velocity, "(n, D) float64 view: centroid velocities, m/s.");
+  field("positions", Field::Position, "(n, D) float64: centroids, world frame, m.");
+  field("velocities", Field::Velocity, "(n, D) float64: centroid velocities, m/s.");
   field("angular_velocities", Field::AngularVelocity,
-        "float64 view: angular velocities, world frame, rad/s; (n,) in 2D (about z), (n, 3) in 3D.");
+        "float64: angular velocities, world frame, rad/s; (n,) in 2D (about z), (n, 3) in 3D.");
   field("orientations", Field::Orientation,
-        "float64 view, body to world: 2D (n,) angles about z, rad; 3D (n, 4) unit quaternions, scalar last "
+        "float64, body to world: 2D (n,) angles about z, rad; 3D (n, 4) unit quaternions, scalar last "
         "(x, y, z, w) as scipy.spatial.transform.Rotation.from_quat takes them.");
-  field("forces", Field::Force, "(n, D) float64 view: total force of the last evaluation (contacts and effects), N.");
-  field("torques", Field::Torque, "float64 view: total torque about the centroid, N m; (n,) in 2D, (n, 3) in 3D.");
-  field("masses", Field::Mass, "(n,) float64 view: masses as the dynamics see them (density scaling included), kg.");
-  field("ids", Field::Id, "(n,) uint64 view: global ids (never reused).");
-  field("parent_ids", Field::ParentId, "(n,) uint64 view: the parent's id, 2**64 - 1 for none.");
-  field("generations", Field::Generation, "(n,) int32 view: 0 for an original particle, parent's + 1 for a fragment.");
-  field("strengths", Field::Strength, "(n,) float64 view: breakage strengths, Pa (0: not yet drawn, inf: unbreakable).");
-  field("birth_times", Field::BirthTime, "(n,) float64 view: simulated time each particle entered, s.");
+  field("forces", Field::Force, "(n, D) float64: total force of the last evaluation (contacts and effects), N.");
+  field("torques", Field::Torque, "float64: total torque about the centroid, N m; (n,) in 2D, (n, 3) in 3D.");
+  field("masses", Field::Mass, "(n,) float64: masses as the dynamics see them (density scaling included), kg.");
+  field("ids", Field::Id, "(n,) uint64: global ids (never reused).");
+  field("parent_ids", Field::ParentId, "(n,) uint64: the parent's id, 2**64 - 1 for none.");
+  field("generations", Field::Generation, "(n,) int32: 0 for an original particle, parent's + 1 for a fragment.");
+  field("strengths", Field::Strength, "(n,) float64: breakage strengths, Pa (0: not yet drawn, inf: unbreakable).");
+  field("birth_times", Field::BirthTime, "(n,) float64: simulated time each particle entered, s.");
 
   c.def(
       "state",

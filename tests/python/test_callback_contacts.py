@@ -1,4 +1,4 @@
-"""Per-step callbacks that read the contacts, scenes from dicts, views, errors."""
+"""Per-step callbacks that read the contacts, scenes from dicts, particle arrays, errors."""
 
 import pathlib
 import tomllib
@@ -105,24 +105,24 @@ def test_temporary_scene_file_goes_with_the_scene(scene_path):
     assert sim.step(3) == 3  # the world does not need the file
 
 
-def test_views_are_read_only_and_in_place(scene_path):
+def test_particle_arrays_are_copies_that_keep_their_values(scene_path):
     sim = lsdem.Simulation(scene_path, threads=1)
     assert len(sim) == 3
     pos = sim.positions
-    assert pos.shape == (3, 2) and pos.dtype == np.float64 and not pos.flags.writeable
-    assert not pos.flags.owndata  # a view of the world's storage
-    with pytest.raises(ValueError):
-        pos[0, 0] = 1.0
+    assert pos.shape == (3, 2) and pos.dtype == np.float64 and pos.flags.owndata
     assert sim.ids.dtype == np.uint64 and sim.generations.dtype == np.int32
     np.testing.assert_array_equal(sim.ids, [0, 1, 2])
     np.testing.assert_array_equal(sim.parent_ids, [2**64 - 1] * 3)
     np.testing.assert_allclose(sim.positions, [[0.0, 0.00065], [0.00003, 0.00175], [-0.00002, 0.00285]],
                                rtol=0, atol=1e-12)
-    before = np.array(sim.positions)
+    before = pos.copy()
+    pos[0, 0] = 1.0  # a copy: the world is not changed
+    assert sim.positions[0, 0] == before[0, 0]
+    pos[0, 0] = before[0, 0]
     sim.step(100)
-    # A view follows the world between changes of the particle set.
-    assert np.all(pos[:, 1] < before[:, 1])  # the grains settle under gravity
-    np.testing.assert_array_equal(pos, sim.positions)
+    # An array read before keeps its values; read again, it has the world's.
+    np.testing.assert_array_equal(pos, before)
+    assert np.all(sim.positions[:, 1] < before[:, 1])  # the grains settle under gravity
     assert sim.masses.sum() == pytest.approx(sim.true_masses().sum(), rel=1e-15)
     assert sim.summary()["particles"] == 3
     # state(): copies that stay as they are.
