@@ -200,14 +200,21 @@ void renderPlot(const PlotSpec& spec) {
   for (std::size_t i = 0; i < spec.series.size(); ++i) {
     const PlotSeries& s = spec.series[i];
     const std::string dat = stem + "." + std::to_string(i) + ".dat";
-    if (writeSeriesData(s, spec.logX, spec.logY, folder / dat) == 0) continue;
+    if (writeSeriesData(s, spec.logX, spec.logY, folder / dat) == 0) {
+      std::error_code ec;
+      fs::remove(folder / dat, ec);  // (nothing to draw: not left behind)
+      continue;
+    }
     const std::string style = s.style == PlotSeries::Style::LinesPoints ? "linespoints lw 2 pt 7 ps 1"
                               : s.style == PlotSeries::Style::Points    ? "points pt 6 ps 1"
                               : spec.lines                              ? "lines lw 2"
                                                                         : "points pt 7 ps 0.6";
     curves.push_back(quoted(dat) + " using 1:2 with " + style + " title " + quoted(s.title.empty() ? s.y : s.title));
   }
-  if (curves.empty()) throw NoRowsError("plot '" + spec.output + "': no series has a row to draw");
+  if (curves.empty()) {
+    throw NoRowsError("plot '" + spec.output + "': no series has a row to draw" +
+                      (spec.logX || spec.logY ? " (a log axis takes positive values only)" : ""));
+  }
 
   // The gnuplot script, kept for the user.
   const std::string script = stem + ".gp";
@@ -284,7 +291,8 @@ RunPlots plotRunFolder(const std::string& dir, const std::string& outDir) {
     try {
       renderPlot(spec);
     } catch (const NoRowsError&) {
-      result.skipped.push_back(name + ": no rows with numbers to draw");
+      result.skipped.push_back(name + ": no rows with numbers to draw" +
+                               (spec.logX || spec.logY ? std::string(" (a log axis takes positive values only)") : ""));
       return;
     }
     result.written.push_back(spec.output);

@@ -6,6 +6,7 @@
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/MeshToLevelSet.h"
 
+#include <cstdio>
 #include <exception>
 #include <stdexcept>
 
@@ -36,6 +37,21 @@ std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& de
     if (notes && !report.describe().empty()) {
       notes->push_back(InputError(decl.file, decl.line, decl.key, "mesh '" + def->meshFile + "': " + report.describe())
                            .what());
+    }
+    // A grid of fewer than 5 cells across is allowed (2 is the least) but
+    // holds little of the shape: said, at the resolution's key.
+    if (notes && def->kind != geometry::ShapeKind::Mesh) {
+      const double cells = geometry::smallestDimension<D>(*def) / shape->grid().spacing();
+      if (cells < 5.0) {
+        char text[32];
+        std::snprintf(text, sizeof(text), "%.3g", cells);
+        notes->push_back(InputError(decl.file, decl.resolutionLine > 0 ? decl.resolutionLine : decl.line,
+                                    decl.resolutionKey.empty() ? decl.key : decl.resolutionKey,
+                                    std::string("gives only ") + text +
+                                        " cells across the shape's smallest dimension: a grid this coarse holds "
+                                        "little of its shape (volume, surface, contacts; docs/accuracy.md)")
+                             .what());
+      }
     }
     return shape;
   } catch (const geometry::ResolutionError& e) {

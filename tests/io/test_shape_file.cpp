@@ -114,6 +114,23 @@ TEST(ShapeFile, BadInputNamesFileLineAndKey) {
   errorOf("[shape]\ndimension = 3\nkind = sphere\n", 3, "");                                // TOML syntax
 }
 
+// A grid of fewer than 5 cells across the shape builds, with a note at the
+// resolution's key; 5 or more, none.
+TEST(ShapeFile, AVeryCoarseGridIsNoted) {
+  for (const double cells : {3.0, 5.0}) {
+    const std::string path = writeFile("coarse_sphere.toml", "[shape]\ndimension = 3\nkind = \"sphere\"\nradius = 0.5\n"
+                                                             "cells_across = " + std::to_string(cells) + "\n");
+    std::vector<std::string> notes;
+    io::buildDeclaredShape<3>(io::readShapeFile(path), &notes);
+    if (cells < 5.0) {
+      ASSERT_EQ(notes.size(), 1u);
+      EXPECT_EQ(notes[0].rfind(path + ":5: shape.cells_across: gives only 3 cells across", 0), 0u) << notes[0];
+    } else {
+      EXPECT_TRUE(notes.empty()) << notes[0];
+    }
+  }
+}
+
 TEST(ShapeFile, MissingFileAndTable) {
   EXPECT_THROW(io::readShapeFile("/nonexistent/lsdem/shape.toml"), io::InputError);
   EXPECT_THROW(io::readShapeFile(writeFile("empty.toml", "[grain]\nradius = 1\n")), io::InputError);
