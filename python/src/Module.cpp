@@ -15,6 +15,7 @@
 #include <Python.h>
 
 #include <atomic>
+#include <cstring>
 #include <exception>
 #include <memory>
 #include <optional>
@@ -39,6 +40,21 @@ void raiseInputError(const io::InputError& e) {
   exc.attr("key") = e.key();
   exc.attr("problem") = e.problem();
   PyErr_SetObject(inputErrorType, exc.ptr());
+}
+
+// A run's advice names command-line options; from Python they are run()'s
+// arguments ("give --overwrite" -> "give overwrite=True").
+std::string pythonSpelling(std::string text) {
+  static const std::pair<const char*, const char*> names[] = {
+      {"--overwrite", "overwrite=True"}, {"--force", "force=True"}, {"--resume ", "resume="},
+      {"--resume", "resume="},           {"--steps N", "steps=N"},  {"--steps", "steps="},
+      {"--out", "out="},                 {"--threads", "threads="}};
+  for (const auto& [cli, python] : names) {
+    for (std::size_t at = text.find(cli); at != std::string::npos; at = text.find(cli, at + std::strlen(python))) {
+      text.replace(at, std::strlen(cli), python);
+    }
+  }
+  return text;
 }
 
 std::string pathText(const py::handle& p) {
@@ -108,7 +124,11 @@ py::dict run(const py::object& scene, const py::object& out, const py::object& s
   io::RunResult r;
   {
     py::gil_scoped_release release;
-    r = io::runScene(o);
+    try {
+      r = io::runScene(o);
+    } catch (const io::InputError& e) {
+      throw io::InputError(e.file(), e.line(), e.key(), pythonSpelling(e.problem()));
+    }
   }
   if (failure) throw std::move(*failure);
   py::dict d;

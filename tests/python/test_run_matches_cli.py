@@ -68,7 +68,10 @@ def test_an_output_folder_of_another_run_is_refused_without_overwrite(tmp_path, 
     try:
         lsdem.run(scene_path, out=tmp_path / "o", steps=5, threads=1)
     except lsdem.InputError as e:
-        assert "overwrite" in str(e)
+        # The advice names run()'s arguments, not the command line's options.
+        assert "give overwrite=True to replace them" in e.problem, e.problem
+        assert "resume=" + str(tmp_path / "o") in e.problem, e.problem
+        assert "--" not in e.problem, e.problem
     else:
         raise AssertionError("no InputError")
     assert lsdem.run(scene_path, out=tmp_path / "o", steps=7, threads=1, overwrite=True)["steps"] == 7
