@@ -125,8 +125,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::RuntimeError& e) {
     return e.get_exit_code();  // a subcommand's exit code (stopped runs, failed checks)
   } catch (const CLI::ParseError& e) {
-    if (lsdem::apps::mpiRank() == 0) app.exit(e);  // prints the usage error
-    return lsdem::apps::mpiRanks() > 1 ? mpi.fail(2, "lsdem: bad command line", true) : 2;
+    // One line, as every other input error: what is wrong, and where the
+    // options are listed.
+    const std::string command = argc >= 2 && argv[1][0] != '-' ? std::string(argv[1]) + " " : std::string();
+    return mpi.fail(2, std::string("lsdem: ") + e.what() + " (lsdem " + command + "--help lists the options)", true);
   } catch (const lsdem::io::InputError& e) {
     return mpi.fail(2, std::string("lsdem: ") + e.what(), true);
   } catch (const std::exception& e) {

@@ -6,6 +6,7 @@
 #include "support/Process.h"
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -161,7 +162,9 @@ TEST(Cli, UsageErrorsExitWithCode2) {
                            "run scene.toml --steps many", "shape", "split"}) {
     const Result r = run(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
-    EXPECT_FALSE(r.output.empty()) << args;
+    // One line, "lsdem: " first.
+    EXPECT_EQ(r.output.rfind("lsdem: ", 0), 0u) << args << "\n" << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << "\n" << r.output;
   }
   EXPECT_EQ(run("run --help").code, 0);
 }
