@@ -655,6 +655,24 @@ TEST(Run, RecordsOnAStepClockAreAsManyAsAskedFor) {
   }
 }
 
+// A tracked id no particle ever had is said at the end of the run (a
+// fragment's id, given later, may be tracked: only ids never given are).
+TEST(Run, ATrackedIdThatNeverExistedIsNoted) {
+  TempDir dir("track_never");
+  io::RunOptions o;
+  o.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 2\ntrack = [0, 99]")).string();
+  o.outDir = (dir.path / "out").string();
+  o.steps = 3;
+  std::vector<std::string> notes;
+  o.note = [&](const std::string& n) { notes.push_back(n); };
+  io::runScene(o);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0], "output.track: no particle of this run had the id 99 (ids given so far: 0 to 0); tracks.csv "
+                      "has no rows for it");
+  // Particle 0's rows are there: the first instant, every step, the last.
+  EXPECT_EQ(lines(readFile(dir.path / "out" / "tracks.csv")).size(), 1u + 4u);
+}
+
 // A folder holding a user's own scene.toml (and no run's outputs) is not
 // written into, --overwrite or not: the run's copy of its scene would replace
 // the file. Running that very scene into its own folder is fine.

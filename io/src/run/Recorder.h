@@ -48,7 +48,7 @@ struct RunContext {
   RunBasis basis;
   std::chrono::steady_clock::time_point started;      ///< when this process started the run
   bool stopped = false;                               ///< stopped early (known at the end)
-  std::function<void(const std::string&)> note;       ///< what a resume repaired, for the user
+  std::function<void(const std::string&)> note;       ///< notes for the user (what a resume repaired, tracked ids that never existed)
   RanksSummary ranks;                                 ///< a distributed run's, at its last view
   std::string failure;                                ///< the error that stopped the run ("" for none)
   double wallBefore = 0.0;                            ///< wall seconds of the processes before this one (a resumed run)

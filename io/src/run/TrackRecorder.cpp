@@ -64,6 +64,20 @@ std::size_t TrackRecorder<D>::indexOf(const dynamics::Particles<D>& p, dynamics:
 }
 
 template <int D>
+void TrackRecorder<D>::onFinish(const World& w) {
+  const dynamics::ParticleId next = w.particles().nextId();
+  std::string never;
+  for (const dynamics::ParticleId id : ids_) {
+    if (id >= next) never += (never.empty() ? "" : ", ") + std::to_string(id);
+  }
+  if (!never.empty() && this->context_.note) {
+    const std::string given = next > 0 ? "ids given so far: 0 to " + std::to_string(next - 1) : "no ids given";
+    this->context_.note("output.track: no particle of this run had the id " + never + " (" + given +
+                        "); tracks.csv has no rows for it");
+  }
+}
+
+template <int D>
 void TrackRecorder<D>::write(const World& w) {
   const dynamics::Particles<D>& p = w.particles();
   std::string rows;

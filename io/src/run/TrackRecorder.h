@@ -25,6 +25,8 @@ class TrackRecorder final : public Recorder<D> {
 
  private:
   void write(const World& world) override;
+  // The ids no particle of the run ever had (at or above the next id): said.
+  void onFinish(const World& world) override;
   /// Index of particle `id` now, or the particle count when it is not in the
   /// world (not yet fed, broken, removed); `hint` is where it was last.
   static std::size_t indexOf(const dynamics::Particles<D>& p, dynamics::ParticleId id, std::size_t& hint);
