@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -344,13 +345,27 @@ void Breakage<D>::applyQueue(World<D>& world) {
       // A manual break is logged and skipped; a failure the criterion found is a bug worth stopping for.
       if (!q.manual) throw;
       manualNotApplied_.push_back({now, q.id, std::string("the split failed: ") + e.what()});
-      ++unsplit_;
       continue;
     }
     if (!split.isSplit && q.manual) {
-      manualNotApplied_.push_back(
-          {now, q.id, q.curved ? "the surface does not cut the particle at its grid resolution"
-                               : "the plane does not cut the particle at its grid resolution"});
+      // (Not a failure of the criterion: not counted in unsplitFailures.)
+      std::string reason = "the surface does not cut the particle at its grid resolution";
+      if (!q.curved) {
+        // A plane wholly beside the grain, or one cutting it within a cell of its surface.
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (const Vec<D>& x : shape.nodes().positions) {
+          const double d = surface.plane->distance(x);
+          lo = std::min(lo, d);
+          hi = std::max(hi, d);
+        }
+        char text[96];
+        std::snprintf(text, sizeof(text), "%.3g m", lo >= 0.0 ? lo : -hi);
+        reason = lo >= 0.0 || hi <= 0.0
+                     ? std::string("the plane misses the particle (its nearest surface node is ") + text + " from it)"
+                     : "the plane cuts the particle too close to its surface to split it at its grid resolution";
+      }
+      manualNotApplied_.push_back({now, q.id, reason});
+      continue;
     }
     if (!split.isSplit && q.chip) {
       // Too shallow or grazing at this grid: the grain stays whole this step.

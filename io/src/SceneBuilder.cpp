@@ -176,6 +176,10 @@ class Builder {
         case Placement::Cloud: placeCloud(g, rng); break;
         case Placement::Grid: placeGrid(g, rng); break;
         case Placement::Feed: {
+          if (const auto* p = planeBehind(g.feedPoint)) {
+            fail(g, "the feed point " + pointText(g.feedPoint) + " lies behind plane '" + p->name +
+                        "' (on the side its normal points away from)");
+          }
           dynamics::FeedDef<D> f;
           for (std::size_t s : g.shapes) f.shapes.push_back(scene_.shapes[s]);
           f.point = g.feedPoint;
@@ -297,23 +301,31 @@ class Builder {
   void checkListed(const ParticleGroupDef<D>& g, std::size_t k, const geometry::Shape<D>& shape,
                    const dynamics::Orientation<D>& q) const {
     const Vec<D>& x = g.positions[k];
-    const auto where = [&] {
-      std::ostringstream s;
-      s << "positions[" << k << "] = (";
-      for (int a = 0; a < D; ++a) s << (a ? ", " : "") << x[a];
-      s << ")";
-      return s.str();
-    };
-    for (const auto& p : scene_.planes) {
-      if (p.plane.signedDistance(x) < 0.0) {
-        fail(g, where() + " lies behind plane '" + p.name + "' (on the side its normal points away from)");
-      }
+    const auto where = [&] { return "positions[" + std::to_string(k) + "] = " + pointText(x); };
+    if (const auto* p = planeBehind(x)) {
+      fail(g, where() + " lies behind plane '" + p->name + "' (on the side its normal points away from)");
     }
     const std::ptrdiff_t other = index_->holdingCentroid(x, shape, dynamics::Rotation<D>::matrix(q));
     if (other >= 0) {
       fail(g, where() + " overlaps particle " + std::to_string(other) +
                   " (ids count from 0 in the order placed) so deeply that one holds the other's centroid");
     }
+  }
+
+  // The first plane whose back side (the side its normal points away from)
+  // holds x; null for none. A centroid there is never meant: the contact
+  // would fling the grain out at once.
+  const dynamics::PlaneDef<D>* planeBehind(const Vec<D>& x) const {
+    for (const auto& p : scene_.planes) {
+      if (p.plane.signedDistance(x) < 0.0) return &p;
+    }
+    return nullptr;
+  }
+  static std::string pointText(const Vec<D>& x) {
+    std::ostringstream s;
+    s << "(";
+    for (int a = 0; a < D; ++a) s << (a ? ", " : "") << x[a];
+    return s.str() + ")";
   }
 
   void placeCloud(const ParticleGroupDef<D>& g, Random& rng) {
@@ -333,13 +345,15 @@ class Builder {
         for (int a = 0; a < D; ++a) x[a] = rng.uniform(lo[a], hi[a]);
         const dynamics::Orientation<D> q =
             g.randomOrientation ? randomOrientation<D>(rng) : dynamics::Rotation<D>::identity();
-        if (index_->overlaps(x, *shape, dynamics::Rotation<D>::matrix(q))) continue;
+        // (A centroid behind a plane is drawn again, as an overlap is.)
+        if (planeBehind(x) || index_->overlaps(x, *shape, dynamics::Rotation<D>::matrix(q))) continue;
         add(g, shape, x, q);
         placed = true;
       }
       if (!placed) {
         fail(g, "could place only " + std::to_string(k) + " of " + std::to_string(g.count) +
-                    " particles without overlap in the cloud region; enlarge it or lower the count");
+                    " particles without overlap, in front of every plane, in the cloud region; enlarge it or lower "
+                    "the count");
       }
     }
   }
@@ -383,6 +397,10 @@ class Builder {
       for (int a = 0; a < D; ++a) {
         x[a] = g.region.lower[a] + (double(rest % std::uint64_t(n[a])) + 0.5) * spacing;
         rest /= std::uint64_t(n[a]);
+      }
+      if (const auto* p = planeBehind(x)) {
+        fail(g, "the grid's particle " + std::to_string(k) + " at " + pointText(x) + " lies behind plane '" + p->name +
+                    "' (on the side its normal points away from); keep the region in front of the planes");
       }
       add(g, shapeFor(g, std::size_t(k), rng), x,
           g.randomOrientation ? randomOrientation<D>(rng) : dynamics::Rotation<D>::identity());

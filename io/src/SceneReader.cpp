@@ -775,6 +775,10 @@ class SceneReader {
         group.feedInterval = r.number("interval", 0.0);
         if (group.feedInterval < 0.0) r.fail("interval", "must be >= 0 s");
         group.feedClearance = r.number("clearance", 0.0);
+        if (group.feedInterval > 0.0 && r.has("clearance")) {
+          r.fail("clearance", "has no meaning with an interval (a grain drops every interval, once the point is "
+                              "free): give one of them");
+        }
         if (group.feedInterval == 0.0 && !(group.feedClearance > 0.0)) {
           r.fail("clearance", "a feed needs an interval > 0 s or a clearance > 0 m");
         }

@@ -366,6 +366,17 @@ TEST(Scene, UnsurvivableValuesNamesAndConflictsAreRefused) {
       {"behind_plane",
        std::string(kBase) + "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.055]\nnormal = [0.0, 1.0]\n", 16,
        "particles", "positions[0] = (0, 0.05) lies behind plane 'floor'"},
+      // So are a grid and a feed behind a plane (a cloud draws again).
+      {"grid_behind_plane",
+       edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
+            "placement = \"grid\"\nregion = { min = [0.0, -0.1], max = [0.06, -0.03] }") +
+           "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\n",
+       16, "particles", "the grid's particle 0 at (0.01"},
+      {"feed_behind_plane",
+       edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
+            "placement = \"feed\"\npoint = [0.0, -0.01]\ninterval = 0.001") +
+           "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\n",
+       16, "particles", "the feed point (0, -0.01) lies behind plane 'floor'"},
   };
   for (const BadCase& c : cases) {
     const fs::path file = writeScene(c.name, c.scene);
@@ -386,6 +397,17 @@ TEST(Scene, UnsurvivableValuesNamesAndConflictsAreRefused) {
                                  "[[0.0, 0.05], [0.015, 0.05]]") +
                                 "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.045]\nnormal = [0.0, 1.0]\n")
           .string()))));
+  // A cloud whose region reaches behind a plane places its grains in front of it.
+  {
+    const auto built = io::buildWorld(as<2>(io::readScene(
+        writeScene("cloud_across_plane",
+                   edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
+                        "placement = \"cloud\"\ncount = 6\nregion = { min = [0.0, -0.1], max = [0.1, 0.1] }") +
+                       "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\n")
+            .string())));
+    ASSERT_EQ(built.world->particles().size(), 6u);
+    for (const auto& x : built.world->particles().position) EXPECT_GE(x[1], 0.0);
+  }
   // A key_frames tool whose own pose is its first frame's is accepted (the demolition scene).
   std::string agreeing = std::string(kBase) + tool;
   agreeing.replace(agreeing.find("position = [0.1, 0.3]"), 21, "position = [0.2, 0.3]");
