@@ -896,8 +896,14 @@ class SceneReader {
       SpecimenDef spec;
       spec.top = sr.string("top");
       spec.bottom = sr.string("bottom");
+      // (The other dimension's key named as such, not as an unknown key.)
+      if (sr.has(D == 2 ? "area" : "width")) {
+        sr.fail(D == 2 ? "area" : "width", D == 2 ? "is the 3D key: a 2D specimen takes `width` (m)"
+                                                  : "is the 2D key: a 3D specimen takes `area` (m^2)");
+      }
       spec.width = sr.positive(D == 2 ? "width" : "area");
       if (!boundaryNames_.count(spec.top)) sr.fail("top", "no plane or tool named '" + spec.top + "'");
+      if (spec.top == spec.bottom) sr.fail("bottom", "is the top too: a specimen lies between two boundaries");
       // (The height and the stress are measured along the bottom plane's normal.)
       if (std::none_of(scene_.planes.begin(), scene_.planes.end(),
                        [&](const dynamics::PlaneDef<D>& p) { return p.name == spec.bottom; })) {

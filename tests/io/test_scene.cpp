@@ -246,6 +246,14 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "contact.tangential", "\"linear\" under model = \"hertz\" needs `ks`"},
       {"motion_without_type", std::string(kBase) + "[[tools]]\nshape = \"disc\"\n[tools.motion]\nrpm = 3.0\n", 23,
        "tools[0].motion", "missing key 'type'"},
+      {"specimen_top_is_bottom",
+       std::string(kBase) + "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.0]\n[output.specimen]\ntop = \"floor\"\n"
+                            "bottom = \"floor\"\nwidth = 0.1\n",
+       26, "output.specimen.bottom", "is the top too"},
+      {"specimen_area_in_2d",
+       std::string(kBase) + "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.0]\n[output.specimen]\ntop = \"floor\"\n"
+                            "bottom = \"floor\"\narea = 0.1\n",
+       27, "output.specimen.area", "is the 3D key: a 2D specimen takes `width` (m)"},
       {"cloud_without_count",
        edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
             "placement = \"cloud\"\nregion = { min = [0.0, 0.0], max = [1.0, 1.0] }"),
