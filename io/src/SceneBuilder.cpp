@@ -176,9 +176,8 @@ class Builder {
         case Placement::Cloud: placeCloud(g, rng); break;
         case Placement::Grid: placeGrid(g, rng); break;
         case Placement::Feed: {
-          if (const auto* p = planeBehind(g.feedPoint)) {
-            fail(g, "the feed point " + pointText(g.feedPoint) + " lies behind plane '" + p->name +
-                        "' (on the side its normal points away from)");
+          if (const std::string inside = insideBoundary(g.feedPoint); !inside.empty()) {
+            fail(g, "the feed point " + pointText(g.feedPoint) + " lies " + inside);
           }
           dynamics::FeedDef<D> f;
           for (std::size_t s : g.shapes) f.shapes.push_back(scene_.shapes[s]);
@@ -293,18 +292,16 @@ class Builder {
     }
   }
 
-  // A listed position that cannot be meant: behind a plane (its centroid on
-  // the side the normal points away from), or with its centroid inside a
-  // particle placed before it, or that particle's inside it. Either makes
+  // A listed position that cannot be meant: behind a plane or inside a tool
+  // (insideBoundary), or with its centroid inside a particle placed before
+  // it, or that particle's inside it. Either makes
   // forces no time step resolves, and silent garbage (grains flung apart,
   // breakage of everything they touch).
   void checkListed(const ParticleGroupDef<D>& g, std::size_t k, const geometry::Shape<D>& shape,
                    const dynamics::Orientation<D>& q) const {
     const Vec<D>& x = g.positions[k];
     const auto where = [&] { return "positions[" + std::to_string(k) + "] = " + pointText(x); };
-    if (const auto* p = planeBehind(x)) {
-      fail(g, where() + " lies behind plane '" + p->name + "' (on the side its normal points away from)");
-    }
+    if (const std::string inside = insideBoundary(x); !inside.empty()) fail(g, where() + " lies " + inside);
     const std::ptrdiff_t other = index_->holdingCentroid(x, shape, dynamics::Rotation<D>::matrix(q));
     if (other >= 0) {
       fail(g, where() + " overlaps particle " + std::to_string(other) +
@@ -312,14 +309,25 @@ class Builder {
     }
   }
 
-  // The first plane whose back side (the side its normal points away from)
-  // holds x; null for none. A centroid there is never meant: the contact
-  // would fling the grain out at once.
-  const dynamics::PlaneDef<D>* planeBehind(const Vec<D>& x) const {
+  // Where x lies inside a boundary at the start: "behind plane 'NAME' (...)"
+  // for the first plane whose back side (the side its normal points away
+  // from) holds it, else "inside tool 'NAME'" for the first tool whose level
+  // set is negative there; empty for neither. A centroid there is never
+  // meant: the contact would fling the grain out at once.
+  std::string insideBoundary(const Vec<D>& x) const {
     for (const auto& p : scene_.planes) {
-      if (p.plane.signedDistance(x) < 0.0) return &p;
+      if (p.plane.signedDistance(x) < 0.0) {
+        return "behind plane '" + p.name + "' (on the side its normal points away from)";
+      }
     }
-    return nullptr;
+    const auto& poses = world_->toolPoses();
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      const Vec<D> arm = x - poses[k].position;
+      if (arm.norm() >= poses[k].shape->boundingRadius()) continue;
+      const Mat<D> R = dynamics::Rotation<D>::matrix(poses[k].orientation);
+      if (poses[k].shape->value(R.transpose() * arm) < 0.0) return "inside tool '" + scene_.tools[k].name + "'";
+    }
+    return {};
   }
   static std::string pointText(const Vec<D>& x) {
     std::ostringstream s;
@@ -345,15 +353,15 @@ class Builder {
         for (int a = 0; a < D; ++a) x[a] = rng.uniform(lo[a], hi[a]);
         const dynamics::Orientation<D> q =
             g.randomOrientation ? randomOrientation<D>(rng) : dynamics::Rotation<D>::identity();
-        // (A centroid behind a plane is drawn again, as an overlap is.)
-        if (planeBehind(x) || index_->overlaps(x, *shape, dynamics::Rotation<D>::matrix(q))) continue;
+        // (A centroid behind a plane or inside a tool is drawn again, as an overlap is.)
+        if (!insideBoundary(x).empty() || index_->overlaps(x, *shape, dynamics::Rotation<D>::matrix(q))) continue;
         add(g, shape, x, q);
         placed = true;
       }
       if (!placed) {
         fail(g, "could place only " + std::to_string(k) + " of " + std::to_string(g.count) +
-                    " particles without overlap, in front of every plane, in the cloud region; enlarge it or lower "
-                    "the count");
+                    " particles without overlap, clear of the planes and tools, in the cloud region; enlarge it or "
+                    "lower the count");
       }
     }
   }
@@ -398,9 +406,9 @@ class Builder {
         x[a] = g.region.lower[a] + (double(rest % std::uint64_t(n[a])) + 0.5) * spacing;
         rest /= std::uint64_t(n[a]);
       }
-      if (const auto* p = planeBehind(x)) {
-        fail(g, "the grid's particle " + std::to_string(k) + " at " + pointText(x) + " lies behind plane '" + p->name +
-                    "' (on the side its normal points away from); keep the region in front of the planes");
+      if (const std::string inside = insideBoundary(x); !inside.empty()) {
+        fail(g, "the grid's particle " + std::to_string(k) + " at " + pointText(x) + " lies " + inside +
+                    "; keep the region clear of the boundaries");
       }
       add(g, shapeFor(g, std::size_t(k), rng), x,
           g.randomOrientation ? randomOrientation<D>(rng) : dynamics::Rotation<D>::identity());

@@ -380,6 +380,9 @@ TEST(Scene, UnsurvivableValuesNamesAndConflictsAreRefused) {
             "placement = \"grid\"\nregion = { min = [0.0, -0.1], max = [0.06, -0.03] }") +
            "[[planes]]\nname = \"floor\"\npoint = [0.0, 0.0]\nnormal = [0.0, 1.0]\n",
        16, "particles", "the grid's particle 0 at (0.01"},
+      {"inside_a_tool",
+       std::string(kBase) + "[[tools]]\nname = \"ram\"\nshape = \"disc\"\nposition = [0.031, 0.05]\n", 16, "particles",
+       "positions[1] = (0.03, 0.05) lies inside tool 'ram'"},
       {"feed_behind_plane",
        edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
             "placement = \"feed\"\npoint = [0.0, -0.01]\ninterval = 0.001") +
