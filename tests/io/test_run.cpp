@@ -627,16 +627,22 @@ TEST(Run, OutputIntervalsBelowTheStepStayBounded) {
   EXPECT_EQ(lines(readFile(dir.path / "out" / "history.csv")).size(), 1u + 1u + r.steps);
 }
 
+// A run of `steps` steps of the disc scene with its `frames = 2` line
+// replaced by `outputKeys`, into dir/out.
+io::RunOptions discRun(const TempDir& dir, const std::string& outputKeys, std::uint64_t steps) {
+  io::RunOptions o;
+  o.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", outputKeys)).string();
+  o.outDir = (dir.path / "out").string();
+  o.steps = steps;
+  return o;
+}
+
 // A run of a number of steps records as many intervals as it asks for when
 // they do not divide the steps: 300 steps in 80 frames and 7 history rows
 // (before, intervals rounded down to whole steps made 100 frames and 8 rows).
 TEST(Run, RecordsOnAStepClockAreAsManyAsAskedFor) {
   TempDir dir("step_clock_records");
-  io::RunOptions o;
-  o.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 80\nhistory_rows = 7")).string();
-  o.outDir = (dir.path / "out").string();
-  o.steps = 300;
-  const io::RunResult r = io::runScene(o);
+  const io::RunResult r = io::runScene(discRun(dir, "frames = 80\nhistory_rows = 7", 300));
   ASSERT_EQ(r.steps, 300u);
   const std::string pvd = readFile(dir.path / "out" / "particles.pvd");
   std::size_t frames = 0;
@@ -659,10 +665,7 @@ TEST(Run, RecordsOnAStepClockAreAsManyAsAskedFor) {
 // fragment's id, given later, may be tracked: only ids never given are).
 TEST(Run, ATrackedIdThatNeverExistedIsNoted) {
   TempDir dir("track_never");
-  io::RunOptions o;
-  o.scene = writeScene(dir.path, editScene(kDiscScene, "frames = 2", "frames = 2\ntrack = [0, 99]")).string();
-  o.outDir = (dir.path / "out").string();
-  o.steps = 3;
+  io::RunOptions o = discRun(dir, "frames = 2\ntrack = [0, 99]", 3);
   std::vector<std::string> notes;
   o.note = [&](const std::string& n) { notes.push_back(n); };
   io::runScene(o);
