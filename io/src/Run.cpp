@@ -11,6 +11,7 @@
 #include "lsdem/io/Vtk.h"
 
 #include "OutputFolder.h"
+#include "NumberText.h"
 #include "OutputNames.h"
 #include "run/Checkpoint.h"
 #include "run/FrameRecorder.h"
@@ -140,7 +141,7 @@ class Runner {
         const double left = runEnd_.byTime ? std::ceil((runEnd_.endTime - world.time()) / world.dt())
                                            : double(runEnd_.endStep) - double(world.steps());
         const std::string away =
-            left > 0.0 ? "; the scene's end is " + std::string(runEnd_.byTime ? "about " : "") + std::to_string(std::uint64_t(left)) +
+            left > 0.0 ? "; the scene's end is " + std::string(runEnd_.byTime ? "about " : "") + numberText(left) +
                              " steps away" + (runEnd_.byTime ? " at dt = " + roughly(world.dt()) + " s" : "")
                        : "; the run is past the scene's end";
         throw InputError(checkpointFile().string(), 0, "",
@@ -181,7 +182,9 @@ class Runner {
       claimOutputFolder(resume);
       // The copy of the scene the run read: its identity for a resume (a
       // forced resume with another scene replaces it).
-      if (!resume || readWholeFile((context_.out / "scene.toml").string(), false) != sceneText_) {
+      // (Not rewritten when it holds the text already: a user's own file
+      // of the same scene, or a link to it, stays as it is.)
+      if (readWholeFile((context_.out / "scene.toml").string(), false) != sceneText_) {
         writeFileAtomically(context_.out / "scene.toml", sceneText_);
       }
     }
@@ -229,7 +232,7 @@ class Runner {
     } catch (const InputError&) {
       throw;
     } catch (const std::exception& e) {
-      stopWith(where() + e.what());
+      failed(e);
     }
     if (writes_ && options_.progress) report(double(world.steps()) / std::max(context_.wallSeconds(), 1e-9), true);
 

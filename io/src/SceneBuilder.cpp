@@ -176,8 +176,10 @@ class Builder {
         case Placement::Cloud: placeCloud(g, rng); break;
         case Placement::Grid: placeGrid(g, rng); break;
         case Placement::Feed: {
-          if (const std::string inside = insideBoundary(g.feedPoint); !inside.empty()) {
-            fail(g, "the feed point " + pointText(g.feedPoint) + " lies " + inside);
+          // (At the feed's start: planes and tools may have moved by then.)
+          if (const std::string inside = insideBoundary(g.feedPoint, g.feedStart); !inside.empty()) {
+            fail(g, "the feed point " + pointText(g.feedPoint) + " lies " + inside +
+                        (g.feedStart > 0.0 ? " when the feed starts" : ""));
           }
           dynamics::FeedDef<D> f;
           for (std::size_t s : g.shapes) f.shapes.push_back(scene_.shapes[s]);
@@ -309,17 +311,19 @@ class Builder {
     }
   }
 
-  // Where x lies inside a boundary at the start: "behind plane 'NAME' (...)"
+  // Where x lies inside a boundary at `time` (s): "behind plane 'NAME' (...)"
   // for the first plane whose back side (the side its normal points away
   // from) holds it, else "inside tool 'NAME'" for the first tool whose level
-  // set is negative there; empty for neither. A centroid there is never
-  // meant: the contact would fling the grain out at once.
-  std::string insideBoundary(const Vec<D>& x) const {
+  // set is negative there (tools only at the start, whose poses the world
+  // has); empty for neither. A centroid there is never meant: the contact
+  // would fling the grain out at once.
+  std::string insideBoundary(const Vec<D>& x, double time = 0.0) const {
     for (const auto& p : scene_.planes) {
-      if (p.plane.signedDistance(x) < 0.0) {
+      if (p.plane.normal.dot(x - (p.plane.point + time * p.plane.velocity)) < 0.0) {
         return "behind plane '" + p.name + "' (on the side its normal points away from)";
       }
     }
+    if (time > 0.0) return {};
     const auto& poses = world_->toolPoses();
     for (std::size_t k = 0; k < poses.size(); ++k) {
       const Vec<D> arm = x - poses[k].position;

@@ -37,6 +37,10 @@ struct SceneHandle {
 /// @note Throws py::type_error naming the dotted key of a value with no TOML form.
 std::string tomlText(const py::dict& scene);
 
+/// @brief `threads` as run() and Simulation take it: a whole number in
+/// [0, io::kMaxThreads] (0: all cores); else py::value_error.
+int checkedThreads(const py::handle& threads);
+
 /// @brief Reads a scene file (io::InputError for bad input).
 std::shared_ptr<SceneHandle> loadScene(const std::string& path);
 

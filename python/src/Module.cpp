@@ -15,11 +15,12 @@
 #include <Python.h>
 
 #include <atomic>
-#include <cstring>
+#include <cctype>
 #include <exception>
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -43,19 +44,47 @@ void raiseInputError(const io::InputError& e) {
 }
 
 // A run's advice names command-line options; from Python they are run()'s
-// arguments ("give --overwrite" -> "give overwrite=True").
-std::string pythonSpelling(std::string text) {
-  static const std::pair<const char*, const char*> names[] = {
+// arguments ("give --overwrite" -> "give overwrite=True"). Only an option
+// at a word's start (the text's start, after a space or a parenthesis) and
+// ending there is rewritten: a path or name holding "--" is left alone.
+std::string pythonSpelling(const std::string& text) {
+  static const std::pair<std::string_view, std::string_view> names[] = {
       {"--overwrite", "overwrite=True"}, {"--force", "force=True"}, {"--resume ", "resume="},
-      {"--resume", "resume="},           {"--steps N", "steps=N"},  {"--steps", "steps="},
-      {"--out", "out="},                 {"--threads", "threads="}};
-  for (const auto& [cli, python] : names) {
-    for (std::size_t at = text.find(cli); at != std::string::npos; at = text.find(cli, at + std::strlen(python))) {
-      text.replace(at, std::strlen(cli), python);
+      {"--steps N", "steps=N"},          {"--resume", "resume"},    {"--steps", "steps"},
+      {"--out", "out"},                  {"--threads", "threads"}};
+  std::string out;
+  for (std::size_t at = 0; at < text.size();) {
+    bool replaced = false;
+    if ((at == 0 || text[at - 1] == ' ' || text[at - 1] == '(') && text.compare(at, 2, "--") == 0) {
+      for (const auto& [cli, python] : names) {
+        const std::size_t end = at + cli.size();
+        if (text.compare(at, cli.size(), cli) != 0) continue;
+        const bool ends = cli.back() == ' ' || end == text.size() ||
+                          !(std::isalnum(static_cast<unsigned char>(text[end])) || text[end] == '-' || text[end] == '_');
+        if (!ends) continue;
+        out += python;
+        at = end;
+        replaced = true;
+        break;
+      }
     }
+    if (!replaced) out += text[at++];
   }
-  return text;
+  return out;
 }
+
+}  // namespace
+
+int checkedThreads(const py::handle& threads) {
+  const long long n = threads.cast<long long>();
+  if (n < 0 || n > io::kMaxThreads) {
+    throw py::value_error("threads must be in [0, " + std::to_string(io::kMaxThreads) + "] (0: all cores), got " +
+                          std::to_string(n));
+  }
+  return int(n);
+}
+
+namespace {
 
 std::string pathText(const py::handle& p) {
   if (py::isinstance<py::str>(p)) return p.cast<std::string>();
@@ -91,10 +120,7 @@ py::dict run(const py::object& scene, const py::object& out, const py::object& s
   }
   if (!out.is_none()) o.outDir = pathText(out);
   if (!steps.is_none()) o.steps = steps.cast<std::uint64_t>();
-  if (!threads.is_none()) {
-    o.threads = threads.cast<int>();
-    if (o.threads < 0) throw py::value_error("threads must be >= 0 (0: all cores)");
-  }
+  if (!threads.is_none()) o.threads = checkedThreads(threads);
   if (!resume.is_none()) o.resumeDir = pathText(resume);
   if (o.scene.empty() && o.resumeDir.empty()) throw py::value_error("run: give a scene, or resume=FOLDER");
   o.overwrite = overwrite;

@@ -205,13 +205,7 @@ class Simulation {
   std::size_t callbackCount() const { return callbacks_.size(); }
 
   int threads() const { return threads_; }
-  void setThreads(int threads) {
-    if (threads < 0 || threads > io::kMaxThreads) {
-      throw py::value_error("threads must be in [0, " + std::to_string(io::kMaxThreads) + "] (0: all cores), got " +
-                            std::to_string(threads));
-    }
-    threads_ = threads;
-  }
+  void setThreads(const py::object& threads) { threads_ = checkedThreads(threads); }
   double wallSeconds() const { return wallSeconds_; }
 
  protected:
@@ -594,7 +588,7 @@ storage as it is when read, in store order: read them again after stepping.
 Methods (rotations(), contacts(), ...) return fresh copies too.
 )doc");
   c.def(py::init([](const py::object& scene, const py::object& threads, bool check) {
-          return makeSimulation(scene, threads.is_none() ? -1 : threads.cast<int>(), check);
+          return makeSimulation(scene, threads.is_none() ? -1 : checkedThreads(threads), check);
         }),
         py::arg("scene"), py::arg("threads") = py::none(), py::arg("check") = false)
       .def(

@@ -148,6 +148,24 @@ TEST(Schedule, EveryIntervalIsDueOnceAtEachMultiple) {
   EXPECT_TRUE(Schedule::everyStep().due({1.0, 1, 1.0}));
 }
 
+// A fractional interval on a step clock (30,000 records over 1e5 steps):
+// record k falls on the first step at or after k x interval for every k, the
+// last one too (summed intervals drifted 3,244 of them a step late).
+TEST(Schedule, FractionalIntervalsDoNotDrift) {
+  const double interval = 100000.0 / 30000.0;
+  Schedule s = Schedule::every(interval);
+  std::uint64_t k = 0;
+  for (std::uint64_t step = 0; step <= 100000; ++step) {
+    const Instant now{0.0, step, double(step)};
+    if (s.due(now)) {
+      ASSERT_EQ(step, std::uint64_t(std::ceil(double(k) * interval - 1e-9 * interval))) << "record " << k;
+      ++k;
+    }
+    s.advance(now);
+  }
+  EXPECT_EQ(k, 30001u);
+}
+
 TEST(Schedule, IntervalsFarBelowTheClockStepStayBounded) {
   Schedule s = Schedule::every(1e-30);
   const Instant now{1.0, 1, 1.0};

@@ -639,7 +639,8 @@ io::RunOptions discRun(const TempDir& dir, const std::string& outputKeys, std::u
 
 // A run of a number of steps records as many intervals as it asks for when
 // they do not divide the steps: 300 steps in 80 frames and 7 history rows
-// (before, intervals rounded down to whole steps made 100 frames and 8 rows).
+// (before, intervals rounded down to whole steps made 101 frames and 9 rows:
+// 100 and 8 intervals).
 TEST(Run, RecordsOnAStepClockAreAsManyAsAskedFor) {
   TempDir dir("step_clock_records");
   const io::RunResult r = io::runScene(discRun(dir, "frames = 80\nhistory_rows = 7", 300));

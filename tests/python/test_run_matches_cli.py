@@ -64,17 +64,25 @@ def test_run_refuses_bad_input_with_the_location(tmp_path):
 
 
 def test_an_output_folder_of_another_run_is_refused_without_overwrite(tmp_path, scene_path):
-    lsdem.run(scene_path, out=tmp_path / "o", steps=5, threads=1)
+    # (A folder name holding "--steps" stays as it is in the advice.)
+    out = tmp_path / "a--steps" / "o"
+    lsdem.run(scene_path, out=out, steps=5, threads=1)
     try:
-        lsdem.run(scene_path, out=tmp_path / "o", steps=5, threads=1)
+        lsdem.run(scene_path, out=out, steps=5, threads=1)
     except lsdem.InputError as e:
         # The advice names run()'s arguments, not the command line's options.
-        assert "give overwrite=True to replace them" in e.problem, e.problem
-        assert "resume=" + str(tmp_path / "o") in e.problem, e.problem
-        assert "--" not in e.problem, e.problem
+        assert e.problem.endswith("give overwrite=True to replace them, or continue that run with resume=" +
+                                  str(out)), e.problem
     else:
         raise AssertionError("no InputError")
-    assert lsdem.run(scene_path, out=tmp_path / "o", steps=7, threads=1, overwrite=True)["steps"] == 7
+    assert lsdem.run(scene_path, out=out, steps=7, threads=1, overwrite=True)["steps"] == 7
+    for bad in (-1, 4097):
+        try:
+            lsdem.run(scene_path, out=tmp_path / "t", steps=1, threads=bad)
+        except ValueError as e:
+            assert "threads must be in [0, 4096]" in str(e), str(e)
+        else:
+            raise AssertionError("threads=%d accepted" % bad)
 
 
 def test_resume_continues_the_run(tmp_path, scene_path):

@@ -18,6 +18,7 @@ Schedule Schedule::every(double interval, double first) {
   Schedule s;
   if (interval > 0.0) {
     s.interval_ = interval;
+    s.first_ = first;
     s.next_ = first;
   }
   return s;
@@ -38,14 +39,14 @@ bool Schedule::due(const Instant& now) const {
 void Schedule::advance(const Instant& now) {
   while (nextTime_ < times_.size() && now.time >= times_[nextTime_]) ++nextTime_;
   if (!(interval_ > 0.0)) return;
-  // An interval far below the clock's step skips the missed instants at once,
-  // and one below the clock's rounding moves to just past the clock.
   const double until = now.clock + 1e-9 * interval_;
-  if ((until - next_) / interval_ > 1e6) next_ += std::floor((until - next_) / interval_) * interval_;
-  while (next_ <= until) {
-    const double n = next_ + interval_;
-    next_ = n > next_ ? n : std::nextafter(until, std::numeric_limits<double>::infinity());
-  }
+  if (next_ > until) return;
+  // The first instant first + k interval past the clock, computed rather than
+  // summed (a sum drifts by a step over 1e5 fractional intervals); an
+  // interval far below the clock's step skips the missed instants at once,
+  // and one below the clock's rounding moves to just past the clock.
+  const double n = first_ + (std::floor((until - first_) / interval_) + 1.0) * interval_;
+  next_ = n > until ? n : std::nextafter(until, std::numeric_limits<double>::infinity());
 }
 
 void Schedule::save(dynamics::StateWriter& out) const {

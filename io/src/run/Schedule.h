@@ -51,6 +51,7 @@ class Schedule {
  private:
   bool everyStep_ = false;
   double interval_ = 0.0;  // > 0: every this much of the clock
+  double first_ = 0.0;     // the first instant; the k-th is first_ + k interval_
   double next_ = 0.0;      // the next clock value due
   std::vector<double> times_;
   std::size_t nextTime_ = 0;  // index into times_

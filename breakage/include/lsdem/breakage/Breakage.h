@@ -263,9 +263,10 @@ class Breakage final : public dynamics::Effect<D> {
   double rawVolumeError() const { return rawVolumeError_; }
   /// @brief Mass removed as fines so far, kg.
   double finesMass() const { return finesMass_; }
-  /// @brief Failures whose surface did not split the grain (it missed or
-  /// grazed it, and for a contact plane so did the parallel plane through the
-  /// centroid).
+  /// @brief Failures of the criterion whose surface did not split the grain
+  /// (it missed or grazed it, and for a contact plane so did the parallel
+  /// plane through the centroid). Manual breaks that were not applied are
+  /// in manualNotApplied(), not here.
   std::size_t unsplitFailures() const { return unsplit_; }
   /// @brief Grains that failed but could not be split at their grid
   /// resolution through their centroid either; they were made unbreakable
