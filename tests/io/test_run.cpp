@@ -645,6 +645,10 @@ TEST(Run, RecordsOnAStepClockAreAsManyAsAskedFor) {
   TempDir dir("step_clock_records");
   const io::RunResult r = io::runScene(discRun(dir, "frames = 80\nhistory_rows = 7", 300));
   ASSERT_EQ(r.steps, 300u);
+  // summary.json's first time step is the one the first step took (history row 0's).
+  const std::string summary = readFile(dir.path / "out" / "summary.json");
+  const std::size_t at = summary.find("\"first\": ");
+  ASSERT_NE(at, std::string::npos) << summary;
   const std::string pvd = readFile(dir.path / "out" / "particles.pvd");
   std::size_t frames = 0;
   for (std::size_t at = pvd.find("<DataSet"); at != std::string::npos; at = pvd.find("<DataSet", at + 1)) ++frames;
@@ -656,6 +660,9 @@ TEST(Run, RecordsOnAStepClockAreAsManyAsAskedFor) {
   const std::vector<std::string> header = split(rows[0]);
   const std::size_t stepColumn = std::size_t(std::find(header.begin(), header.end(), "step") - header.begin());
   ASSERT_LT(stepColumn, header.size()) << rows[0];
+  const std::size_t dtColumn = std::size_t(std::find(header.begin(), header.end(), "dt_s") - header.begin());
+  ASSERT_LT(dtColumn, header.size()) << rows[0];
+  EXPECT_EQ(std::stod(summary.substr(at + 9)), std::stod(split(rows[1])[dtColumn]));
   for (int k = 0; k <= 7; ++k) {
     EXPECT_EQ(std::stoul(split(rows[std::size_t(k) + 1])[stepColumn]), std::size_t(std::ceil(300.0 * k / 7.0 - 1e-9)))
         << rows[std::size_t(k) + 1];

@@ -383,6 +383,10 @@ TEST(Scene, UnsurvivableValuesNamesAndConflictsAreRefused) {
       {"inside_a_tool",
        std::string(kBase) + "[[tools]]\nname = \"ram\"\nshape = \"disc\"\nposition = [0.031, 0.05]\n", 16, "particles",
        "positions[1] = (0.03, 0.05) lies inside tool 'ram'"},
+      {"feed_interval_and_clearance",
+       edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
+            "placement = \"feed\"\npoint = [0.0, 0.05]\ninterval = 0.001\nclearance = 0.02"),
+       22, "particles[0].clearance", "has no meaning with an interval"},
       {"feed_behind_plane",
        edit("placement = \"list\"\npositions = [[0.0, 0.05], [0.03, 0.05]]",
             "placement = \"feed\"\npoint = [0.0, -0.01]\ninterval = 0.001") +
