@@ -127,12 +127,11 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     // One line, as every other input error: what is wrong, and where the
     // options are listed.
-    // (The command's words as given: "run ", "bench stability ".)
+    // (The commands parsed before the mistake: "run ", "bench stability ".)
     std::string command;
-    for (int k = 1; k < argc && k <= 2 && argv[k][0] != '-'; ++k) {
-      const bool known = k == 1 || std::string(argv[1]) == "bench";
-      if (!known) break;
-      command += std::string(argv[k]) + " ";
+    for (const CLI::App* at = &app; !at->get_subcommands().empty();) {
+      at = at->get_subcommands().front();
+      command += at->get_name() + " ";
     }
     return mpi.fail(2, std::string("lsdem: ") + e.what() + " (lsdem " + command + "--help lists the options)", true);
   } catch (const lsdem::io::InputError& e) {

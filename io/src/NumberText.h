@@ -5,6 +5,7 @@
 /// outputs carry full precision and no more digits.
 
 #include <charconv>
+#include <cstdio>
 #include <string>
 
 namespace lsdem::io {
@@ -23,6 +24,14 @@ std::string numberText(T v) {
   std::string s;
   appendNumber(s, v);
   return s;
+}
+
+/// @brief `v` to 3 significant digits ("%.3g"): a figure in a message, where
+/// the exact value is not the point.
+inline std::string roughText(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.3g", v);
+  return buf;
 }
 
 }  // namespace lsdem::io

@@ -185,6 +185,14 @@ std::vector<std::string> csvDistinctValues(const std::string& csv, const std::st
   return values;
 }
 
+namespace {
+// What a plot with no row to draw adds to its reason when an axis is
+// logarithmic (the rows with values <= 0 there were left out).
+std::string logAxisNote(const PlotSpec& spec) {
+  return spec.logX || spec.logY ? " (a log axis takes positive values only)" : "";
+}
+}  // namespace
+
 void renderPlot(const PlotSpec& spec) {
   // Check the request and gnuplot.
   const fs::path output(spec.output);
@@ -212,8 +220,7 @@ void renderPlot(const PlotSpec& spec) {
     curves.push_back(quoted(dat) + " using 1:2 with " + style + " title " + quoted(s.title.empty() ? s.y : s.title));
   }
   if (curves.empty()) {
-    throw NoRowsError("plot '" + spec.output + "': no series has a row to draw" +
-                      (spec.logX || spec.logY ? " (a log axis takes positive values only)" : ""));
+    throw NoRowsError("plot '" + spec.output + "': no series has a row to draw" + logAxisNote(spec));
   }
 
   // The gnuplot script, kept for the user.
@@ -291,8 +298,7 @@ RunPlots plotRunFolder(const std::string& dir, const std::string& outDir) {
     try {
       renderPlot(spec);
     } catch (const NoRowsError&) {
-      result.skipped.push_back(name + ": no rows with numbers to draw" +
-                               (spec.logX || spec.logY ? std::string(" (a log axis takes positive values only)") : ""));
+      result.skipped.push_back(name + ": no rows with numbers to draw" + logAxisNote(spec));
       return;
     }
     result.written.push_back(spec.output);

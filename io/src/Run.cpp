@@ -42,13 +42,6 @@ constexpr const char* kRunSection = "run";
 // distributed run's engine says which process does.
 bool writesOutputs(const RunOptions& options) { return !options.engine || options.engine->writesOutputs; }
 
-// A number in a message, to 3 significant digits.
-std::string roughly(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.3g", v);
-  return buf;
-}
-
 // What a world's state says of a run that failed in a step: the particle
 // with a non-finite position or velocity, else the one that moves farthest
 // per step against its own bounding radius where that exceeds the radius
@@ -70,9 +63,9 @@ std::string divergenceNote(const dynamics::World<D>& w) {
     }
   }
   if (worst == p.size()) return "";
-  return "the simulation diverged: particle " + std::to_string(p.id[worst]) + " moves " + roughly(worstRatio) +
-         " times its bounding radius in one step (speed " + roughly(p.velocity[worst].norm()) + " m/s, dt = " +
-         roughly(w.dt()) + " s): the time step is too long for the contact stiffness or for the speeds";
+  return "the simulation diverged: particle " + std::to_string(p.id[worst]) + " moves " + roughText(worstRatio) +
+         " times its bounding radius in one step (speed " + roughText(p.velocity[worst].norm()) + " m/s, dt = " +
+         roughText(w.dt()) + " s): the time step is too long for the contact stiffness or for the speeds";
 }
 
 template <int D>
@@ -142,7 +135,7 @@ class Runner {
                                            : double(runEnd_.endStep) - double(world.steps());
         const std::string away =
             left > 0.0 ? "; the scene's end is " + std::string(runEnd_.byTime ? "about " : "") + numberText(left) +
-                             " steps away" + (runEnd_.byTime ? " at dt = " + roughly(world.dt()) + " s" : "")
+                             " steps away" + (runEnd_.byTime ? " at dt = " + roughText(world.dt()) + " s" : "")
                        : "; the run is past the scene's end";
         throw InputError(checkpointFile().string(), 0, "",
                          std::string("the run's outputs are scheduled in ") + (saved.end->byTime ? "seconds" : "steps") +
@@ -323,7 +316,7 @@ class Runner {
   // the last of them, as does one in their records.
   std::string where() const {
     const World& w = *stepped().world;
-    return "after step " + std::to_string(w.steps()) + " (t = " + roughly(w.time()) + " s): ";
+    return "after step " + std::to_string(w.steps()) + " (t = " + roughText(w.time()) + " s): ";
   }
   // Ends the run with `message`: the summary records it (stopped early,
   // with the error) from the state as it is, then it is thrown.
@@ -447,7 +440,7 @@ class Runner {
   // A checkpoint's run state (writeCheckpoint), read whole.
   struct SavedRun {
     RunBasis basis;
-    std::string schedule;  // the checkpoints' schedule, as saved
+    Schedule schedule;  // the checkpoints' schedule's position (Schedule::continueFrom)
     std::map<std::string, std::vector<char>> sections;
     std::optional<RunEnd> end;  // absent in checkpoints of earlier releases
     double wallSeconds = 0.0;
@@ -459,11 +452,7 @@ class Runner {
       s.expectTag("run");
       saved.basis.initialMass = s.get<double>();
       saved.basis.specimenHeight = s.get<double>();
-      Schedule schedule;
-      schedule.load(s);
-      dynamics::StateWriter scheduleBytes;
-      schedule.save(scheduleBytes);
-      saved.schedule.assign(scheduleBytes.bytes().begin(), scheduleBytes.bytes().end());
+      saved.schedule.load(s);
       for (std::uint64_t k = s.get<std::uint64_t>(); k > 0; --k) {
         const std::string name = s.getString();
         s.getVector(saved.sections[name]);
@@ -484,8 +473,7 @@ class Runner {
   }
   void loadRunState(const SavedRun& saved) {
     asCheckpointError(checkpointFile().string(), [&] {
-      dynamics::StateReader schedule(saved.schedule.data(), saved.schedule.size());
-      checkpoints_.load(schedule);
+      checkpoints_.continueFrom(saved.schedule);
       for (auto& r : recorders_) {
         const auto it = saved.sections.find(r->name());
         if (it == saved.sections.end()) {

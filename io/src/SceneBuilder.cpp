@@ -64,6 +64,14 @@ bool nodesReach(const geometry::Shape<D>& a, const Mat<D>& Ra, const Vec<D>& xa,
   return false;
 }
 
+// Whether a body of `shape` posed (R, centre) holds the point x: its level
+// set is negative there (the bounding sphere first).
+template <int D>
+bool bodyHolds(const geometry::Shape<D>& shape, const Mat<D>& R, const Vec<D>& centre, const Vec<D>& x) {
+  const Vec<D> arm = x - centre;
+  return arm.norm() < shape.boundingRadius() && shape.value(R.transpose() * arm) < 0.0;
+}
+
 // Particles placed so far, in cells of a hash grid, for overlap tests: the
 // bounding spheres first, then the shapes themselves (nodes against level
 // sets both ways, with half a cell of clearance), so grains can be placed as
@@ -93,8 +101,7 @@ class PlacementIndex {
   /// its index in the order of add(), or -1.
   std::ptrdiff_t holdingCentroid(const Vec<D>& x, const geometry::Shape<D>& shape, const Mat<D>& R) const {
     return near(x, shape, [&](std::size_t k) {
-      return shapes_[k]->value(rotations_[k].transpose() * (x - centres_[k])) < 0.0 ||
-             shape.value(R.transpose() * (centres_[k] - x)) < 0.0;
+      return bodyHolds(*shapes_[k], rotations_[k], centres_[k], x) || bodyHolds(shape, R, x, centres_[k]);
     });
   }
 
@@ -326,10 +333,9 @@ class Builder {
     if (time > 0.0) return {};
     const auto& poses = world_->toolPoses();
     for (std::size_t k = 0; k < poses.size(); ++k) {
-      const Vec<D> arm = x - poses[k].position;
-      if (arm.norm() >= poses[k].shape->boundingRadius()) continue;
-      const Mat<D> R = dynamics::Rotation<D>::matrix(poses[k].orientation);
-      if (poses[k].shape->value(R.transpose() * arm) < 0.0) return "inside tool '" + scene_.tools[k].name + "'";
+      if (bodyHolds(*poses[k].shape, dynamics::Rotation<D>::matrix(poses[k].orientation), poses[k].position, x)) {
+        return "inside tool '" + scene_.tools[k].name + "'";
+      }
     }
     return {};
   }

@@ -1,12 +1,12 @@
 #include "lsdem/io/ShapeFile.h"
 
+#include "NumberText.h"
 #include "ShapeTable.h"
 #include "TomlReader.h"
 
 #include "lsdem/geometry/MeshIO.h"
 #include "lsdem/geometry/MeshToLevelSet.h"
 
-#include <cstdio>
 #include <exception>
 #include <stdexcept>
 
@@ -43,11 +43,9 @@ std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& de
     if (notes && def->kind != geometry::ShapeKind::Mesh) {
       const double cells = geometry::smallestDimension<D>(*def) / shape->grid().spacing();
       if (cells < 5.0) {
-        char text[32];
-        std::snprintf(text, sizeof(text), "%.3g", cells);
         notes->push_back(InputError(decl.file, decl.resolutionLine > 0 ? decl.resolutionLine : decl.line,
                                     decl.resolutionKey.empty() ? decl.key : decl.resolutionKey,
-                                    std::string("gives only ") + text +
+                                    "gives only " + roughText(cells) +
                                         " cells across the shape's smallest dimension: a grid this coarse holds "
                                         "little of its shape (volume, surface, contacts; docs/accuracy.md)")
                              .what());

@@ -47,6 +47,12 @@ class Schedule {
 
   void save(dynamics::StateWriter& out) const;
   void load(dynamics::StateReader& in);
+  /// @brief Takes the position of `saved` (a schedule load() read from a
+  /// checkpoint): the next instant due, not the interval or times.
+  void continueFrom(const Schedule& saved) {
+    next_ = saved.next_;
+    nextTime_ = saved.nextTime_;
+  }
 
  private:
   bool everyStep_ = false;
