@@ -150,51 +150,75 @@ void narrowPhase(benchmark::State& state, const ContactLawDef& law) {
   state.counters["pairs"] = double(c.pairs.size());
   state.counters["touching"] = double(solver.particleContacts().size());
   state.counters["node contacts"] = double(solver.nodeContacts().size());
-  // Node checks plus tree-cell checks per second: each is at most one grid
-  // look-up (value at the point) after the sphere and box tests; compare with
-  // BM_TrilinearLookup, the machine's raw look-up rate.
+  // Node checks plus tree-cell checks per second (all threads): each is at
+  // most one grid look-up (value at the point) after the sphere and box
+  // tests; compare with the raw look-up rates below, taken on as many
+  // threads.
   state.counters["checks/s"] = benchmark::Counter(double(solver.nodeChecks() + solver.cellChecks()),
                                                   benchmark::Counter::kIsIterationInvariantRate);
   // The machine's raw look-up rate next to it, on this bed's own grid (the
   // first shape's), at 2^16 points within a cell of its surface in grid
-  // coordinates, for 50 ms each after the timed passes: one at a time
-  // (Grid::valueAtCells, "raw look-ups/s") and in one batch
-  // (Grid::valuesAtCells, two per instruction, as the batched walks make
-  // theirs: "raw batched look-ups/s"), and one at a time with the gradient
-  // below zero ("raw look-ups with gradient/s"). One line prints them all.
+  // coordinates, for 50 ms each after the timed passes, on as many threads
+  // as the pass (each its own loop over the points; the rate is the sum of
+  // theirs): one at a time (Grid::valueAtCells, "raw look-ups/s") and in
+  // one batch (Grid::valuesAtCells, two per instruction, as the batched
+  // walks make theirs: "raw batched look-ups/s"), and one at a time with
+  // the gradient below zero ("raw look-ups with gradient/s"). One line
+  // prints them all, with the threads ("threads") and the pass's checks
+  // per second and thread ("checks/s per thread").
   {
     const geometry::Grid<D>& grid = p.shape[0]->grid();
     const std::vector<Vec<D>> points = surfacePointsAtCells(grid);
-    std::vector<double> values(points.size());
+#ifdef _OPENMP
+    const int threads = omp_get_max_threads();
+#else
+    const int threads = 1;
+#endif
+    // lookUps(values, grad) makes one round of look-ups over `points`,
+    // into the calling thread's own `values` and `grad`.
     const auto rate = [&](auto&& lookUps) {
-      double seconds = 0.0;
-      std::size_t count = 0;
-      const auto start = std::chrono::steady_clock::now();
-      while (seconds < 0.05) {
-        lookUps();
-        count += points.size();
-        seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      double total = 0.0;
+#ifdef _OPENMP
+#pragma omp parallel num_threads(threads) reduction(+ : total)
+#endif
+      {
+        std::vector<double> values(points.size());
+        Vec<D> grad = Vec<D>::Zero();
+        double seconds = 0.0;
+        std::size_t count = 0;
+        const auto start = std::chrono::steady_clock::now();
+        while (seconds < 0.05) {
+          lookUps(values, grad);
+          count += points.size();
+          seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        }
+        total += double(count) / seconds;
       }
-      return double(count) / seconds;
+      return total;
     };
-    double sum = 0.0;
-    state.counters["raw look-ups/s"] = rate([&] {
+    state.counters["raw look-ups/s"] = rate([&](std::vector<double>& values, Vec<D>&) {
+      double sum = 0.0;
       for (const Vec<D>& g : points) sum += grid.valueAtCells(g);
+      values[0] = sum;
+      benchmark::DoNotOptimize(values.data());
     });
-    benchmark::DoNotOptimize(sum);
     // With the gradient where the value is negative (what a contact node
     // takes: Grid::valueAtCellsGradientBelow), about half of these points.
-    Vec<D> grad = Vec<D>::Zero();
-    state.counters["raw look-ups with gradient/s"] = rate([&] {
+    state.counters["raw look-ups with gradient/s"] = rate([&](std::vector<double>& values, Vec<D>& grad) {
+      double sum = 0.0;
       for (const Vec<D>& g : points) sum += grid.valueAtCellsGradientBelow(g, 0.0, grad);
+      values[0] = sum;
+      benchmark::DoNotOptimize(values.data());
       benchmark::DoNotOptimize(grad);
     });
-    benchmark::DoNotOptimize(sum);
-    state.counters["raw batched look-ups/s"] = rate([&] {
+    state.counters["raw batched look-ups/s"] = rate([&](std::vector<double>& values, Vec<D>&) {
       grid.valuesAtCells(points.data(), points.size(), values.data());
       benchmark::DoNotOptimize(values.data());
       benchmark::ClobberMemory();
     });
+    state.counters["threads"] = threads;
+    state.counters["checks/s per thread"] = benchmark::Counter(
+        double(solver.nodeChecks() + solver.cellChecks()) / threads, benchmark::Counter::kIsIterationInvariantRate);
   }
   state.SetLabel("node checks");
 }
