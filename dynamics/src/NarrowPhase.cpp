@@ -431,20 +431,17 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
                        length / h, -1};
   };
   // The records of the trilinear nodes at tree positions ks[at[c]], c <
-  // count, known to be inside: lookUp(c, grad) gives node c's value and
-  // writes its gradient (looked up again from the same corners, or kept
-  // from a look-up that made both). Written in place (Records leaves a
-  // resize unwritten).
+  // count, known to be inside, with values phis[c] and gradients grads[c].
+  // Written in place (Records leaves a resize unwritten).
   [[maybe_unused]] const auto recordNodes = [&](const std::uint32_t* ks, const std::uint32_t* at, std::uint32_t count,
-                                                auto lookUp) {
+                                                const double* phis, const Vec<D>* grads) {
     std::size_t n = buf.nodes.size();
     buf.nodes.resize(n + count);
     buf.work.resize(n + count);
     for (std::uint32_t c = 0; c < count; ++c) {
-      Vec<D> grad;
-      const double phi = lookUp(c, grad);
+      const double phi = phis[c];
       Vec<D> normal;
-      const double length = normalOf(grad, normal);
+      const double length = normalOf(grads[c], normal);
       if (!(length > 0.0)) continue;
       const std::uint32_t i = tree.order[ks[at[c]]];
       // (Made where they go: assigned, they were made in a temporary and
@@ -603,7 +600,7 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
   // look-up gives every candidate's value and gradient (Grid::
   // valuesAndGradientsAtCells), so those inside need no second one; else
   // the values first, and the gradients of those inside from a second
-  // look-up.
+  // batch of look-ups.
   const auto testNodes = [&]<bool Gradients>(const std::uint32_t* ks, std::uint32_t n, double* margins) __attribute__((noinline)) {
     std::uint32_t* const live = buf.batchLive.data();
     Vec<D>* const at = buf.batchPoints.data();
@@ -650,15 +647,10 @@ std::uint64_t collectLevelSet(const Shape<D>& owner, const Mat<D>& Ro, const Vec
       if (certify) {
         for (std::uint32_t c = 0; c < inside; ++c) margins[live[c]] = 0.0;
       }
-      if constexpr (Gradients) {
-        recordNodes(ks, live, inside, [&](std::uint32_t c, Vec<D>& grad) {
-          grad = at[c];
-          return values[c];
-        });
-      } else {
-        recordNodes(ks, live, inside,
-                    [&](std::uint32_t c, Vec<D>& grad) { return grid.valueAndGradientAtCells(at[c], grad); });
-      }
+      // Without Gradients, those inside get theirs now, in one batch (the
+      // same values again, bit for bit).
+      if constexpr (!Gradients) grid.valuesAndGradientsAtCells(at, inside, values, at);
+      recordNodes(ks, live, inside, values, at);
     }
   };
   // The order of the leaves batchLeaves[0, count) in the tree, in
