@@ -18,6 +18,7 @@
 #include <thread>
 #endif
 
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -88,6 +89,12 @@ struct Mpi {
 
 int main(int argc, char** argv) {
   Mpi mpi(argc, argv);
+#ifdef SIGXFSZ
+  // Past a file size limit (ulimit -f) a write fails with EFBIG, as on a
+  // full disk, and the run stops with its one-line error, its summary and
+  // no lock left, instead of being killed mid-write.
+  std::signal(SIGXFSZ, SIG_IGN);
+#endif
   if (lsdem::apps::mpiRanks() > 1 && (argc < 2 || std::strcmp(argv[1], "run") != 0)) {
     return mpi.fail(2, "lsdem: only `lsdem run` runs on several MPI ranks", true);
   }

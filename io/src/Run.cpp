@@ -187,34 +187,31 @@ class Runner {
       }
     } else {
       // The first instant of a new run (a resumed run has it already), with
-      // its contacts: the first step would evaluate them first anyway.
+      // its contacts: the first step would evaluate them first anyway. (A
+      // write that fails stops the run as a failed step does, "after step
+      // 0": the summary records the error.)
       world.refreshContacts();
       updateView();
-      if (writes_) {
-        for (auto& r : recorders_) r->create();
-      }
-      writeFramePieces(true);
-      if (writes_) {
-        for (auto& r : recorders_) r->record(*sw_.world, now());
-      }
+      orFail([&] {
+        if (writes_) {
+          for (auto& r : recorders_) r->create();
+        }
+        writeFramePieces(true);
+        if (writes_) {
+          for (auto& r : recorders_) r->record(*sw_.world, now());
+        }
+      });
       advanceSchedules();
     }
 
     // The steps; a step (or a record of it) that fails ends the run here (failed()).
-    bool stopped = false;
-    try {
-      stopped = stepToEnd(world);
-    } catch (const InputError&) {
-      throw;
-    } catch (const std::exception& e) {
-      failed(e);
-    }
+    const bool stopped = orFail([&] { return stepToEnd(world); });
 
     // The end (or an early stop): the checkpoint first, so that a resumed run
     // drops what follows (it is not on any schedule), then every recorder's last
     // record; the summary is the last of them. (A write that fails here
     // stops the run as a failed step does: the summary records the error.)
-    try {
+    orFail([&] {
       updateView();
       writeCheckpoint();
       context_.stopped = stopped;
@@ -222,11 +219,7 @@ class Runner {
       if (writes_) {
         for (auto& r : recorders_) r->finish(*sw_.world, now());
       }
-    } catch (const InputError&) {
-      throw;
-    } catch (const std::exception& e) {
-      failed(e);
-    }
+    });
     if (writes_ && options_.progress) report(double(world.steps()) / std::max(context_.wallSeconds(), 1e-9), true);
 
     return result(stopped);
@@ -297,6 +290,18 @@ class Runner {
     r.massOut = view.particleMass() + view.removedMass();
     r.massBalanceError = r.massIn > 0.0 ? (r.massOut - r.massIn) / r.massIn : 0.0;
     return r;
+  }
+  // f(), whose error (but an input error, which is the user's to fix and
+  // says where) ends the run as a failed step does (failed()).
+  template <class F>
+  decltype(auto) orFail(F&& f) {
+    try {
+      return f();
+    } catch (const InputError&) {
+      throw;
+    } catch (const std::exception& e) {
+      failed(e);
+    }
   }
   // A step (or a record of it) that failed: the error says where, and what
   // the state says (divergenceNote); the summary records it (stopped early,

@@ -324,12 +324,18 @@ TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
   }
 
   // 16 kB: the first particles frame (compressed) fits, the first surfaces
-  // frame (written to a temporary file, then renamed) is too large.
+  // frame (written to a temporary file, then renamed) is too large. The
+  // run's first instant fails "after step 0", and its summary says so.
   const fs::path small = dir / "frame";
   const lsdem::test::ProcessResult frame = runLimited(small, 16384);
   EXPECT_EQ(frame.code, 1) << frame.output;
-  EXPECT_EQ(frame.output, "lsdem: error: cannot write '" + (small / "frames" / "surfaces_000000.vtp").string() +
-                              "': File too large\n");
+  const std::string frameError =
+      "after step 0 (t = 0 s): cannot write '" + (small / "frames" / "surfaces_000000.vtp").string() +
+      "': File too large";
+  EXPECT_EQ(frame.output, "lsdem: error: " + frameError + "\n");
+  const std::string frameSummary = readFile(small / "summary.json");
+  EXPECT_NE(frameSummary.find("\"stopped_early\": true"), std::string::npos) << frameSummary;
+  EXPECT_NE(frameSummary.find("\"error\": \"" + frameError + "\""), std::string::npos) << frameSummary;
   EXPECT_TRUE(fs::exists(small / "frames" / "particles_000000.vtp"));
   EXPECT_FALSE(fs::exists(small / "frames" / "surfaces_000000.vtp"));
   EXPECT_EQ(temporaryFiles(small), 0u);

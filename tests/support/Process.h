@@ -50,8 +50,9 @@ struct ProcessResult {
 };
 
 /// @brief Runs `args` to the end with its stdout and stderr captured.
-/// @param fileSizeLimit when >= 0, the child's RLIMIT_FSIZE in bytes, with
-/// SIGXFSZ ignored: a write past it fails with EFBIG, as on a full disk.
+/// @param fileSizeLimit when >= 0, the child's RLIMIT_FSIZE in bytes. The
+/// child's SIGXFSZ is left as it is: lsdem ignores it itself, so that a
+/// write past the limit fails with EFBIG, as on a full disk.
 inline ProcessResult runCaptured(const std::vector<std::string>& args, long long fileSizeLimit = -1) {
   std::vector<char*> argv;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -70,7 +71,6 @@ inline ProcessResult runCaptured(const std::vector<std::string>& args, long long
     if (fileSizeLimit >= 0) {
       const rlimit limit{rlim_t(fileSizeLimit), rlim_t(fileSizeLimit)};
       setrlimit(RLIMIT_FSIZE, &limit);
-      signal(SIGXFSZ, SIG_IGN);
     }
     execv(argv[0], argv.data());
     _exit(127);
