@@ -207,17 +207,22 @@ class Runner {
     // The steps; a step (or a record of it) that fails ends the run here (failed()).
     const bool stopped = orFail([&] { return stepToEnd(world); });
 
-    // The end (or an early stop): the checkpoint first, so that a resumed run
-    // drops what follows (it is not on any schedule), then every recorder's last
-    // record; the summary is the last of them. (A write that fails here
-    // stops the run as a failed step does: the summary records the error.)
+    // The end (or an early stop): every recorder's last record, the summary
+    // the last of them, then the checkpoint. Its outputs' state is taken
+    // before those records, so that a resumed run drops them (they are not
+    // on any schedule); it is written after them, so that a run has a
+    // checkpoint of its end only once they are all written: one whose last
+    // writes failed is resumed from its last periodic checkpoint, and makes
+    // them again. (A write that fails here stops the run as a failed step
+    // does: the summary records the error.)
     orFail([&] {
       updateView();
-      writeCheckpoint();
+      const std::string state = writes_ ? checkpointState() : std::string();
       context_.stopped = stopped;
       if (frames_) writeFramePieces(frames_->recordsAtFinish(now()));
       if (writes_) {
         for (auto& r : recorders_) r->finish(*sw_.world, now());
+        writeRunState(state);
       }
     });
     if (writes_ && options_.progress) report(double(world.steps()) / std::max(context_.wallSeconds(), 1e-9), true);
@@ -263,7 +268,9 @@ class Runner {
         }
       }
       advanceSchedules();
-      if (checkpoint) writeCheckpoint();
+      // (One due at the end is the end's own, written after the last
+      // records: see run().)
+      if (checkpoint && !end_.finished(world.time(), world.steps())) writeCheckpoint();
       if (writes_ && options_.progress && secondsSince(lastReport) >= scene_.output.progressSeconds) {
         report(double(world.steps() - stepsAtReport) / secondsSince(lastReport), false);
         lastReport = Clock::now();
@@ -411,10 +418,19 @@ class Runner {
     removeRunOutputs(context_.out);
   }
 
-  // The run's state: its basis, the checkpoints' schedule, and one section
-  // per recorder (by name), each as the recorder saved it.
+  // A periodic checkpoint, and the summary brought up to date with it.
   void writeCheckpoint() {
     if (!writes_) return;
+    writeRunState(checkpointState());
+    recorders_.back()->record(*sw_.world, now());  // the summary stays current with the checkpoints
+  }
+  // The checkpoint of the world now with the run's state `state` (checkpointState).
+  void writeRunState(const std::string& state) {
+    io::writeCheckpoint<D>(checkpointFile(), scene_.file, sceneHash(sceneText_), *sw_.world, state);
+  }
+  // The run's state: its basis, the checkpoints' schedule, and one section
+  // per recorder (by name), each as the recorder saved it.
+  std::string checkpointState() {
     dynamics::StateWriter s;
     s.putTag("run");
     s.put(context_.basis.initialMass);
@@ -437,9 +453,7 @@ class Runner {
     run.put(context_.wallSeconds());
     s.putString(kRunSection);
     s.putVector(run.bytes());
-    io::writeCheckpoint<D>(checkpointFile(), scene_.file, sceneHash(sceneText_), *sw_.world,
-                           std::string(s.bytes().begin(), s.bytes().end()));
-    recorders_.back()->record(*sw_.world, now());  // the summary stays current with the checkpoints
+    return std::string(s.bytes().begin(), s.bytes().end());
   }
 
   // A checkpoint's run state (writeCheckpoint), read whole.

@@ -362,6 +362,61 @@ TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
   fs::remove_all(dir);
 }
 
+// A run whose last writes fail has no checkpoint of its end: resumed, it
+// goes on from its last periodic checkpoint and makes them again, and ends
+// as the run that never failed (it said "already at its end" and wrote
+// nothing). Its last frame is blocked by a folder of that name, made
+// before a forced resume with a scene that ends later (a new run would
+// clear the frames folder).
+TEST(RunCli, ARunWhoseLastWritesFailedIsResumedToItsEnd) {
+  const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_last_writes");
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string shipped =
+      readFile(fs::path(LSDEM_SOURCE_DIR) / "apps" / "scenes" / "three_grains" / "three_grains_2d.toml");
+  // The shipped scene with frames, rows and size distributions every 0.01,
+  // 0.0002 and 0.02 s, ending at `duration`.
+  const auto scene = [&](const std::string& name, const char* duration, const char* frames, const char* rows,
+                         const char* distributions) {
+    std::string text = shipped;
+    const auto set = [&](const std::string& key, const std::string& value) {
+      const std::size_t at = text.find("\n" + key + " = ");
+      ASSERT_NE(at, std::string::npos) << key;
+      text.replace(at + 1, text.find('\n', at + 1) - at - 1, key + " = " + value);
+    };
+    set("duration", duration);
+    set("frames", frames);
+    set("history_rows", rows);
+    set("distributions", distributions);
+    std::ofstream(dir / name) << text;
+  };
+  scene("half.toml", "0.04", "4", "200", "3");
+  scene("whole.toml", "0.08", "8", "400", "5");
+  const auto lsdem = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), LSDEM_BINARY);
+    args.push_back("--quiet");
+    return runCaptured(args);
+  };
+  const fs::path ref = dir / "ref", out = dir / "out";
+  ASSERT_EQ(lsdem({"run", (dir / "whole.toml").string(), "--out", ref.string()}).code, 0);
+  ASSERT_EQ(lsdem({"run", (dir / "half.toml").string(), "--out", out.string()}).code, 0);
+  const fs::path lastFrame = out / "frames" / "particles_000008.vtp";
+  ASSERT_TRUE(fs::exists(ref / "frames" / "particles_000008.vtp"));
+  fs::create_directories(lastFrame / "blocked");
+  const lsdem::test::ProcessResult failed =
+      lsdem({"run", "--resume", out.string(), (dir / "whole.toml").string(), "--force"});
+  EXPECT_EQ(failed.code, 1) << failed.output;
+  EXPECT_NE(failed.output.find("cannot write '" + lastFrame.string() + "'"), std::string::npos) << failed.output;
+  fs::remove_all(lastFrame);
+  const lsdem::test::ProcessResult resumed = lsdem({"run", "--resume", out.string()});
+  EXPECT_EQ(resumed.code, 0) << resumed.output;
+  EXPECT_EQ(resumed.output.find("already at its end"), std::string::npos) << resumed.output;
+  for (const char* file : {"history.csv", "psd.csv", "breakage_log.csv", "frames/particles_000008.vtp"}) {
+    EXPECT_EQ(readFile(out / file), readFile(ref / file)) << file;
+  }
+  fs::remove_all(dir);
+}
+
 // Command-line mistakes end in exit code 2 with a message naming what was
 // given, and nothing written: a step count or thread count that is not a
 // whole number in range, an unknown command, a folder given as the scene.
