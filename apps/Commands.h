@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -38,6 +39,11 @@ CLI::Validator atLeast(double least, double most = std::numeric_limits<double>::
       },
       (Integer ? "INT " : "NUMBER ") + bound);
 }
+
+/// An image size option ("--size WxH", x or X): whole numbers of pixels in
+/// [64, 8000] each; io::InputError naming the option otherwise. (render and
+/// paraview take the same sizes.)
+std::array<int, 2> imageSize(const std::string& text);
 
 /// The MPI ranks `lsdem` runs on (1 unless started by mpirun with -np > 1, in
 /// a build with LSDEM_MPI), and this process's rank.

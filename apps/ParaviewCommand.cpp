@@ -151,7 +151,7 @@ void addParaviewCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--screenshot", opts->screenshot, "render offscreen and save this PNG instead of opening the GUI");
   cmd->add_option("--time", opts->time, "simulated time to show, s (the nearest frame; default the last)");
-  cmd->add_option("--size", opts->size, "screenshot size WxH in pixels (default 1200x800)");
+  cmd->add_option("--size", opts->size, "screenshot size WxH in pixels, 64 to 8000 each (default 1200x800)");
   cmd->add_option("--color", opts->color,
                   "surfaces coloured by: auto (generation once a grain has broken, else id), id, generation");
   cmd->add_option("--state", opts->state, "save a ParaView state file (.pvsm) instead of opening the GUI");
@@ -169,6 +169,10 @@ void addParaviewCommand(CLI::App& app) {
       std::ostringstream given;
       given << *opts->time;
       throw io::InputError("--time", 0, "", "must be a finite number >= 0 (s), got " + given.str());
+    }
+    if (!opts->size.empty()) imageSize(opts->size);
+    if (!opts->color.empty() && opts->color != "auto" && opts->color != "id" && opts->color != "generation") {
+      throw io::InputError("--color", 0, "", "expected 'auto', 'id' or 'generation', got '" + opts->color + "'");
     }
     if (!opts->screenshot.empty() && !opts->state.empty()) {
       throw io::InputError("--state", 0, "", "give either --screenshot or --state, not both");

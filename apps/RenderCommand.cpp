@@ -78,6 +78,22 @@ std::array<double, 2> parsePair(const std::string& text, char separator, const s
   return v;
 }
 
+}  // namespace
+
+std::array<int, 2> imageSize(const std::string& text) {
+  std::string pair = text;
+  std::replace(pair.begin(), pair.end(), 'X', 'x');
+  const std::array<double, 2> size = parsePair(pair, 'x', "--size");
+  for (const double v : size) {
+    if (!(v >= 64 && v <= 8000 && v == std::floor(v))) {
+      throw io::InputError("--size", 0, "", "width and height must be whole numbers of pixels in [64, 8000], got '" + text + "'");
+    }
+  }
+  return {int(size[0]), int(size[1])};
+}
+
+namespace {
+
 // ---------------------------------------------------------------------------
 // Colours (0xRRGGBB)
 
@@ -557,13 +573,7 @@ void render(const RenderOptions& o) {
   }
   if (o.up != "x" && o.up != "y" && o.up != "z") throw io::InputError("--up", 0, "", "expected x, y or z, got '" + o.up + "'");
   const std::array<double, 2> view = parsePair(o.view, ',', "--view");
-  std::string sizeText = o.size;
-  std::replace(sizeText.begin(), sizeText.end(), 'X', 'x');
-  const std::array<double, 2> size = parsePair(sizeText, 'x', "--size");
-  if (size[0] < 64 || size[1] < 64 || size[0] > 8000 || size[1] > 8000 || size[0] != std::floor(size[0]) ||
-      size[1] != std::floor(size[1])) {
-    throw io::InputError("--size", 0, "", "width and height must be whole numbers of pixels in [64, 8000], got '" + o.size + "'");
-  }
+  const std::array<int, 2> size = imageSize(o.size);
   const fs::path output(o.output);
   if (output.extension() != ".png") throw io::InputError("-o", 0, "", "the image must end in .png, got '" + o.output + "'");
   std::error_code ec;

@@ -66,11 +66,11 @@ def parse_args(argv):
     a = p.parse_args(argv)
     try:
         w, h = (int(v) for v in a.size.lower().split("x"))
-        if not (16 <= w <= 8192 and 16 <= h <= 8192):
+        if not (64 <= w <= 8000 and 64 <= h <= 8000):
             raise ValueError
         a.size = (w, h)
     except ValueError:
-        fail("--size: expected WxH with 16..8192 pixels each, got '%s'" % a.size)
+        fail("--size: expected WxH with 64..8000 pixels each, got '%s'" % a.size)
     if a.time is not None and not math.isfinite(a.time):
         fail("--time: must be a finite number")
     if a.screenshot and a.state:

@@ -218,6 +218,20 @@ TEST_F(Render, BadInputExitsTwoWithOneLine) {
   EXPECT_EQ(jpg.code, 2) << jpg.output;
 }
 
+// `lsdem paraview` checks its options as render does, before it looks for
+// pvpython (so also where ParaView is not installed): a colouring it does
+// not know, a size outside [64, 8000] pixels.
+TEST_F(Render, ParaviewOptionsAreCheckedFirst) {
+  for (const auto& [opt, says] : {std::pair<std::string, std::string>{"--color red", "--color: expected 'auto', 'id' or 'generation', got 'red'"},
+                                  {"--size 16x16", "--size: width and height must be whole numbers of pixels in [64, 8000], got '16x16'"},
+                                  {"--size 800", "--size: expected two numbers separated by 'x', got '800'"}}) {
+    const Result r = run("paraview " + out2d_.string() + " " + opt + " --screenshot " + (tempDir() / "p.png").string());
+    EXPECT_EQ(r.code, 2) << opt << ": " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    EXPECT_NE(r.output.find(says), std::string::npos) << r.output;
+  }
+}
+
 TEST_F(Render, MissingGnuplotExitsThree) {
   const fs::path empty = tempDir() / "empty-path";
   fs::create_directories(empty);

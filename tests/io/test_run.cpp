@@ -684,6 +684,22 @@ TEST(Run, ATrackedIdThatNeverExistedIsNoted) {
   EXPECT_EQ(lines(readFile(dir.path / "out" / "tracks.csv")).size(), 1u + 4u);
 }
 
+// Size-distribution times after the scene's end are said at the start, at
+// their key's line (they are kept: a resume with --steps may reach them).
+TEST(Run, DistributionTimesPastTheEndAreNoted) {
+  TempDir dir("distribution_times_past");
+  io::RunOptions o = discRun(dir, "frames = 2\ndistribution_times = [0.002, 0.02, 0.5]", 3);
+  std::vector<std::string> notes;
+  o.note = [&](const std::string& n) { notes.push_back(n); };
+  io::runScene(o);
+  ASSERT_EQ(notes.size(), 1u);
+  const std::string text = readFile(o.scene);
+  const auto line = 1 + std::count(text.begin(), text.begin() + std::ptrdiff_t(text.find("distribution_times")), '\n');
+  EXPECT_EQ(notes[0], o.scene + ":" + std::to_string(line) +
+                          ": output.distribution_times: 2 of its 3 times come after the scene's end (duration = "
+                          "0.01 s): they are not recorded");
+}
+
 // A folder holding a user's own scene.toml (and no run's outputs) is not
 // written into, --overwrite or not: the run's copy of its scene would replace
 // the file. Running that very scene into its own folder is fine.
