@@ -152,9 +152,11 @@ class Runner {
       }
     }
     if (!resume) checkRunLimits(scene_, options_, world, end_, sw_.initialMass);
-    checkpoints_ = checkpointSchedule(scene_, end_, world);
+    // The outputs' schedules are the run's own (a resume's --steps moves
+    // this process's end, not the instants the run records).
+    checkpoints_ = checkpointSchedule(scene_, runEnd_, world);
     // (Every process keeps the schedules; only the one that writes records.)
-    recorders_ = makeRecorders(context_, end_);
+    recorders_ = makeRecorders(context_, runEnd_);
     // A distributed run's frames in per-rank pieces: every process writes its piece.
     if (engine && scene_.output.framePiecesPerRank) {
       for (auto& r : recorders_) {
@@ -349,7 +351,9 @@ class Runner {
   // The world this process steps.
   SceneWorld<D>& stepped() { return part_.world ? part_ : sw_; }
   const SceneWorld<D>& stepped() const { return part_.world ? part_ : sw_; }
-  Instant now() const { return end_.now(stepped().world->time(), stepped().world->steps()); }
+  // The instant on the run's own clock, the outputs' schedules' (a resume's
+  // --steps counts this process's end in steps, whatever that clock).
+  Instant now() const { return runEnd_.now(stepped().world->time(), stepped().world->steps()); }
   // The scene of a distributed run's view, without its particles (the view
   // takes the part's). Its energy ledger is the sum of the parts'
   // (DistributedWorld::updateView).

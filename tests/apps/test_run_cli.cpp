@@ -365,10 +365,10 @@ TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
 // A run whose last writes fail has no checkpoint of its end: resumed, it
 // goes on from its last periodic checkpoint and makes them again, and ends
 // as the run that never failed (it said "already at its end" and wrote
-// nothing). Its last frame is blocked by a folder of that name, made
+// nothing), also when resumed in parts with --steps. Its last frame is blocked by a folder of that name, made
 // before a forced resume with a scene that ends later (a new run would
 // clear the frames folder).
-TEST(RunCli, ARunWhoseLastWritesFailedIsResumedToItsEnd) {
+TEST(RunCli, ARunWhoseLastWritesFailedIsResumedToItsEndInParts) {
   const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_last_writes");
   fs::remove_all(dir);
   fs::create_directories(dir);
@@ -408,6 +408,10 @@ TEST(RunCli, ARunWhoseLastWritesFailedIsResumedToItsEnd) {
   EXPECT_EQ(failed.code, 1) << failed.output;
   EXPECT_NE(failed.output.find("cannot write '" + lastFrame.string() + "'"), std::string::npos) << failed.output;
   fs::remove_all(lastFrame);
+  // In two parts, the first of 2000 steps: the rows and frames stay on the
+  // run's own schedule (they were spread over the part's end instead).
+  const lsdem::test::ProcessResult part = lsdem({"run", "--resume", out.string(), "--steps", "2000"});
+  EXPECT_EQ(part.code, 0) << part.output;
   const lsdem::test::ProcessResult resumed = lsdem({"run", "--resume", out.string()});
   EXPECT_EQ(resumed.code, 0) << resumed.output;
   EXPECT_EQ(resumed.output.find("already at its end"), std::string::npos) << resumed.output;
