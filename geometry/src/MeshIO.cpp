@@ -83,6 +83,15 @@ class SceneCollector {
                                  std::to_string(raw.y) + ", " + std::to_string(raw.z) + ") is not finite" +
                                  (scale_ != 1.0 ? " once scaled" : ""));
       }
+      // Lengths are metres; far beyond 1e10 m the orientation and distance
+      // tests overflow (a cube scaled by 1e300 was called inverted).
+      if (scaled.cwiseAbs().maxCoeff() > 1e10) {
+        std::ostringstream what;
+        what << "vertex " << vertexBase_ + v << " lies at (" << scaled.x() << ", " << scaled.y() << ", " << scaled.z()
+             << ")" << (scale_ != 1.0 ? " once scaled" : "")
+             << ": lsdem takes coordinates within 1e10 m of the origin (lengths are in metres)";
+        throw std::runtime_error(what.str());
+      }
       const auto [it, isNew] = vertexOf_.try_emplace(key, int(mesh_.vertices.size()));
       if (isNew) mesh_.vertices.push_back(scaled);
       index[v] = it->second;

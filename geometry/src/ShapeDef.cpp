@@ -76,6 +76,19 @@ double spacingFor(const ShapeDef<D>& def, double smallest) {
   return smallest / def.cellsAcross;
 }
 
+// Refuses a shape `smallest` m across its smallest dimension outside
+// [1e-10, 1e10] m: lengths are metres, and far beyond that range the exact
+// geometry of the node placement (CGAL) overflows (a sphere of radius 1e40
+// crashed it).
+void checkShapeSize(double smallest) {
+  if (std::isfinite(smallest) && smallest > 0.0 && (smallest > 1e10 || smallest < 1e-10)) {
+    std::ostringstream what;
+    what << "the shape is " << smallest
+         << " m across its smallest dimension: lsdem takes shapes 1e-10 to 1e10 m across (lengths are in metres)";
+    throw std::invalid_argument(what.str());
+  }
+}
+
 }  // namespace
 
 template <int D>
@@ -91,12 +104,23 @@ void checkMeshResolution(const TriangleMesh& mesh, double spacing) {
          << " at spacing " << spacing << "); it must give 2 to 1e4";
     throw ResolutionError(what.str());
   }
+  // The grid over the box and its padding: at most 2^31 - 1 values (Grid::covering).
+  double values = 1.0;
+  for (int a = 0; a < 3; ++a) values *= mesh.bounds().size()[a] / spacing + 2.0 * kDefaultPaddingCells + 2.0;
+  if (!(values <= 2147483647.0)) {
+    std::ostringstream what;
+    what << "gives a grid of " << values << " values over the mesh's box (" << mesh.bounds().size().x() << " x "
+         << mesh.bounds().size().y() << " x " << mesh.bounds().size().z() << " at spacing " << spacing
+         << "); the limit is 2^31: give a larger spacing";
+    throw ResolutionError(what.str());
+  }
 }
 
 namespace {
 
 // The level set of a mesh definition's mesh (read by the caller, scaled).
 Grid<3> meshGrid(const ShapeDef<3>& def, const TriangleMesh& mesh) {
+  checkShapeSize(mesh.bounds().size().minCoeff());
   const double h = spacingFor(def, mesh.bounds().size().minCoeff());
   checkMeshResolution(mesh, h);
   return meshToLevelSet(mesh, h, kDefaultPaddingCells, def.meshFile);
@@ -111,6 +135,7 @@ Grid<D> buildGrid(const ShapeDef<D>& def, MeshImportReport* meshReport) {
   if constexpr (D == 3) {
     if (def.kind == ShapeKind::Mesh) return meshGrid(def, readMesh(def.meshFile, def.meshScale, meshReport));
   }
+  checkShapeSize(smallestDimension(def));
   const double h = resolvedSpacing(def);
   switch (def.kind) {
     case ShapeKind::Sphere: return sphereGrid<D>(def.radius, h, pad);

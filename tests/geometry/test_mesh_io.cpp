@@ -1,5 +1,6 @@
 #include "support/Files.h"
 #include "lsdem/geometry/MeshIO.h"
+#include "lsdem/geometry/ShapeDef.h"
 
 #include <gtest/gtest.h>
 
@@ -88,6 +89,30 @@ TEST_F(MeshIO, AsciiStlWithScale) {
   text += "endsolid cube\n";
   writeText("cube.stl", text);
   expectUnitCube(readMesh(file("cube.stl"), 0.001), 1.0);
+}
+
+// Scaled coordinates beyond 1e10 m are refused naming the vertex (a cube
+// scaled by 1e300 was called inverted); a spacing whose grid would exceed
+// 2^31 values is a ResolutionError (it was a bare "too large or invalid").
+TEST_F(MeshIO, CoordinatesAndGridsBeyondTheirRangesAreRefused) {
+  writeStl(cubeMesh(1.0), file("unit.stl"));
+  EXPECT_NO_THROW(readMesh(file("unit.stl"), 1e9));
+  try {
+    readMesh(file("unit.stl"), 1e12);
+    ADD_FAILURE() << "a cube 1e12 m across was read";
+  } catch (const MeshError& e) {
+    EXPECT_NE(std::string(e.what()).find("once scaled: lsdem takes coordinates within 1e10 m of the origin"),
+              std::string::npos)
+        << e.what();
+  }
+  const TriangleMesh cube = readMesh(file("unit.stl"), 1.0);
+  EXPECT_NO_THROW(checkMeshResolution(cube, 0.01));
+  try {
+    checkMeshResolution(cube, 0.0007);
+    ADD_FAILURE() << "a grid of 3e9 values was allowed";
+  } catch (const ResolutionError& e) {
+    EXPECT_NE(std::string(e.what()).find("the limit is 2^31"), std::string::npos) << e.what();
+  }
 }
 
 // writeStl then readMesh: same cube, vertices equal to float precision, file size 84 + 50 F.

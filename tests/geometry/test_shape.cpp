@@ -103,6 +103,35 @@ TEST(ShapeDef, ResolutionMustBeGivenOnce) {
   EXPECT_DOUBLE_EQ(resolvedSpacing(def), 0.05);
 }
 
+// Lengths are metres: a shape 1e-10 to 1e10 m across its smallest dimension
+// builds; beyond, an error says so (a sphere of radius 1e40 crashed the node
+// placement's exact geometry, 1e155 the grid).
+TEST(ShapeDef, ShapesBeyondTheLengthRangeAreRefused) {
+  const auto message = [](double radius) {
+    ShapeDef<3> def;
+    def.radius = radius;
+    def.cellsAcross = 6;
+    try {
+      buildShape(def);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  for (const double radius : {1e40, 1e155, 1e10, 1e-11}) {
+    EXPECT_NE(message(radius).find("m across its smallest dimension: lsdem takes shapes 1e-10 to 1e10 m across"),
+              std::string::npos)
+        << radius << ": " << message(radius);
+  }
+  EXPECT_EQ(message(1e4), "");
+  EXPECT_EQ(message(1e-9), "");
+  ShapeDef<3> box;
+  box.kind = ShapeKind::Box;
+  box.halfExtents = Vec<3>(1e100, 1e100, 1e100);
+  box.cellsAcross = 6;
+  EXPECT_THROW(buildShape(box), std::invalid_argument);
+}
+
 // The bounding sphere holds every point where the interpolated level set is
 // negative, not only the nodes and interior grid nodes (the fragments of a
 // split, with sharp edges where nodes are sparse, are checked in test_split).

@@ -83,7 +83,8 @@ class ResolutionError : public std::invalid_argument {
 };
 
 /// @brief Throws ResolutionError unless `spacing` gives 2 to 1e4 cells across
-/// the smallest extent of `mesh`'s box (the range cells_across allows).
+/// the smallest extent of `mesh`'s box (the range cells_across allows) and a
+/// grid of at most 2^31 values over the box with its padding.
 void checkMeshResolution(const TriangleMesh& mesh, double spacing);
 
 /// @brief The grid spacing the definition asks for (world units).
