@@ -197,7 +197,15 @@ double criticalTimeStep(const std::vector<double>& masses, const std::vector<dou
       fail("contact stiffness = " + str(stiffnesses[i]) + " N/m must be >= 0 and finite (particle " +
            std::to_string(i) + ")");
     }
-    omega2 = std::max(omega2, stiffnesses[i] / masses[i]);
+    const double w2 = stiffnesses[i] / masses[i];
+    if (!std::isfinite(w2)) {
+      // (A stiffness near the largest double, or a mass near the smallest:
+      // the step would be 0.)
+      fail("contact stiffness = " + str(stiffnesses[i]) + " N/m over particle mass = " + str(masses[i]) +
+           " kg overflows: the time step would be 0 s (particle " + std::to_string(i) +
+           "; check the stiffness, kn or youngs_modulus, and the density)");
+    }
+    omega2 = std::max(omega2, w2);
   }
   if (omega2 == 0.0) return std::numeric_limits<double>::infinity();
   // Stability limit of velocity Verlet with damping ratio zeta (see TimeStep.h).

@@ -214,6 +214,14 @@ typename World<D>::ShapeStiffness World<D>::shapeStiffness(const std::shared_ptr
   };
   for (std::size_t j = 0; j < planes_.size(); ++j) consider(contacts_.planeConstants(j), j);
   for (std::size_t j = 0; j < tools_.size(); ++j) consider(contacts_.toolConstants(j), planes_.size() + j);
+  // (kn near the largest double overflows the stiffness of a node patch,
+  // which then comes out 0 or not finite: the time step would be 0.)
+  if (!std::isfinite(k.stiffness) || !(k.stiffness > 0.0)) {
+    std::ostringstream what;
+    what << "contact stiffness of a grain = " << k.stiffness << " N/m is not a finite positive number (kn = "
+         << law.kn << " N/m, ks = " << law.ks << " N/m): the time step would be 0 s";
+    throw std::invalid_argument(what.str());
+  }
   shapeStiffness_[shapePtr.get()] = CachedStiffness{shapePtr, k};
   return k;
 }

@@ -190,11 +190,11 @@ class Runner {
     } else {
       // The first instant of a new run (a resumed run has it already), with
       // its contacts: the first step would evaluate them first anyway. (A
-      // write that fails stops the run as a failed step does, "after step
-      // 0": the summary records the error.)
-      world.refreshContacts();
-      updateView();
+      // failure, of the contacts or a write, stops the run as a failed step
+      // does, "after step 0": the summary records the error.)
       orFail([&] {
+        world.refreshContacts();
+        updateView();
         if (writes_) {
           for (auto& r : recorders_) r->create();
         }

@@ -596,6 +596,10 @@ TEST(Run, RunsThatCannotEndOrWouldOverflowAreRefusedBeforeWriting) {
        "double precision"},
       {"overflowing_velocity", "positions = [[0.0, 0.0099]]", "positions = [[0.0, 0.0099]]\nvelocity = [1e200, 0.0]",
        18, "particles[0].velocity", "double precision"},
+      // (A stiffness that overflows came out 0: the run stopped at its first
+      // instant, "contact solver: dt must be > 0 s, got 0", no key, exit 1.)
+      {"overflowing_kn", "kn = 1e5", "kn = 1e308", 5, "contact", "is not a finite positive number (kn = 1e+308"},
+      {"overflowing_ks", "kn = 1e5", "kn = 1e5\nfriction = 0.5\nks = 1e308", 5, "contact", "is not a finite positive number"},
   };
   for (const Case& c : cases) {
     TempDir dir("limits_" + c.name);
