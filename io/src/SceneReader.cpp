@@ -549,9 +549,14 @@ class SceneReader {
     scene_.keyLines[r.pathOf("gravity")] = r.lineOf("gravity");
     if (r.has("global_damping")) {
       scene_.world.globalDamping = r.number("global_damping");
+      scene_.keyLines[r.pathOf("global_damping")] = r.lineOf("global_damping");
       if (*scene_.world.globalDamping < 0.0) r.fail("global_damping", "must be >= 0 (1/s)");
     }
-    if (r.has("local_damping")) scene_.world.localDamping = r.inRange("local_damping", 0.0, 0.999999, 0.0);
+    if (r.has("local_damping")) {
+      const double alpha = r.number("local_damping");
+      if (!(alpha >= 0.0 && alpha < 1.0)) r.fail("local_damping", "must be in [0, 1), got " + numberText(alpha));
+      scene_.world.localDamping = alpha;
+    }
     if (r.has("outflow")) scene_.world.outflow = box<D>(r, "outflow");
     scene_.world.energyLedger = r.boolean("energy_ledger", true);
     if (r.has("discharge")) {

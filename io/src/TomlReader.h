@@ -4,6 +4,7 @@
 /// errors that name the file, the line and the dotted key. Every key read is
 /// remembered, so `finish()` can reject the keys nobody asked for (typos).
 
+#include "NumberText.h"
 #include "lsdem/io/InputError.h"
 
 #include <toml++/toml.h>
@@ -262,11 +263,9 @@ class TomlReader {
       default: return "a date/time";
     }
   }
-  static std::string toString(double v) {
-    std::ostringstream s;
-    s << v;
-    return s.str();
-  }
+  // (Shortest round-trip text: a value just inside or outside a bound is
+  // not rounded onto it, as 0.9999999 was to "1".)
+  static std::string toString(double v) { return numberText(v); }
 
   const toml::table& table_;
   std::string file_;

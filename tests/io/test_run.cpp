@@ -599,6 +599,9 @@ TEST(Run, RunsThatCannotEndOrWouldOverflowAreRefusedBeforeWriting) {
       // (A stiffness that overflows came out 0: the run stopped at its first
       // instant, "contact solver: dt must be > 0 s, got 0", no key, exit 1.)
       {"overflowing_kn", "kn = 1e5", "kn = 1e308", 5, "contact", "is not a finite positive number (kn = 1e+308"},
+      // (C_g dt past 2 made energy with exit 0: kinetic energy 1e177 J.)
+      {"strong_global_damping", "gravity = [0.0, -9.81]", "gravity = [0.0, -9.81]\nglobal_damping = 1e9", 26,
+       "effects.global_damping", "it must stay below 1"},
       {"overflowing_ks", "kn = 1e5", "kn = 1e5\nfriction = 0.5\nks = 1e308", 5, "contact", "is not a finite positive number"},
   };
   for (const Case& c : cases) {

@@ -141,6 +141,9 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
       {"bad_position", edit("[0.0, 0.05], [0.03, 0.05]", "[0.0, 0.05], [0.03]"), 20, "particles[0].positions[1]",
        "expected 2 numbers"},
       {"bad_damping", edit("kn = 1e5", "kn = 1e5\ndamping_ratio = 1.5"), 7, "contact.damping_ratio", "[0, 1)"},
+      // (0.9999999 was refused as "must be in [0, 0.999999], got 1".)
+      {"local_damping_one", std::string(kBase) + "[effects]\nlocal_damping = 1.0\n", 22, "effects.local_damping",
+       "must be in [0, 1), got 1"},
       {"bad_criterion", std::string(kBase) + "[effects.breakage]\ncriterion = \"rankine\"\n", 22,
        "effects.breakage.criterion", "must be \"von_mises\""},
       {"negative_regrid_cells", std::string(kBase) + "[effects.breakage]\nregrid_cells = -2.0\n", 22,

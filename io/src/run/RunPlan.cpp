@@ -97,6 +97,16 @@ void checkRunLimits(const SceneDef<D>& scene, const RunOptions& options, const d
                  " s), over the limit of 1e9 per run; run it in parts with --steps and --resume");
     }
   }
+  // Global damping is a force -C_g m v of the step's start: past C_g dt = 1 a
+  // step more than stops the motion it damps, past 2 it makes energy (the
+  // kinetic energy grew to 1e177 J at C_g dt = 2.7). The step only shrinks
+  // during a run, so the start is where C_g dt is largest.
+  if (scene.world.globalDamping && !(*scene.world.globalDamping * dt < 1.0)) {
+    refuse("effects.global_damping", "global_damping = " + num(*scene.world.globalDamping) + " 1/s times the time step (" +
+                                         roughText(dt) + " s) is " + roughText(*scene.world.globalDamping * dt) +
+                                         ": it must stay below 1 (an explicit damping force that strong reverses the "
+                                         "velocities it damps, and past 2 makes energy); lower it");
+  }
   if (scene.output.checkpointEvery > 0.0 && scene.output.checkpointEvery < dt) {
     refuse("output.checkpoint_every", "checkpoint_every = " + num(scene.output.checkpointEvery) +
                                           " s is shorter than one time step (dt = " + num(dt) + " s)");
