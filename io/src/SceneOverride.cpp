@@ -75,4 +75,27 @@ std::string overrideScene(const std::string& text, const std::vector<SceneSettin
   return out.str();
 }
 
+std::optional<std::pair<std::string, int>> firstChangedKey(const std::string& before, const std::string& after,
+                                                           const std::vector<std::string>& keys) {
+  toml::table a, b;
+  try {
+    a = toml::parse(before);
+    b = toml::parse(after);
+  } catch (const toml::parse_error&) {
+    return std::nullopt;
+  }
+  // A node as TOML text ("" when absent).
+  const auto text = [](const toml::node* n) {
+    std::ostringstream s;
+    if (n) s << toml::toml_formatter(*n);
+    return s.str();
+  };
+  for (const std::string& key : keys) {
+    const toml::node* x = a.get(key);
+    const toml::node* y = b.get(key);
+    if (text(x) != text(y)) return std::pair(key, y ? int(y->source().begin.line) : 0);
+  }
+  return std::nullopt;
+}
+
 }  // namespace lsdem::io

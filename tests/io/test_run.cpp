@@ -969,6 +969,28 @@ TEST(Run, ResumeWithAnotherSceneIsRefusedUnlessForced) {
   next.resumeDir = outA.string();
   next.scene = sceneB.string();
   EXPECT_EQ(refusal(next), "resumed");
+
+  // Forced with what the checkpoint holds or runs from the start edited (a
+  // plane's velocity, the particles' density): refused at the table, and
+  // nothing changes (the plane jumped; the particles were the checkpoint's).
+  const std::string historyA = readFile(outA / "history.csv");
+  for (const auto& [from, to, key, line] :
+       {std::tuple<std::string, std::string, std::string, int>{"normal = [0.0, 1.0]",
+                                                               "normal = [0.0, 1.0]\nvelocity = [0.0, 0.1]", "planes", 19},
+        {"density = 2000.0", "density = 100.0", "particles", 13}}) {
+    fs::create_directories(dir.path / "c");
+    const fs::path sceneC = writeScene(dir.path / "c", editScene(readFile(sceneB), from, to));
+    io::RunOptions edited = next;
+    edited.scene = sceneC.string();
+    edited.force = true;
+    EXPECT_EQ(refusal(edited), sceneC.string() + ":" + std::to_string(line) + ": " + key + ": differs from the run's (" +
+                                   (outA / "scene.toml").string() +
+                                   "): a forced resume takes the scene's output, end, contact law and effects as "
+                                   "they are now, but its particles, shapes, materials, planes and tools must be "
+                                   "the run's");
+    EXPECT_EQ(readFile(outA / "history.csv"), historyA);
+    EXPECT_EQ(readFile(outA / "scene.toml"), readFile(sceneB));
+  }
 }
 
 // A run given --steps and stopped part-way ends, resumed without --steps,

@@ -8,6 +8,7 @@
 
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/InputError.h"
+#include "lsdem/io/SceneOverride.h"
 #include "lsdem/io/Vtk.h"
 
 #include <cstring>
@@ -169,14 +170,31 @@ std::string resumeScene(const RunOptions& options) {
                      "written by a run of another scene than " + copy.string() +
                          " (a checkpoint copied from another run, or an edited copy)");
   } else if (sceneHash(readWholeFile(scene)) != hash) {
+    // (The file the checkpoint names, given again: edited, not another scene.)
+    std::error_code ec;
+    const bool sameFile = options.scene.empty() || fs::equivalent(options.scene, named, ec);
     mismatch.emplace(scene, 0, "",
-                     options.scene.empty()
-                         ? "the scene file changed since the checkpoint in " + dir + " was written"
-                         : "not the scene of the run in " + dir + " (its checkpoint names " + named + ")");
+                     sameFile ? "the scene file changed since the checkpoint in " + dir + " was written"
+                              : "not the scene of the run in " + dir + " (its checkpoint names " + named + ")");
   }
   if (!mismatch) return scene;
   if (!options.force) {
     throw InputError(mismatch->file(), 0, "", mismatch->problem() + "; give --force to resume with it anyway");
+  }
+  // What the checkpoint holds, or runs from the start, must be the run's:
+  // the particles (the checkpoint's are restored: an edited list was
+  // ignored), their shapes and materials, and the planes and tools, whose
+  // motions are functions of time from the start (a new velocity moved a
+  // platen 1.2 mm into the grains in one step).
+  if (copyMatches) {
+    const auto changed = firstChangedKey(readWholeFile(copy.string()), readWholeFile(scene),
+                                         {"particles", "shapes", "materials", "planes", "tools"});
+    if (changed) {
+      throw InputError(scene, changed->second, changed->first,
+                       "differs from the run's (" + copy.string() +
+                           "): a forced resume takes the scene's output, end, contact law and effects as they are "
+                           "now, but its particles, shapes, materials, planes and tools must be the run's");
+    }
   }
   if (options.note) options.note(std::string(mismatch->what()) + ": resumed with " + scene + " anyway (--force)");
   return scene;

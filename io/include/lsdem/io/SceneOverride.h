@@ -5,7 +5,9 @@
 /// shipped scene at another grid resolution, contact law or seed through
 /// exactly the path `lsdem run` takes.
 
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace lsdem::io {
@@ -29,5 +31,13 @@ struct SceneSetting {
 /// table, or a `*` that matches no table.
 std::string overrideScene(const std::string& text, const std::vector<SceneSetting>& settings,
                           const std::string& file = "scene");
+
+/// @brief The first of the top-level `keys` whose value differs between the
+/// scene texts `before` and `after` (comments, layout and the order of keys
+/// aside: both are parsed and printed back), with its line in `after` (0
+/// where it is absent there); nullopt when they agree or a text does not
+/// parse (its reader then says why).
+std::optional<std::pair<std::string, int>> firstChangedKey(const std::string& before, const std::string& after,
+                                                           const std::vector<std::string>& keys);
 
 }  // namespace lsdem::io
