@@ -985,8 +985,8 @@ TEST(Run, ResumeWithAnotherSceneIsRefusedUnlessForced) {
     edited.force = true;
     EXPECT_EQ(refusal(edited), sceneC.string() + ":" + std::to_string(line) + ": " + key + ": differs from the run's (" +
                                    (outA / "scene.toml").string() +
-                                   "): a forced resume takes the scene's output, end, contact law and effects as "
-                                   "they are now, but its particles, shapes, materials, planes and tools must be "
+                                   "): a forced resume takes the scene's output, end, contact law, effects and "
+                                   "tools as they are now, but its particles, shapes, materials and planes must be "
                                    "the run's");
     EXPECT_EQ(readFile(outA / "history.csv"), historyA);
     EXPECT_EQ(readFile(outA / "scene.toml"), readFile(sceneB));
