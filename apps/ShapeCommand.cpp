@@ -35,7 +35,10 @@ struct ShapeReport {
 template <int D>
 ShapeReport report(const io::ShapeDecl& decl) {
   const auto t0 = std::chrono::steady_clock::now();
-  const std::shared_ptr<const Shape<D>> shape = io::buildDeclaredShape<D>(decl);
+  std::vector<std::string> notes;
+  const std::shared_ptr<const Shape<D>> shape = io::buildDeclaredShape<D>(decl, &notes);
+  // (What `lsdem run` notes of a shape, said here too.)
+  for (const std::string& n : notes) std::cerr << "lsdem: note: " << n << '\n';
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const auto& mass = shape->mass();
   const auto& desc = shape->descriptors();

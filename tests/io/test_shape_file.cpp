@@ -131,6 +131,25 @@ TEST(ShapeFile, AVeryCoarseGridIsNoted) {
   }
 }
 
+// A shape with fewer than 20 surface nodes (8 in 2D) is noted: a sphere at
+// node_density 1e-6 has 4.
+TEST(ShapeFile, AShapeWithAHandfulOfNodesIsNoted) {
+  for (const char* density : {"1e-6", "2"}) {
+    const std::string path = writeFile("sparse_sphere.toml", "[shape]\ndimension = 3\nkind = \"sphere\"\nradius = 0.5\n"
+                                                             "cells_across = 10\nnode_density = " + std::string(density) + "\n");
+    std::vector<std::string> notes;
+    const auto shape = io::buildDeclaredShape<3>(io::readShapeFile(path), &notes);
+    if (shape->nodes().size() < 20) {
+      ASSERT_EQ(notes.size(), 1u) << density;
+      EXPECT_EQ(notes[0], path + ":1: shape: has only " + std::to_string(shape->nodes().size()) +
+                              " surface nodes: contacts are found at these points only (node_density)");
+    } else {
+      EXPECT_STREQ(density, "2");
+      EXPECT_TRUE(notes.empty()) << notes[0];
+    }
+  }
+}
+
 TEST(ShapeFile, MissingFileAndTable) {
   EXPECT_THROW(io::readShapeFile("/nonexistent/lsdem/shape.toml"), io::InputError);
   EXPECT_THROW(io::readShapeFile(writeFile("empty.toml", "[grain]\nradius = 1\n")), io::InputError);
