@@ -218,8 +218,14 @@ typename World<D>::ShapeStiffness World<D>::shapeStiffness(const std::shared_ptr
   // which then comes out 0 or not finite: the time step would be 0.)
   if (!std::isfinite(k.stiffness) || !(k.stiffness > 0.0)) {
     std::ostringstream what;
-    what << "contact stiffness of a grain = " << k.stiffness << " N/m is not a finite positive number (kn = "
-         << law.kn << " N/m, ks = " << law.ks << " N/m): the time step would be 0 s";
+    what << "contact stiffness of a grain = " << k.stiffness << " N/m is not a finite positive number (";
+    if (k.boundary >= 0) what << "against boundary " << k.boundary << " with its own material; ";
+    if (law.normal == NormalModel::Hertz) {
+      what << "youngs_modulus = " << law.youngsModulus << " Pa";
+    } else {
+      what << "kn = " << law.kn << " N/m, ks = " << law.ks << " N/m";
+    }
+    what << "): the time step would be 0 s";
     throw std::invalid_argument(what.str());
   }
   shapeStiffness_[shapePtr.get()] = CachedStiffness{shapePtr, k};

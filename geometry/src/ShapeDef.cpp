@@ -104,9 +104,11 @@ void checkMeshResolution(const TriangleMesh& mesh, double spacing) {
          << " at spacing " << spacing << "); it must give 2 to 1e4";
     throw ResolutionError(what.str());
   }
-  // The grid over the box and its padding: at most 2^31 - 1 values (Grid::covering).
+  // The grid over the box and its padding: at most 2^31 - 1 values. (Grid::
+  // covering makes 2 (ceil(size / 2h) + pad) + 1 per axis, at most size / h
+  // + 2 pad + 3.)
   double values = 1.0;
-  for (int a = 0; a < 3; ++a) values *= mesh.bounds().size()[a] / spacing + 2.0 * kDefaultPaddingCells + 2.0;
+  for (int a = 0; a < 3; ++a) values *= mesh.bounds().size()[a] / spacing + 2.0 * kDefaultPaddingCells + 3.0;
   if (!(values <= 2147483647.0)) {
     std::ostringstream what;
     what << "gives a grid of " << values << " values over the mesh's box (" << mesh.bounds().size().x() << " x "

@@ -115,6 +115,7 @@ class Runner {
     // scene's, or where its `--steps` put it); a resumed run's, the
     // checkpoint's (a resume's `--steps` sets this process's end only).
     runEnd_ = end_;
+    outputEnd_.reset();
     SavedRun saved;
     if (resume) {
       saved = readRunState(runState);
@@ -142,8 +143,17 @@ class Runner {
                              " and the scene's end is in " + (runEnd_.byTime ? "seconds" : "steps") +
                              ": resume it with --steps N (N more steps)" + away);
       }
+      if (options_.steps && saved.end && saved.end->byTime != runEnd_.byTime) {
+        // Forced with --steps across clocks: the outputs stay scheduled on
+        // the clock the checkpoint left them on.
+        outputEnd_ = *saved.end;
+      } else if (options_.steps && !saved.end) {
+        // (A checkpoint of an earlier release: its schedules are taken on
+        // this process's clock, as that release took them.)
+        outputEnd_ = end_;
+      }
       if (!options_.steps) end_ = runEnd_;
-      if (end_.finished(world.time(), world.steps())) {
+      if (end_.finished(world.time(), world.steps()) && !saved.lastRecordsMissing) {
         // Nothing to run: nothing is written.
         RunResult r = result(false);
         r.alreadyFinished = true;
@@ -154,9 +164,9 @@ class Runner {
     if (!resume) checkRunLimits(scene_, options_, world, end_, sw_.initialMass);
     // The outputs' schedules are the run's own (a resume's --steps moves
     // this process's end, not the instants the run records).
-    checkpoints_ = checkpointSchedule(scene_, runEnd_, world);
+    checkpoints_ = checkpointSchedule(scene_, outputEnd(), world);
     // (Every process keeps the schedules; only the one that writes records.)
-    recorders_ = makeRecorders(context_, runEnd_);
+    recorders_ = makeRecorders(context_, outputEnd());
     // A distributed run's frames in per-rank pieces: every process writes its piece.
     if (engine && scene_.output.framePiecesPerRank) {
       for (auto& r : recorders_) {
@@ -209,23 +219,40 @@ class Runner {
     // The steps; a step (or a record of it) that fails ends the run here (failed()).
     const bool stopped = orFail([&] { return stepToEnd(world); });
 
-    // The end (or an early stop): every recorder's last record, the summary
-    // the last of them, then the checkpoint. Its outputs' state is taken
-    // before those records, so that a resumed run drops them (they are not
-    // on any schedule); it is written after them, so that a run has a
-    // checkpoint of its end only once they are all written: one whose last
-    // writes failed is resumed from its last periodic checkpoint, and makes
-    // them again. (A write that fails here stops the run as a failed step
-    // does: the summary records the error.)
+    // The end (or an early stop): the checkpoint and every recorder's last
+    // record, the summary the last of them. The checkpoint's outputs' state
+    // is taken before those records, so that a resumed run drops them (they
+    // are not on any schedule). A run that stops short of its own end (a
+    // signal, a resume's --steps) writes the checkpoint first, as its way
+    // on. A run at its own end writes it after them, saying whether they
+    // were all written: a resume of one whose last writes failed makes them
+    // again (it said "already at its end" and wrote nothing). (A write that
+    // fails here stops the run as a failed step does: the summary records
+    // the error.)
     orFail([&] {
       updateView();
-      const std::string state = writes_ ? checkpointState() : std::string();
+      const bool atOwnEnd = writes_ && !stopped && atRunEnd();
+      if (!atOwnEnd) writeCheckpoint();
+      const std::string done = atOwnEnd ? checkpointState(false) : std::string();
+      const std::string missing = atOwnEnd ? checkpointState(true) : std::string();
       context_.stopped = stopped;
-      if (frames_) writeFramePieces(frames_->recordsAtFinish(now()));
-      if (writes_) {
-        for (auto& r : recorders_) r->finish(*sw_.world, now());
-        writeRunState(state);
+      try {
+        if (frames_) writeFramePieces(frames_->recordsAtFinish(now()));
+        if (writes_) {
+          for (auto& r : recorders_) r->finish(*sw_.world, now());
+        }
+      } catch (const std::exception&) {
+        if (atOwnEnd) {
+          try {
+            writeRunState(missing);
+          } catch (const std::exception&) {
+            // (Not written either, as on a full disk: the last periodic
+            // checkpoint stays the way on; the error below says what failed.)
+          }
+        }
+        throw;
       }
+      if (atOwnEnd) writeRunState(done);
     });
     if (writes_ && options_.progress) report(double(world.steps()) / std::max(context_.wallSeconds(), 1e-9), true);
 
@@ -270,9 +297,9 @@ class Runner {
         }
       }
       advanceSchedules();
-      // (One due at the end is the end's own, written after the last
-      // records: see run().)
-      if (checkpoint && !end_.finished(world.time(), world.steps())) writeCheckpoint();
+      // (One due at the run's own end is written after its last records:
+      // see run().)
+      if (checkpoint && !atRunEnd()) writeCheckpoint();
       if (writes_ && options_.progress && secondsSince(lastReport) >= scene_.output.progressSeconds) {
         report(double(world.steps() - stepsAtReport) / secondsSince(lastReport), false);
         lastReport = Clock::now();
@@ -351,9 +378,14 @@ class Runner {
   // The world this process steps.
   SceneWorld<D>& stepped() { return part_.world ? part_ : sw_; }
   const SceneWorld<D>& stepped() const { return part_.world ? part_ : sw_; }
+  // Whether the run is at its own end (not only this process's).
+  bool atRunEnd() const { return runEnd_.finished(stepped().world->time(), stepped().world->steps()); }
   // The instant on the run's own clock, the outputs' schedules' (a resume's
   // --steps counts this process's end in steps, whatever that clock).
-  Instant now() const { return runEnd_.now(stepped().world->time(), stepped().world->steps()); }
+  Instant now() const { return outputEnd().now(stepped().world->time(), stepped().world->steps()); }
+  // The end the outputs' schedules are spread over, on their clock: the
+  // run's own, but where a resume set another (outputEnd_).
+  const RunEnd& outputEnd() const { return outputEnd_ ? *outputEnd_ : runEnd_; }
   // The scene of a distributed run's view, without its particles (the view
   // takes the part's). Its energy ledger is the sum of the parts'
   // (DistributedWorld::updateView).
@@ -425,7 +457,7 @@ class Runner {
   // A periodic checkpoint, and the summary brought up to date with it.
   void writeCheckpoint() {
     if (!writes_) return;
-    writeRunState(checkpointState());
+    writeRunState(checkpointState(false));
     recorders_.back()->record(*sw_.world, now());  // the summary stays current with the checkpoints
   }
   // The checkpoint of the world now with the run's state `state` (checkpointState).
@@ -433,8 +465,10 @@ class Runner {
     io::writeCheckpoint<D>(checkpointFile(), scene_.file, sceneHash(sceneText_), *sw_.world, state);
   }
   // The run's state: its basis, the checkpoints' schedule, and one section
-  // per recorder (by name), each as the recorder saved it.
-  std::string checkpointState() {
+  // per recorder (by name), each as the recorder saved it; the run's own
+  // section says whether the last records of the run's end are missing
+  // (`lastRecordsMissing`: written at the end, they failed).
+  std::string checkpointState(bool lastRecordsMissing) {
     dynamics::StateWriter s;
     s.putTag("run");
     s.put(context_.basis.initialMass);
@@ -455,6 +489,7 @@ class Runner {
     run.put(runEnd_.endStep);
     run.put(runEnd_.span);
     run.put(context_.wallSeconds());
+    run.put(std::uint8_t(lastRecordsMissing));
     s.putString(kRunSection);
     s.putVector(run.bytes());
     return std::string(s.bytes().begin(), s.bytes().end());
@@ -467,6 +502,7 @@ class Runner {
     std::map<std::string, std::vector<char>> sections;
     std::optional<RunEnd> end;  // absent in checkpoints of earlier releases
     double wallSeconds = 0.0;
+    bool lastRecordsMissing = false;  // at the run's end, its last records failed (checkpointState)
   };
   SavedRun readRunState(const std::string& bytes) const {
     SavedRun saved;
@@ -490,6 +526,8 @@ class Runner {
         end.span = r.get<double>();
         saved.end = end;
         saved.wallSeconds = r.get<double>();
+        // (Checkpoints of earlier releases end here: their runs' records were written.)
+        saved.lastRecordsMissing = !r.atEnd() && r.get<std::uint8_t>() != 0;
       }
     });
     return saved;
@@ -549,7 +587,8 @@ class Runner {
   FrameRecorder<D>* frames_ = nullptr;    // a distributed run's frames in per-rank pieces (in recorders_)
   RunContext<D> context_;
   RunEnd end_;     // this process's end
-  RunEnd runEnd_;  // the run's own end (writeCheckpoint keeps it)
+  RunEnd runEnd_;  // the run's own end (its checkpoints keep it: checkpointState)
+  std::optional<RunEnd> outputEnd_;  // the outputs' schedules' end, where not runEnd_ (outputEnd())
   Schedule checkpoints_;
   std::vector<std::unique_ptr<Recorder<D>>> recorders_;  // the summary last
 };

@@ -8,6 +8,7 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <sstream>
 
 namespace lsdem::io {
@@ -75,8 +76,60 @@ std::string overrideScene(const std::string& text, const std::vector<SceneSettin
   return out.str();
 }
 
-std::optional<std::pair<std::string, int>> firstChangedKey(const std::string& before, const std::string& after,
-                                                           const std::vector<std::string>& keys) {
+namespace {
+
+// Whether two TOML nodes hold the same scene data: numbers by value (10 and
+// 10.0 are one value to a scene), tables by key, arrays entry by entry; a
+// table's keys in `ignored` are left out.
+bool sameData(const toml::node& a, const toml::node& b, const std::vector<std::string>& ignored = {}) {
+  if (a.is_number() && b.is_number()) return a.value<double>() == b.value<double>();
+  if (a.type() != b.type()) return false;
+  if (const toml::table* x = a.as_table()) {
+    const toml::table& y = *b.as_table();
+    const auto counted = [&](const toml::table& t) {
+      std::size_t n = 0;
+      for (auto&& [key, node] : t) n += std::find(ignored.begin(), ignored.end(), std::string(key.str())) == ignored.end();
+      return n;
+    };
+    if (counted(*x) != counted(y)) return false;
+    for (auto&& [key, node] : *x) {
+      if (std::find(ignored.begin(), ignored.end(), std::string(key.str())) != ignored.end()) continue;
+      const toml::node* other = y.get(key.str());
+      if (!other || !sameData(node, *other)) return false;
+    }
+    return true;
+  }
+  if (const toml::array* x = a.as_array()) {
+    const toml::array& y = *b.as_array();
+    if (x->size() != y.size()) return false;
+    for (std::size_t k = 0; k < x->size(); ++k) {
+      if (!sameData(*x->get(k), *y.get(k))) return false;
+    }
+    return true;
+  }
+  if (a.is_string()) return a.value<std::string>() == b.value<std::string>();
+  if (a.is_boolean()) return a.value<bool>() == b.value<bool>();
+  std::ostringstream x, y;  // dates and times: as written
+  x << toml::toml_formatter(a);
+  y << toml::toml_formatter(b);
+  return x.str() == y.str();
+}
+
+// The entries of an array of tables (`[[particles]]`), but those `skip` leaves out.
+template <class Skip>
+std::vector<const toml::node*> entries(const toml::node* array, Skip skip) {
+  std::vector<const toml::node*> out;
+  if (const toml::array* a = array ? array->as_array() : nullptr) {
+    for (const toml::node& n : *a) {
+      if (!skip(n)) out.push_back(&n);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::optional<std::pair<std::string, int>> forcedResumeEdit(const std::string& before, const std::string& after) {
   toml::table a, b;
   try {
     a = toml::parse(before);
@@ -84,16 +137,36 @@ std::optional<std::pair<std::string, int>> firstChangedKey(const std::string& be
   } catch (const toml::parse_error&) {
     return std::nullopt;
   }
-  // A node as TOML text ("" when absent).
-  const auto text = [](const toml::node* n) {
-    std::ostringstream s;
-    if (n) s << toml::toml_formatter(*n);
-    return s.str();
+  const auto lineOf = [](const toml::node* n) { return n ? int(n->source().begin.line) : 0; };
+  // Shapes and materials: each named table.
+  for (const char* key : {"shapes", "materials"}) {
+    const toml::table* x = a.get_as<toml::table>(key);
+    const toml::table* y = b.get_as<toml::table>(key);
+    if (!x && !y) continue;
+    if (!x || !y) return std::pair(std::string(key), lineOf(y));
+    for (auto&& [name, node] : *y) {
+      const toml::node* old = x->get(name.str());
+      if (!old || !sameData(*old, node)) return std::pair(std::string(key) + "." + std::string(name.str()), lineOf(&node));
+    }
+    for (auto&& [name, node] : *x) {
+      if (!y->get(name.str())) return std::pair(std::string(key) + "." + std::string(name.str()), lineOf(y));
+    }
+  }
+  // The particle groups but feeds (a feed may be given more grains to come),
+  // and the planes but their own contact materials (as [contact] may change).
+  const auto isFeed = [](const toml::node& n) {
+    const toml::table* t = n.as_table();
+    return t && t->get_as<std::string>("placement") && t->get_as<std::string>("placement")->get() == "feed";
   };
-  for (const std::string& key : keys) {
-    const toml::node* x = a.get(key);
-    const toml::node* y = b.get(key);
-    if (text(x) != text(y)) return std::pair(key, y ? int(y->source().begin.line) : 0);
+  const auto none = [](const toml::node&) { return false; };
+  for (const auto& [key, ignored] : {std::pair<std::string, std::vector<std::string>>{"particles", {}},
+                                     {"planes", {"material"}}}) {
+    const std::vector<const toml::node*> x = key == "particles" ? entries(a.get(key), isFeed) : entries(a.get(key), none);
+    const std::vector<const toml::node*> y = key == "particles" ? entries(b.get(key), isFeed) : entries(b.get(key), none);
+    for (std::size_t k = 0; k < std::max(x.size(), y.size()); ++k) {
+      if (k < x.size() && k < y.size() && sameData(*x[k], *y[k], ignored)) continue;
+      return std::pair(key, k < y.size() ? lineOf(y[k]) : lineOf(b.get(key)));
+    }
   }
   return std::nullopt;
 }

@@ -872,15 +872,16 @@ class SceneReader {
           r.fail("distribution_times", "times must be >= 0 s and increase");
         }
       }
-      // Times past the scene's end are never reached: said (the run may be
-      // meant to be resumed with --steps past it).
+      // Times past the scene's end are not reached by a run to its end:
+      // said (kept: a resume with --steps past the end records them).
       const std::vector<double>& times = o.distributionTimes;
       const auto past = std::count_if(times.begin(), times.end(), [&](double t) { return t > scene_.duration; });
       if (scene_.duration > 0.0 && past > 0) {
         scene_.notes.push_back(InputError(file_, r.lineOf("distribution_times"), r.pathOf("distribution_times"),
                                           std::to_string(past) + " of its " + std::to_string(times.size()) +
                                               " times come after the scene's end (duration = " +
-                                              numberText(scene_.duration) + " s): they are not recorded")
+                                              numberText(scene_.duration) +
+                                              " s): a run to its end does not record them")
                                    .what());
       }
     }

@@ -240,6 +240,10 @@ TEST(RunCli, ResumeWithAnEditedSceneNeedsForce) {
   EXPECT_EQ(forced.code, 0) << forced.output;
   EXPECT_NE(forced.output.find("anyway (--force)"), std::string::npos) << forced.output;
   EXPECT_EQ(readFile(out / "scene.toml"), readFile(scene));
+  // The run's rows stay on its clock (steps, from its --steps), though the
+  // scene's end is in seconds: one per step, 0 to 5.
+  const std::string rows = readFile(out / "history.csv");
+  EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 1 + 6) << rows;
   EXPECT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--force", "--quiet"}), 2);
   fs::remove_all(dir);
 }
@@ -362,12 +366,13 @@ TEST(RunCli, AFailedWriteStopsTheRunNamingTheFile) {
   fs::remove_all(dir);
 }
 
-// A run whose last writes fail has no checkpoint of its end: resumed, it
-// goes on from its last periodic checkpoint and makes them again, and ends
-// as the run that never failed (it said "already at its end" and wrote
-// nothing), also when resumed in parts with --steps. Its last frame is blocked by a folder of that name, made
-// before a forced resume with a scene that ends later (a new run would
-// clear the frames folder).
+// A run whose last writes fail keeps a checkpoint of its end that says so:
+// resumed, it makes them again, and ends as the run that never failed (it
+// said "already at its end" and wrote nothing). The run goes there in parts
+// (--steps), whose rows and frames stay on the run's own schedule (they were
+// spread over each part's end). Its last frame is blocked by a folder of
+// that name, made before a forced resume with a scene that ends later (a
+// new run would clear the frames folder).
 TEST(RunCli, ARunWhoseLastWritesFailedIsResumedToItsEndInParts) {
   const fs::path dir = lsdem::test::tempPath("lsdem_test_run_cli_last_writes");
   fs::remove_all(dir);
@@ -403,21 +408,25 @@ TEST(RunCli, ARunWhoseLastWritesFailedIsResumedToItsEndInParts) {
   const fs::path lastFrame = out / "frames" / "particles_000008.vtp";
   ASSERT_TRUE(fs::exists(ref / "frames" / "particles_000008.vtp"));
   fs::create_directories(lastFrame / "blocked");
-  const lsdem::test::ProcessResult failed =
-      lsdem({"run", "--resume", out.string(), (dir / "whole.toml").string(), "--force"});
-  EXPECT_EQ(failed.code, 1) << failed.output;
-  EXPECT_NE(failed.output.find("cannot write '" + lastFrame.string() + "'"), std::string::npos) << failed.output;
-  fs::remove_all(lastFrame);
-  // In two parts, the first of 2000 steps: the rows and frames stay on the
-  // run's own schedule (they were spread over the part's end instead).
-  const lsdem::test::ProcessResult part = lsdem({"run", "--resume", out.string(), "--steps", "2000"});
+  // A part of 2000 steps, then the rest, whose last frame fails, twice.
+  const lsdem::test::ProcessResult part =
+      lsdem({"run", "--resume", out.string(), (dir / "whole.toml").string(), "--force", "--steps", "2000"});
   EXPECT_EQ(part.code, 0) << part.output;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    const lsdem::test::ProcessResult failed = lsdem({"run", "--resume", out.string()});
+    EXPECT_EQ(failed.code, 1) << failed.output;
+    EXPECT_NE(failed.output.find("cannot write '" + lastFrame.string() + "'"), std::string::npos) << failed.output;
+  }
+  fs::remove_all(lastFrame);
   const lsdem::test::ProcessResult resumed = lsdem({"run", "--resume", out.string()});
   EXPECT_EQ(resumed.code, 0) << resumed.output;
   EXPECT_EQ(resumed.output.find("already at its end"), std::string::npos) << resumed.output;
-  for (const char* file : {"history.csv", "psd.csv", "breakage_log.csv", "frames/particles_000008.vtp"}) {
+  for (const char* file : {"history.csv", "psd.csv", "breakage_log.csv", "particles.pvd", "frames/particles_000008.vtp"}) {
     EXPECT_EQ(readFile(out / file), readFile(ref / file)) << file;
   }
+  // Now whole: nothing more to do.
+  const lsdem::test::ProcessResult again = lsdem({"run", "--resume", out.string()});
+  EXPECT_EQ(again.code, 0) << again.output;
   fs::remove_all(dir);
 }
 

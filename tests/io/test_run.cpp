@@ -704,7 +704,7 @@ TEST(Run, DistributionTimesPastTheEndAreNoted) {
   const auto line = 1 + std::count(text.begin(), text.begin() + std::ptrdiff_t(text.find("distribution_times")), '\n');
   EXPECT_EQ(notes[0], o.scene + ":" + std::to_string(line) +
                           ": output.distribution_times: 2 of its 3 times come after the scene's end (duration = "
-                          "0.01 s): they are not recorded");
+                          "0.01 s): a run to its end does not record them");
 }
 
 // A folder holding a user's own scene.toml (and no run's outputs) is not
@@ -985,12 +985,21 @@ TEST(Run, ResumeWithAnotherSceneIsRefusedUnlessForced) {
     edited.force = true;
     EXPECT_EQ(refusal(edited), sceneC.string() + ":" + std::to_string(line) + ": " + key + ": differs from the run's (" +
                                    (outA / "scene.toml").string() +
-                                   "): a forced resume takes the scene's output, end, contact law, effects and "
-                                   "tools as they are now, but its particles, shapes, materials and planes must be "
-                                   "the run's");
+                                   "): a forced resume takes the scene's output, end, contact law, effects, feeds "
+                                   "and tools as they are now, but its particles, shapes, materials and planes must "
+                                   "be the run's");
     EXPECT_EQ(readFile(outA / "history.csv"), historyA);
     EXPECT_EQ(readFile(outA / "scene.toml"), readFile(sceneB));
   }
+  // What may change: a number written another way, a comment, a plane's own
+  // contact material (as [contact] may).
+  const fs::path sceneD = writeScene(
+      dir.path / "c", editScene(editScene(readFile(sceneB), "density = 2000.0", "density = 2000  # kg/m^3"),
+                                "normal = [0.0, 1.0]", "normal = [0, 1]\nmaterial = { kn = 2e5 }"));
+  io::RunOptions allowed = next;
+  allowed.scene = sceneD.string();
+  allowed.force = true;
+  EXPECT_EQ(refusal(allowed), "resumed");
 }
 
 // A run given --steps and stopped part-way ends, resumed without --steps,

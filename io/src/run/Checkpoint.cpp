@@ -185,16 +185,15 @@ std::string resumeScene(const RunOptions& options) {
   // the particles (the checkpoint's are restored: an edited list was
   // ignored), their shapes and materials, and the planes, whose positions
   // are functions of time from the start (a new velocity moved a platen 1.2
-  // mm into the grains in one step). (A tool's key frames may be extended
-  // past the checkpoint, as unloading added after a loading: docs/outputs.md.)
+  // mm into the grains in one step). (A feed may be given more grains, a
+  // tool key frames past the checkpoint, as unloading added after a
+  // loading: docs/outputs.md.)
   if (copyMatches) {
-    const auto changed = firstChangedKey(readWholeFile(copy.string()), readWholeFile(scene),
-                                         {"particles", "shapes", "materials", "planes"});
-    if (changed) {
-      throw InputError(scene, changed->second, changed->first,
+    if (const auto edit = forcedResumeEdit(readWholeFile(copy.string()), readWholeFile(scene))) {
+      throw InputError(scene, edit->second, edit->first,
                        "differs from the run's (" + copy.string() +
-                           "): a forced resume takes the scene's output, end, contact law, effects and tools as "
-                           "they are now, but its particles, shapes, materials and planes must be the run's");
+                           "): a forced resume takes the scene's output, end, contact law, effects, feeds and "
+                           "tools as they are now, but its particles, shapes, materials and planes must be the run's");
     }
   }
   if (options.note) options.note(std::string(mismatch->what()) + ": resumed with " + scene + " anyway (--force)");

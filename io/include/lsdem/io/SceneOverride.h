@@ -32,12 +32,13 @@ struct SceneSetting {
 std::string overrideScene(const std::string& text, const std::vector<SceneSetting>& settings,
                           const std::string& file = "scene");
 
-/// @brief The first of the top-level `keys` whose value differs between the
-/// scene texts `before` and `after` (comments, layout and the order of keys
-/// aside: both are parsed and printed back), with its line in `after` (0
-/// where it is absent there); nullopt when they agree or a text does not
-/// parse (its reader then says why).
-std::optional<std::pair<std::string, int>> firstChangedKey(const std::string& before, const std::string& after,
-                                                           const std::vector<std::string>& keys);
+/// @brief What a forced resume may not change (`lsdem run --resume --force`):
+/// the first of the scene texts' shapes and materials (by name), particle
+/// groups but feeds, and planes but their own contact materials that differ
+/// between `before` (the run's copy) and `after`, compared as data (comments,
+/// layout and key order aside; 10 and 10.0 alike), with its key and its line
+/// in `after` (0 where it is absent there); nullopt when none differs or a
+/// text does not parse (its reader then says why).
+std::optional<std::pair<std::string, int>> forcedResumeEdit(const std::string& before, const std::string& after);
 
 }  // namespace lsdem::io
