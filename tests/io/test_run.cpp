@@ -1002,6 +1002,35 @@ TEST(Run, ResumeWithAnotherSceneIsRefusedUnlessForced) {
   EXPECT_EQ(refusal(allowed), "resumed");
 }
 
+// An effect may change on a forced resume, within its limits: a global
+// damping raised past what the step allows is refused at its line, as for a
+// new run, and the run's outputs stay as they were.
+TEST(Run, AForcedResumeChecksTheGlobalDamping) {
+  TempDir dir("forced_damping");
+  const std::string text = editScene(kDiscScene, "gravity = [0.0, -9.81]", "gravity = [0.0, -9.81]\nglobal_damping = 1.0");
+  const fs::path scene = writeScene(dir.path, text);
+  io::RunOptions run;
+  run.scene = scene.string();
+  run.outDir = (dir.path / "out").string();
+  run.steps = 3;
+  io::runScene(run);
+  const std::string history = readFile(dir.path / "out" / "history.csv");
+  std::ofstream(scene, std::ios::trunc) << editScene(text, "global_damping = 1.0", "global_damping = 1e9");
+  io::RunOptions resume;
+  resume.resumeDir = run.outDir;
+  resume.force = true;
+  resume.steps = 3;
+  try {
+    io::runScene(resume);
+    ADD_FAILURE() << "resumed";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.line(), 26) << e.what();
+    EXPECT_EQ(e.key(), "effects.global_damping") << e.what();
+    EXPECT_NE(e.problem().find("global_damping = 1e+09 1/s times the time step"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(readFile(dir.path / "out" / "history.csv"), history);
+}
+
 // A run given --steps and stopped part-way ends, resumed without --steps,
 // where the uninterrupted run ends (its checkpoint keeps its end), with the
 // same outputs; resumed again, it is at its end: nothing is run or written.

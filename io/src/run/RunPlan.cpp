@@ -76,6 +76,22 @@ RunEnd runEnd(const SceneDef<D>& scene, const RunOptions& options, const dynamic
 }
 
 template <int D>
+void checkGlobalDamping(const SceneDef<D>& scene, const dynamics::World<D>& world) {
+  // Global damping is a force -C_g m v of the step's start: past C_g dt = 1 a
+  // step more than stops the motion it damps, past 2 it makes energy (the
+  // kinetic energy grew to 1e177 J at C_g dt = 2.7). The step only shrinks
+  // during a run, so its start (or a resume's) is where C_g dt is largest.
+  const double dt = world.dt();
+  if (!scene.world.globalDamping || !(dt > 0.0) || *scene.world.globalDamping * dt < 1.0) return;
+  const auto line = scene.keyLines.find("effects.global_damping");
+  throw InputError(scene.file, line != scene.keyLines.end() ? line->second : 0, "effects.global_damping",
+                   "global_damping = " + numberText(*scene.world.globalDamping) + " 1/s times the time step (" +
+                       roughText(dt) + " s) is " + roughText(*scene.world.globalDamping * dt) +
+                       ": it must stay below 1 (an explicit damping force that strong reverses the velocities it "
+                       "damps, and past 2 makes energy); lower it");
+}
+
+template <int D>
 void checkRunLimits(const SceneDef<D>& scene, const RunOptions& options, const dynamics::World<D>& world,
                     const RunEnd& end, double initialMass) {
   const auto refuse = [&](const std::string& key, const std::string& what) {
@@ -97,16 +113,7 @@ void checkRunLimits(const SceneDef<D>& scene, const RunOptions& options, const d
                  " s), over the limit of 1e9 per run; run it in parts with --steps and --resume");
     }
   }
-  // Global damping is a force -C_g m v of the step's start: past C_g dt = 1 a
-  // step more than stops the motion it damps, past 2 it makes energy (the
-  // kinetic energy grew to 1e177 J at C_g dt = 2.7). The step only shrinks
-  // during a run, so the start is where C_g dt is largest.
-  if (scene.world.globalDamping && !(*scene.world.globalDamping * dt < 1.0)) {
-    refuse("effects.global_damping", "global_damping = " + num(*scene.world.globalDamping) + " 1/s times the time step (" +
-                                         roughText(dt) + " s) is " + roughText(*scene.world.globalDamping * dt) +
-                                         ": it must stay below 1 (an explicit damping force that strong reverses the "
-                                         "velocities it damps, and past 2 makes energy); lower it");
-  }
+  checkGlobalDamping(scene, world);
   if (scene.output.checkpointEvery > 0.0 && scene.output.checkpointEvery < dt) {
     refuse("output.checkpoint_every", "checkpoint_every = " + num(scene.output.checkpointEvery) +
                                           " s is shorter than one time step (dt = " + num(dt) + " s)");
@@ -159,6 +166,7 @@ std::vector<std::unique_ptr<Recorder<D>>> makeRecorders(const RunContext<D>& con
 
 #define LSDEM_RUN_PLAN(D)                                                                                          \
   template RunEnd runEnd<D>(const SceneDef<D>&, const RunOptions&, const dynamics::World<D>&);                     \
+  template void checkGlobalDamping<D>(const SceneDef<D>&, const dynamics::World<D>&);                               \
   template void checkRunLimits<D>(const SceneDef<D>&, const RunOptions&, const dynamics::World<D>&, const RunEnd&, \
                                   double);                                                                         \
   template Schedule checkpointSchedule<D>(const SceneDef<D>&, const RunEnd&, const dynamics::World<D>&);           \

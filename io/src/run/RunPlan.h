@@ -46,6 +46,12 @@ template <int D>
 void checkRunLimits(const SceneDef<D>& scene, const RunOptions& options, const dynamics::World<D>& world,
                     const RunEnd& end, double initialMass);
 
+/// @brief Refuses (InputError at `effects.global_damping`) a global damping
+/// C_g with C_g dt >= 1 at the world's time step: a new run's (checkRunLimits
+/// calls it) or a resumed one's.
+template <int D>
+void checkGlobalDamping(const SceneDef<D>& scene, const dynamics::World<D>& world);
+
 /// @brief The checkpoints' schedule: every `[output] checkpoint_every` (s; in
 /// whole steps on a step clock), first after one interval.
 template <int D>
