@@ -76,7 +76,9 @@ class Runner {
       : scene_(std::move(scene)), sceneText_(std::move(sceneText)), options_(options), lock_(std::move(lock)),
         context_{scene_, sw_, out, {}, Clock::now(), false, options.note, {}, {}, 0.0} {}
 
-  RunResult run(bool resume) {
+  // `forcedNote`: a forced resume's note, said once the run's own checks
+  // have passed (not before a refusal).
+  RunResult run(bool resume, const std::string& forcedNote) {
     if (options_.check) {
       scene_.world.checkFinite = true;
       scene_.world.energyLedger = true;  // the splits' energy check measures against the run's energy scale
@@ -144,9 +146,11 @@ class Runner {
                              ": resume it with --steps N (N more steps)" + away);
       }
       if (options_.steps && saved.end && saved.end->byTime != runEnd_.byTime) {
-        // Forced with --steps across clocks: the outputs stay scheduled on
-        // the clock the checkpoint left them on.
-        outputEnd_ = *saved.end;
+        // Forced with --steps across clocks: the run keeps its own end and
+        // clock, on which its outputs are scheduled (the scene's end, on the
+        // other clock, saved as the run's, made the next resume read the
+        // outputs' positions on the wrong clock).
+        runEnd_ = *saved.end;
       } else if (options_.steps && !saved.end) {
         // (A checkpoint of an earlier release: its schedules are taken on
         // this process's clock, as that release took them.)
@@ -198,6 +202,7 @@ class Runner {
       if (writes_) {
         for (auto& r : recorders_) r->reopen();
       }
+      if (!forcedNote.empty() && options_.note) options_.note(forcedNote);
     } else {
       // The first instant of a new run (a resumed run has it already), with
       // its contacts: the first step would evaluate them first anyway. (A
@@ -595,7 +600,8 @@ class Runner {
 };
 
 template <int D>
-RunResult runOf(SceneDef<D> scene, std::string sceneText, const RunOptions& options, std::unique_ptr<OutputLock> lock) {
+RunResult runOf(SceneDef<D> scene, std::string sceneText, const RunOptions& options, std::unique_ptr<OutputLock> lock,
+                const std::string& forcedNote) {
   const std::string out =
       !options.resumeDir.empty() ? options.resumeDir : (!options.outDir.empty() ? options.outDir : scene.output.dir);
   // A folder that exists is claimed before the world is built: another run
@@ -609,7 +615,7 @@ RunResult runOf(SceneDef<D> scene, std::string sceneText, const RunOptions& opti
   if (options.threads < 0 && scene.threads > 0) omp_set_num_threads(scene.threads);
 #endif
   Runner<D> runner(std::move(scene), std::move(sceneText), options, out, std::move(lock));
-  return runner.run(!options.resumeDir.empty());
+  return runner.run(!options.resumeDir.empty(), forcedNote);
 }
 
 }  // namespace
@@ -621,7 +627,8 @@ RunResult runScene(const RunOptions& options) {
   if (writesOutputs(options) && !options.resumeDir.empty() && fs::is_directory(options.resumeDir)) {
     lock = std::make_unique<OutputLock>(options.resumeDir);
   }
-  const std::string scenePath = options.resumeDir.empty() ? options.scene : resumeScene(options);
+  std::string forcedNote;
+  const std::string scenePath = options.resumeDir.empty() ? options.scene : resumeScene(options, &forcedNote);
 #ifdef LSDEM_HAVE_OPENMP
   // The threads asked for on the command line apply to building the shapes
   // (reading the scene) as well; the scene's own `threads` once it is read.
@@ -631,9 +638,9 @@ RunResult runScene(const RunOptions& options) {
   std::string text = readWholeFile(scenePath);
   if (options.note) std::visit([&](const auto& s) { for (const std::string& n : s.notes) options.note(n); }, scene);
   if (auto* s2 = std::get_if<SceneDef<2>>(&scene)) {
-    return runOf<2>(std::move(*s2), std::move(text), options, std::move(lock));
+    return runOf<2>(std::move(*s2), std::move(text), options, std::move(lock), forcedNote);
   }
-  return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), std::move(text), options, std::move(lock));
+  return runOf<3>(std::move(std::get<SceneDef<3>>(scene)), std::move(text), options, std::move(lock), forcedNote);
 }
 
 }  // namespace lsdem::io

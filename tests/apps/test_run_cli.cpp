@@ -244,6 +244,19 @@ TEST(RunCli, ResumeWithAnEditedSceneNeedsForce) {
   // scene's end is in seconds: one per step, 0 to 5.
   const std::string rows = readFile(out / "history.csv");
   EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 1 + 6) << rows;
+  // Edited again and forced without --steps: the scene's end is in seconds,
+  // the run's outputs in steps: refused in one line, with no note that it
+  // was resumed anyway (the note came first).
+  std::ofstream(scene, std::ios::app) << "# edited\n";
+  const lsdem::test::ProcessResult clocks =
+      runCaptured({LSDEM_BINARY, "run", "--resume", out.string(), "--force", "--quiet"});
+  EXPECT_EQ(clocks.code, 2) << clocks.output;
+  EXPECT_EQ(std::count(clocks.output.begin(), clocks.output.end(), '\n'), 1) << clocks.output;
+  EXPECT_NE(clocks.output.find("the run's outputs are scheduled in steps and the scene's end is in seconds: resume "
+                               "it with --steps N (N more steps)"),
+            std::string::npos)
+      << clocks.output;
+  EXPECT_EQ(readFile(out / "history.csv"), rows);
   EXPECT_EQ(runToExit({LSDEM_BINARY, "run", scene.string(), "--out", out.string(), "--force", "--quiet"}), 2);
   fs::remove_all(dir);
 }

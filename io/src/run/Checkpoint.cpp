@@ -139,7 +139,7 @@ std::string loadCheckpoint(const fs::path& file, std::span<dynamics::World<D>* c
   });
 }
 
-std::string resumeScene(const RunOptions& options) {
+std::string resumeScene(const RunOptions& options, std::string* forcedNote) {
   const std::string& dir = options.resumeDir;
   const std::string path = (fs::path(dir) / outputs::kCheckpoint).string();
   if (!fs::exists(path)) throw InputError(path, 0, "", "no checkpoint to resume from (is this a run's output folder?)");
@@ -196,7 +196,12 @@ std::string resumeScene(const RunOptions& options) {
                            "tools as they are now, but its particles, shapes, materials and planes must be the run's");
     }
   }
-  if (options.note) options.note(std::string(mismatch->what()) + ": resumed with " + scene + " anyway (--force)");
+  const std::string note = std::string(mismatch->what()) + ": resumed with " + scene + " anyway (--force)";
+  if (forcedNote) {
+    *forcedNote = note;
+  } else if (options.note) {
+    options.note(note);
+  }
   return scene;
 }
 

@@ -56,8 +56,10 @@ std::string loadCheckpoint(const std::filesystem::path& file, std::span<dynamics
 /// @brief The scene a resumed run uses: the one given, else the one the
 /// checkpoint names, else (it moved) the copy in the output folder. It must be
 /// the checkpoint's scene, and the folder's copy too (a checkpoint copied in
-/// from another run is not this folder's), unless `options.force`.
-std::string resumeScene(const RunOptions& options);
+/// from another run is not this folder's), unless `options.force`. A forced
+/// resume's note goes to `forcedNote` where given (the run says it once its
+/// own checks pass), else to `options.note`.
+std::string resumeScene(const RunOptions& options, std::string* forcedNote = nullptr);
 
 extern template void writeCheckpoint<2>(const std::filesystem::path&, const std::string&, std::uint64_t,
                                         const dynamics::World<2>&, const std::string&);
