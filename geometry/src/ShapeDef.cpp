@@ -122,8 +122,9 @@ namespace {
 
 // The level set of a mesh definition's mesh (read by the caller, scaled).
 Grid<3> meshGrid(const ShapeDef<3>& def, const TriangleMesh& mesh) {
-  checkShapeSize(mesh.bounds().size().minCoeff());
-  const double h = spacingFor(def, mesh.bounds().size().minCoeff());
+  const double smallest = mesh.bounds().size().minCoeff();
+  checkShapeSize(smallest);
+  const double h = spacingFor(def, smallest);
   checkMeshResolution(mesh, h);
   return meshToLevelSet(mesh, h, kDefaultPaddingCells, def.meshFile);
 }

@@ -166,7 +166,7 @@ class Runner {
       }
     }
     if (!resume) checkRunLimits(scene_, options_, world, end_, sw_.initialMass);
-    if (resume) checkGlobalDamping(scene_, world);  // (a forced resume may have changed it)
+    checkGlobalDamping(scene_, world);
     // The outputs' schedules are the run's own (a resume's --steps moves
     // this process's end, not the instants the run records).
     checkpoints_ = checkpointSchedule(scene_, outputEnd(), world);

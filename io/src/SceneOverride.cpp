@@ -115,13 +115,15 @@ bool sameData(const toml::node& a, const toml::node& b, const std::vector<std::s
   return x.str() == y.str();
 }
 
-// The entries of an array of tables (`[[particles]]`), but those `skip` leaves out.
-template <class Skip>
-std::vector<const toml::node*> entries(const toml::node* array, Skip skip) {
+// The entries of an array of tables (`[[particles]]`), but feeds (`placement
+// = "feed"`) where `skipFeeds`.
+std::vector<const toml::node*> entries(const toml::node* array, bool skipFeeds) {
   std::vector<const toml::node*> out;
   if (const toml::array* a = array ? array->as_array() : nullptr) {
     for (const toml::node& n : *a) {
-      if (!skip(n)) out.push_back(&n);
+      const toml::table* t = n.as_table();
+      const auto* placement = t ? t->get_as<std::string>("placement") : nullptr;
+      if (!(skipFeeds && placement && placement->get() == "feed")) out.push_back(&n);
     }
   }
   return out;
@@ -154,15 +156,16 @@ std::optional<std::pair<std::string, int>> forcedResumeEdit(const std::string& b
   }
   // The particle groups but feeds (a feed may be given more grains to come),
   // and the planes but their own contact materials (as [contact] may change).
-  const auto isFeed = [](const toml::node& n) {
-    const toml::table* t = n.as_table();
-    return t && t->get_as<std::string>("placement") && t->get_as<std::string>("placement")->get() == "feed";
+  struct Entries {
+    std::string key;
+    bool skipFeeds;
+    std::vector<std::string> ignored;
   };
-  const auto none = [](const toml::node&) { return false; };
-  for (const auto& [key, ignored] : {std::pair<std::string, std::vector<std::string>>{"particles", {}},
-                                     {"planes", {"material"}}}) {
-    const std::vector<const toml::node*> x = key == "particles" ? entries(a.get(key), isFeed) : entries(a.get(key), none);
-    const std::vector<const toml::node*> y = key == "particles" ? entries(b.get(key), isFeed) : entries(b.get(key), none);
+  for (const Entries& e : {Entries{"particles", true, {}}, Entries{"planes", false, {"material"}}}) {
+    const std::string& key = e.key;
+    const std::vector<std::string>& ignored = e.ignored;
+    const std::vector<const toml::node*> x = entries(a.get(key), e.skipFeeds);
+    const std::vector<const toml::node*> y = entries(b.get(key), e.skipFeeds);
     for (std::size_t k = 0; k < std::max(x.size(), y.size()); ++k) {
       if (k < x.size() && k < y.size() && sameData(*x[k], *y[k], ignored)) continue;
       return std::pair(key, k < y.size() ? lineOf(y[k]) : lineOf(b.get(key)));

@@ -75,6 +75,15 @@ RunEnd runEnd(const SceneDef<D>& scene, const RunOptions& options, const dynamic
   return e;
 }
 
+namespace {
+// An input error at the scene's key `key` (its line where the reader kept it).
+template <int D>
+InputError keyError(const SceneDef<D>& scene, const std::string& key, const std::string& what) {
+  const auto line = scene.keyLines.find(key);
+  return InputError(scene.file, line != scene.keyLines.end() ? line->second : 0, key, what);
+}
+}  // namespace
+
 template <int D>
 void checkGlobalDamping(const SceneDef<D>& scene, const dynamics::World<D>& world) {
   // Global damping is a force -C_g m v of the step's start: past C_g dt = 1 a
@@ -83,21 +92,17 @@ void checkGlobalDamping(const SceneDef<D>& scene, const dynamics::World<D>& worl
   // during a run, so its start (or a resume's) is where C_g dt is largest.
   const double dt = world.dt();
   if (!scene.world.globalDamping || !(dt > 0.0) || *scene.world.globalDamping * dt < 1.0) return;
-  const auto line = scene.keyLines.find("effects.global_damping");
-  throw InputError(scene.file, line != scene.keyLines.end() ? line->second : 0, "effects.global_damping",
-                   "global_damping = " + numberText(*scene.world.globalDamping) + " 1/s times the time step (" +
-                       roughText(dt) + " s) is " + roughText(*scene.world.globalDamping * dt) +
-                       ": it must stay below 1 (an explicit damping force that strong reverses the velocities it "
-                       "damps, and past 2 makes energy); lower it");
+  throw keyError(scene, "effects.global_damping",
+                 "global_damping = " + numberText(*scene.world.globalDamping) + " 1/s times the time step (" +
+                     roughText(dt) + " s) is " + roughText(*scene.world.globalDamping * dt) +
+                     ": it must stay below 1 (an explicit damping force that strong reverses the velocities it "
+                     "damps, and past 2 makes energy); lower it");
 }
 
 template <int D>
 void checkRunLimits(const SceneDef<D>& scene, const RunOptions& options, const dynamics::World<D>& world,
                     const RunEnd& end, double initialMass) {
-  const auto refuse = [&](const std::string& key, const std::string& what) {
-    const auto line = scene.keyLines.find(key);
-    throw InputError(scene.file, line != scene.keyLines.end() ? line->second : 0, key, what);
-  };
+  const auto refuse = [&](const std::string& key, const std::string& what) { throw keyError(scene, key, what); };
   const auto num = [](double v) { return numberText(v); };
   const double dt = world.dt();
   if (!(dt > 0.0)) return;
@@ -113,7 +118,6 @@ void checkRunLimits(const SceneDef<D>& scene, const RunOptions& options, const d
                  " s), over the limit of 1e9 per run; run it in parts with --steps and --resume");
     }
   }
-  checkGlobalDamping(scene, world);
   if (scene.output.checkpointEvery > 0.0 && scene.output.checkpointEvery < dt) {
     refuse("output.checkpoint_every", "checkpoint_every = " + num(scene.output.checkpointEvery) +
                                           " s is shorter than one time step (dt = " + num(dt) + " s)");

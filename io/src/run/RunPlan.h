@@ -47,8 +47,8 @@ void checkRunLimits(const SceneDef<D>& scene, const RunOptions& options, const d
                     const RunEnd& end, double initialMass);
 
 /// @brief Refuses (InputError at `effects.global_damping`) a global damping
-/// C_g with C_g dt >= 1 at the world's time step: a new run's (checkRunLimits
-/// calls it) or a resumed one's.
+/// C_g with C_g dt >= 1 at the world's time step: a new run's or a resumed
+/// one's (a forced resume may have changed it).
 template <int D>
 void checkGlobalDamping(const SceneDef<D>& scene, const dynamics::World<D>& world);
 
