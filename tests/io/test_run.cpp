@@ -644,6 +644,14 @@ io::RunOptions discRun(const TempDir& dir, const std::string& outputKeys, std::u
   return o;
 }
 
+// The notes a run of `o` gives, in order.
+std::vector<std::string> runNotes(io::RunOptions o) {
+  std::vector<std::string> notes;
+  o.note = [&](const std::string& n) { notes.push_back(n); };
+  io::runScene(o);
+  return notes;
+}
+
 // A run of a number of steps records as many intervals as it asks for when
 // they do not divide the steps: 300 steps in 80 frames and 7 history rows
 // (before, intervals rounded down to whole steps made 101 frames and 9 rows:
@@ -680,10 +688,7 @@ TEST(Run, RecordsOnAStepClockAreAsManyAsAskedFor) {
 // fragment's id, given later, may be tracked: only ids never given are).
 TEST(Run, ATrackedIdThatNeverExistedIsNoted) {
   TempDir dir("track_never");
-  io::RunOptions o = discRun(dir, "frames = 2\ntrack = [0, 99]", 3);
-  std::vector<std::string> notes;
-  o.note = [&](const std::string& n) { notes.push_back(n); };
-  io::runScene(o);
+  const std::vector<std::string> notes = runNotes(discRun(dir, "frames = 2\ntrack = [0, 99]", 3));
   ASSERT_EQ(notes.size(), 1u);
   EXPECT_EQ(notes[0], "output.track: no particle of this run had the id 99 (ids given so far: 0 to 0); tracks.csv "
                       "has no rows for it");
@@ -695,10 +700,8 @@ TEST(Run, ATrackedIdThatNeverExistedIsNoted) {
 // their key's line (they are kept: a resume with --steps may reach them).
 TEST(Run, DistributionTimesPastTheEndAreNoted) {
   TempDir dir("distribution_times_past");
-  io::RunOptions o = discRun(dir, "frames = 2\ndistribution_times = [0.002, 0.02, 0.5]", 3);
-  std::vector<std::string> notes;
-  o.note = [&](const std::string& n) { notes.push_back(n); };
-  io::runScene(o);
+  const io::RunOptions o = discRun(dir, "frames = 2\ndistribution_times = [0.002, 0.02, 0.5]", 3);
+  const std::vector<std::string> notes = runNotes(o);
   ASSERT_EQ(notes.size(), 1u);
   const std::string text = readFile(o.scene);
   const auto line = 1 + std::count(text.begin(), text.begin() + std::ptrdiff_t(text.find("distribution_times")), '\n');
