@@ -1142,7 +1142,9 @@ void World<D>::run(std::uint64_t n) {
 template <int D>
 void World<D>::saveState(
     StateWriter& out, const std::function<std::uint32_t(const std::shared_ptr<const geometry::Shape<D>>&)>& shapeIndex) const {
-  out.putTag("world 4");  // 3: with the time-step limits and density scaling; 4: whether the contacts are current
+  // 3: with the time-step limits and density scaling; 4: whether the
+  // contacts are current; 5: the tools' poses.
+  out.putTag("world 5");
   out.put(std::int32_t(D));
   out.put(std::uint64_t(planes_.size()));
   out.put(std::uint64_t(tools_.size()));
@@ -1190,6 +1192,10 @@ void World<D>::saveState(
       out.put(servo->def().targetForce);
     }
   }
+  for (const ToolPose<D>& pose : toolPoses_) {
+    out.put(pose.position);
+    out.put(pose.orientation);
+  }
   for (const auto& e : effects_) {
     out.putString(e->name());
     e->saveState(out);
@@ -1200,7 +1206,7 @@ void World<D>::saveState(
 template <int D>
 void World<D>::loadState(StateReader& in,
                          const std::function<std::shared_ptr<const geometry::Shape<D>>(std::uint32_t)>& shapeAt) {
-  in.expectTag("world 4");
+  const bool withPoses = in.expectTag({"world 5", "world 4"}) == 0;
   const auto mismatch = [](const std::string& what, std::uint64_t saved, std::uint64_t here) {
     throw std::runtime_error("checkpoint does not fit this scene: " + what + " " + std::to_string(saved) +
                              " in the checkpoint, " + std::to_string(here) + " in the scene");
@@ -1251,6 +1257,15 @@ void World<D>::loadState(StateReader& in,
       const double displacement = in.get<double>(), speed = in.get<double>(), target = in.get<double>();
       servo->setTargetForce(target);
       servo->restore(displacement, speed);
+    }
+  }
+  savedToolPoses_.clear();
+  if (withPoses) {
+    savedToolPoses_.resize(tools_.size());
+    for (std::size_t k = 0; k < tools_.size(); ++k) {
+      savedToolPoses_[k].shape = tools_[k].shape.get();
+      savedToolPoses_[k].position = in.get<Vec<D>>();
+      savedToolPoses_[k].orientation = in.get<Orientation<D>>();
     }
   }
   for (auto& e : effects_) {

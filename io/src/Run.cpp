@@ -167,6 +167,7 @@ class Runner {
     }
     if (!resume) checkRunLimits(scene_, options_, world, end_, sw_.initialMass);
     checkGlobalDamping(scene_, world);
+    if (resume) checkToolPoses(scene_, world);
     // The outputs' schedules are the run's own (a resume's --steps moves
     // this process's end, not the instants the run records).
     checkpoints_ = checkpointSchedule(scene_, outputEnd(), world);

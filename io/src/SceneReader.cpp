@@ -422,7 +422,8 @@ class SceneReader {
 
   void readTools(TomlReader& top) {
     for (const toml::table* t : top.tables("tools")) {
-      TomlReader r(*t, file_, "tools[" + std::to_string(scene_.tools.size()) + "]");
+      const std::string path = "tools[" + std::to_string(scene_.tools.size()) + "]";
+      TomlReader r(*t, file_, path);
       dynamics::ToolDef<D> tool;
       tool.name = r.string("name", "tool" + std::to_string(scene_.tools.size()));
       checkName(r, tool.name);
@@ -430,6 +431,9 @@ class SceneReader {
       if (shapes.size() != 1) r.fail("shape", "a tool has exactly one shape");
       tool.shape = scene_.shapes[shapes[0]];
       const toml::table* m = r.optionalTable("motion");
+      // (For a resume's check of the tools' poses: checkToolPoses.)
+      scene_.keyLines[path] = int(t->source().begin.line);
+      if (m) scene_.keyLines[r.pathOf("motion")] = int(m->source().begin.line);
       // (Read first: the jaw crusher's motion poses it. No motion table: fixed.)
       const std::string type = m ? TomlReader(*m, file_, r.pathOf("motion")).string("type") : std::string("fixed");
       // Where the shape's build frame sits at the start (not for the jaw crusher,

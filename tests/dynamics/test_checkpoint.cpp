@@ -153,8 +153,13 @@ void checkpointRoundTrip(bool frictionLate = false) {
 
   // Restored into a fresh world and continued.
   auto resumed = setup.build();
+  EXPECT_TRUE(resumed->savedToolPoses().empty());
   restore(*resumed, saved);
   expectSameState(*first, *resumed);
+  // The platen's pose as the saved run had it (a resume compares it with its own motion's).
+  ASSERT_EQ(resumed->savedToolPoses().size(), 1u);
+  EXPECT_EQ(resumed->savedToolPoses()[0].position, first->toolPoses()[0].position);
+  EXPECT_NE(first->toolPoses()[0].position[1], 0.2) << "the platen moved from its start";
   resumed->run(after);
   expectSameState(*straight, *resumed);
   EXPECT_GT(resumed->particles().size(), 12u);  // the feed kept dropping

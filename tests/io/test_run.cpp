@@ -1034,6 +1034,43 @@ TEST(Run, AForcedResumeChecksTheGlobalDamping) {
   EXPECT_EQ(readFile(dir.path / "out" / "history.csv"), history);
 }
 
+// A tool's motion may change on a forced resume past the checkpoint, not
+// before it: a scene that puts the tool elsewhere at the checkpoint's time
+// (here a platen's speed, edited) is refused at its motion's line, and the
+// run's outputs stay as they were; one that changes it only after (the
+// platen's travel, ending later than the checkpoint) resumes.
+TEST(Run, AForcedResumeKeepsEachToolOnItsPathToTheCheckpoint) {
+  TempDir dir("forced_tool");
+  const std::string text = std::string(kDiscScene) +
+                           "\n[[tools]]\nname = \"ram\"\nshape = \"disc\"\nposition = [0.1, 0.1]\n[tools.motion]\n"
+                           "type = \"platen\"\ndirection = [0.0, -1.0]\nspeed = 0.1\ntravel = 1.0\n";
+  const fs::path scene = writeScene(dir.path, text);
+  io::RunOptions run;
+  run.scene = scene.string();
+  run.outDir = (dir.path / "out").string();
+  run.steps = 3;
+  io::runScene(run);
+  const std::string history = readFile(dir.path / "out" / "history.csv");
+  const int motionLine = int(std::count(text.begin(), text.begin() + std::ptrdiff_t(text.find("[tools.motion]")), '\n')) + 1;
+  io::RunOptions resume;
+  resume.resumeDir = run.outDir;
+  resume.force = true;
+  resume.steps = 3;
+  std::ofstream(scene, std::ios::trunc) << editScene(text, "speed = 0.1", "speed = 0.2");
+  try {
+    io::runScene(resume);
+    ADD_FAILURE() << "resumed";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.line(), motionLine) << e.what();
+    EXPECT_EQ(e.key(), "tools[0].motion") << e.what();
+    EXPECT_NE(e.problem().find("puts tool 'ram' up to "), std::string::npos) << e.what();
+    EXPECT_NE(e.problem().find("must follow the run's path up to the checkpoint"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(readFile(dir.path / "out" / "history.csv"), history);
+  std::ofstream(scene, std::ios::trunc) << editScene(text, "travel = 1.0", "travel = 0.5");
+  EXPECT_EQ(io::runScene(resume).steps, 6u);
+}
+
 // A run given --steps and stopped part-way ends, resumed without --steps,
 // where the uninterrupted run ends (its checkpoint keeps its end), with the
 // same outputs; resumed again, it is at its end: nothing is run or written.

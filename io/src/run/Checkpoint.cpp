@@ -187,7 +187,8 @@ std::string resumeScene(const RunOptions& options, std::string* forcedNote) {
   // are functions of time from the start (a new velocity moved a platen 1.2
   // mm into the grains in one step). (A feed may be given more grains, a
   // tool key frames past the checkpoint, as unloading added after a
-  // loading: docs/outputs.md.)
+  // loading: docs/outputs.md; Run checks the tools' poses at the
+  // checkpoint against its own, checkToolPoses.)
   if (copyMatches) {
     if (const auto edit = forcedResumeEdit(readWholeFile(copy.string()), readWholeFile(scene))) {
       throw InputError(scene, edit->second, edit->first,

@@ -100,6 +100,31 @@ void checkGlobalDamping(const SceneDef<D>& scene, const dynamics::World<D>& worl
 }
 
 template <int D>
+void checkToolPoses(const SceneDef<D>& scene, const dynamics::World<D>& world) {
+  const auto& saved = world.savedToolPoses();
+  const auto& now = world.toolPoses();
+  for (std::size_t k = 0; k < saved.size() && k < now.size(); ++k) {
+    // How far a point of the tool moves from the saved pose to this one, at
+    // most: the origin's move and the turn over the tool's reach from it
+    // (its node tree's root sphere, about the body frame's origin).
+    const geometry::Shape<D>& shape = *world.tools()[k].shape;
+    const auto& root = shape.nodeTree().cells;
+    const double reach = root.empty() ? shape.boundingRadius() : root[0].centre.norm() + root[0].radius;
+    const geometry::Mat<D> turn =
+        dynamics::Rotation<D>::matrix(now[k].orientation) - dynamics::Rotation<D>::matrix(saved[k].orientation);
+    const double moved = (now[k].position - saved[k].position).norm() + turn.norm() * reach;
+    // (Far below any contact overlap; the same motion gives the same pose bit for bit.)
+    if (!(moved > 1e-9 * (reach + now[k].position.norm()))) continue;
+    const std::string key = "tools[" + std::to_string(k) + "]";
+    throw keyError(scene, scene.keyLines.count(key + ".motion") ? key + ".motion" : key,
+                   "puts tool '" + world.tools()[k].name + "' up to " + roughText(moved) +
+                       " m from where the run had it at the checkpoint (t = " + roughText(world.time()) +
+                       " s): a resumed run's tools must follow the run's path up to the checkpoint (a motion may "
+                       "change after it, as key frames added past it), or the tool would jump into the grains");
+  }
+}
+
+template <int D>
 void checkRunLimits(const SceneDef<D>& scene, const RunOptions& options, const dynamics::World<D>& world,
                     const RunEnd& end, double initialMass) {
   const auto refuse = [&](const std::string& key, const std::string& what) { throw keyError(scene, key, what); };
@@ -171,6 +196,7 @@ std::vector<std::unique_ptr<Recorder<D>>> makeRecorders(const RunContext<D>& con
 #define LSDEM_RUN_PLAN(D)                                                                                          \
   template RunEnd runEnd<D>(const SceneDef<D>&, const RunOptions&, const dynamics::World<D>&);                     \
   template void checkGlobalDamping<D>(const SceneDef<D>&, const dynamics::World<D>&);                               \
+  template void checkToolPoses<D>(const SceneDef<D>&, const dynamics::World<D>&);                                   \
   template void checkRunLimits<D>(const SceneDef<D>&, const RunOptions&, const dynamics::World<D>&, const RunEnd&, \
                                   double);                                                                         \
   template Schedule checkpointSchedule<D>(const SceneDef<D>&, const RunEnd&, const dynamics::World<D>&);           \

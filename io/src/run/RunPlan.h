@@ -52,6 +52,14 @@ void checkRunLimits(const SceneDef<D>& scene, const RunOptions& options, const d
 template <int D>
 void checkGlobalDamping(const SceneDef<D>& scene, const dynamics::World<D>& world);
 
+/// @brief Refuses (InputError at the tool's `motion`, or its table) a resume
+/// whose scene puts a tool elsewhere at the checkpoint's time than the
+/// checkpointed run had it (World::savedToolPoses): an edited motion,
+/// resumed with --force, would move the tool into the grains at once. A
+/// motion may change past the checkpoint (key frames added after it).
+template <int D>
+void checkToolPoses(const SceneDef<D>& scene, const dynamics::World<D>& world);
+
 /// @brief The checkpoints' schedule: every `[output] checkpoint_every` (s; in
 /// whole steps on a step clock), first after one interval.
 template <int D>

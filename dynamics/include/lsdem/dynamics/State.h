@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -103,6 +104,18 @@ class StateReader {
   void expectTag(const char* tag) {
     const std::string got = getString();
     if (got != tag) fail(std::string("section '") + tag + "', found '" + got + "'");
+  }
+  /// @brief Reads a tag that must be one of `tags` and returns its index
+  /// (throws std::runtime_error when it is none of them): a section whose
+  /// later versions add to it.
+  std::size_t expectTag(std::initializer_list<const char*> tags) {
+    const std::string got = getString();
+    std::size_t k = 0;
+    for (const char* tag : tags) {
+      if (got == tag) return k;
+      ++k;
+    }
+    fail(std::string("section '") + *tags.begin() + "' or a later version, found '" + got + "'");
   }
   bool atEnd() const { return pos_ == size_; }
 

@@ -410,8 +410,8 @@ class World {
   // ---- checkpoints ----
   /// @brief Writes the state between steps: particles (each shape as the number
   /// `shapeIndex` gives it), contact records and shear history, boundary loads,
-  /// servo states, time, step count, time step, energy ledger, removals, stage
-  /// times and every effect's state, in order.
+  /// servo states and the tools' poses, time, step count, time step, energy
+  /// ledger, removals, stage times and every effect's state, in order.
   void saveState(StateWriter& out,
                  const std::function<std::uint32_t(const std::shared_ptr<const geometry::Shape<D>>&)>& shapeIndex) const;
   /// @brief Restores what saveState wrote into a world built from the same
@@ -475,6 +475,11 @@ class World {
   const BroadPhase<D>& broadPhase() const { return broad_; }
   const std::vector<ToolDef<D>>& tools() const { return tools_; }
   const std::vector<ToolPose<D>>& toolPoses() const { return toolPoses_; }
+  /// @brief The tools' poses at the checkpoint's time as the checkpointed run
+  /// had them (loadState; empty before a load, and after a load of a state
+  /// saved before they were kept). A resume whose tools' motions put a tool
+  /// elsewhere then (an edited motion, forced) would move it at once.
+  const std::vector<ToolPose<D>>& savedToolPoses() const { return savedToolPoses_; }
   const std::vector<Plane<D>>& planes() const { return planes_; }
   const std::vector<std::string>& planeNames() const { return planeNames_; }
   /// @brief Loads of the particles on planes and tools from the last step.
@@ -581,6 +586,7 @@ class World {
   void dropParticle(std::size_t index);
   std::vector<ToolDef<D>> tools_;
   std::vector<ToolPose<D>> toolPoses_;
+  std::vector<ToolPose<D>> savedToolPoses_;  // loadState's (savedToolPoses)
   std::vector<Plane<D>> planes_;
   std::vector<Plane<D>> planesAtStart_;
   std::vector<std::string> planeNames_;
