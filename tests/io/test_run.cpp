@@ -1034,6 +1034,43 @@ TEST(Run, AForcedResumeChecksTheGlobalDamping) {
   EXPECT_EQ(readFile(dir.path / "out" / "history.csv"), history);
 }
 
+// A run whose every particle breaks into fines runs on to its end with
+// none left (a feed could still come): nothing sets a step, and history.csv
+// leaves critical_dt_s empty, as summary.json writes null. (It was read as
+// a non-finite value, "the simulation diverged", exit 1.)
+TEST(Run, ARunWithEveryParticleTurnedToFinesRunsToItsEnd) {
+  TempDir dir("all_fines");
+  const fs::path scene = writeScene(
+      dir.path, std::string(kDiscScene) + "\n[effects.breakage]\nmin_volume = 1.0\n[[effects.breakage.manual]]\n"
+                                          "particle = 0\ntime = 0.0\npoint = [0.0, 0.0099]\n");
+  io::RunOptions run;
+  run.scene = scene.string();
+  run.outDir = (dir.path / "out").string();
+  run.steps = 4;
+  const io::RunResult r = io::runScene(run);
+  EXPECT_EQ(r.steps, 4u);
+  std::istringstream history(readFile(dir.path / "out" / "history.csv"));
+  std::string line;
+  std::vector<std::string> rows;
+  while (std::getline(history, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 6u);
+  const auto cell = [](const std::string& row, int k) {
+    std::size_t at = 0;
+    for (int c = 0; c < k; ++c) at = row.find(',', at) + 1;
+    return row.substr(at, row.find(',', at) - at);
+  };
+  EXPECT_EQ(cell(rows[0], 3), "critical_dt_s");
+  EXPECT_EQ(cell(rows[0], 12), "particles");
+  EXPECT_GT(std::stod(cell(rows[1], 3)), 0.0);  // step 0: the disc
+  EXPECT_EQ(cell(rows[1], 12), "1");
+  for (std::size_t k = 2; k < rows.size(); ++k) {
+    EXPECT_EQ(cell(rows[k], 3), "") << rows[k];
+    EXPECT_EQ(cell(rows[k], 12), "0") << rows[k];
+  }
+  EXPECT_NE(readFile(dir.path / "out" / "summary.json").find("\"critical_dt\": null"), std::string::npos);
+  EXPECT_NE(readFile(dir.path / "out" / "removed.csv").find(",fines"), std::string::npos);
+}
+
 // A tool's motion may change on a forced resume past the checkpoint, not
 // before it: a scene that puts the tool elsewhere at the checkpoint's time
 // (here a platen's speed, edited) is refused at its motion's line, and the

@@ -10,6 +10,8 @@
 #include "lsdem/breakage/Breakage.h"
 #include "lsdem/io/RunSummary.h"
 
+#include <cmath>
+
 namespace lsdem::io {
 
 namespace {
@@ -47,8 +49,11 @@ void HistoryRecorder<D>::write(const World& w) {
   const dynamics::EnergyLedger& e = w.energy();
   // What set the time step (a grain still to come has no id: -1).
   const dynamics::TimeStepLimit& lim = stepLimit(w);
+  // (With no particle left nothing sets a step: the critical step is
+  // infinite, an empty cell, as summary.json's null; not a divergence.)
+  const double critical = w.criticalDt();
   std::string row = std::to_string(w.steps()) + "," + num(w.time()) + "," + num(w.dt()) + "," +
-                    num(w.criticalDt()) + "," +
+                    (std::isinf(critical) && critical > 0.0 ? std::string() : num(critical)) + "," +
                     (lim.id == dynamics::kNoParent ? std::string("-1") : std::to_string(lim.id)) + "," +
                     std::to_string(lim.generation) + "," + num(lim.diameter) + "," + std::to_string(lim.nodes) + "," +
                     num(lim.mass) + "," + num(lim.stiffness) + "," + std::to_string(lim.patchNodes) + "," +
