@@ -45,6 +45,7 @@ struct Ct2lsOptions {
   std::vector<double> origin;
   double scale = 1.0;
   bool scaleGiven = false;  // --scale on the command line (else from the file's units)
+  bool gridSpacingGiven = false;
   long long minVoxels = 100;
   bool keepBorder = false;
   long long background = 0;
@@ -64,6 +65,18 @@ void requirePositive(const std::string& option, double v) {
     std::snprintf(buf, sizeof(buf), "%g", v);
     throw io::InputError(option, 0, "", std::string("must be positive, got ") + buf);
   }
+}
+
+// The grid cells across a grain (a shape's `cells_across`) lsdem accepts.
+constexpr double kMinCellsAcross = 2.0, kMaxCellsAcross = 1e4;
+// A grain's volume off its voxels' by more than this fraction is noted.
+constexpr double kVolumeNoteFraction = 0.02;
+
+// A number with `digits` significant digits ("0.05", "1.5e+05").
+std::string shortText(double v, int digits = 6) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*g", digits, v);
+  return buf;
 }
 
 std::string fixed(double v) {
@@ -123,10 +136,12 @@ Vec<3> rotationDegrees(const geometry::Mat<3>& r) {
 
 void run(const Ct2lsOptions& o) {
   // Options first, before reading anything.
-  if (o.gridSpacing > 0.0) {
+  if (o.gridSpacingGiven) {
     requirePositive("--grid-spacing", o.gridSpacing);
-  } else {
-    requirePositive("--cells-across", o.cellsAcross);
+  } else if (!(o.cellsAcross >= kMinCellsAcross && o.cellsAcross <= kMaxCellsAcross)) {
+    // (As a shape's `cells_across`: fewer cells make no grain, 1 cell gave
+    // 5x the scanned volume; more, grids no machine holds.)
+    throw io::InputError("--cells-across", 0, "", "must be in [2, 10000], got " + shortText(o.cellsAcross));
   }
   if (o.scaleGiven) requirePositive("--scale", o.scale);
   requirePositive("--max-memory", o.maxMemoryMb);
@@ -198,7 +213,7 @@ void run(const Ct2lsOptions& o) {
     std::string file;
   };
   std::vector<Written> written;
-  int skippedBorder = 0, skippedSmall = 0, skippedPieces = 0;
+  int skippedBorder = 0, skippedSmall = 0, skippedPieces = 0, noted = 0;
   const double voxelVolume = volume.spacing.prod();
   double labelSeconds = 0.0;
   for (const geometry::LabelStats& s : labels) {
@@ -217,14 +232,37 @@ void run(const Ct2lsOptions& o) {
       continue;
     }
     const std::string key = "label " + std::to_string(s.label);
+    if (o.gridSpacingGiven) {
+      // The cells --grid-spacing gives this grain, in the range --cells-across takes.
+      geometry::LabelGridOptions extent;
+      extent.cellsAcross = 1.0;
+      const double across = geometry::labelGridSpacing(volume, s, extent);
+      const double cells = across / o.gridSpacing;
+      if (!(cells >= kMinCellsAcross && cells <= kMaxCellsAcross)) {
+        throw io::InputError("--grid-spacing", 0, "",
+                             shortText(o.gridSpacing) + " m gives label " + std::to_string(s.label) + " " +
+                                 shortText(cells, 3) + " cells across its smallest extent (" + fixed(across) +
+                                 " m); a grain needs 2 to 10000" +
+                                 (cells < kMinCellsAcross ? " (lower it, or raise --min-voxels to skip small labels)"
+                                                          : " (raise it)"));
+      }
+    }
     // Memory: estimated before anything of the label is allocated.
-    const std::size_t need = geometry::labelLevelSetBytes(volume, s, gridOptions);
+    const char* resolution = o.gridSpacingGiven ? "--grid-spacing" : "--cells-across";
+    std::size_t need = 0;
+    try {
+      need = geometry::labelLevelSetBytes(volume, s, gridOptions);
+    } catch (const std::invalid_argument& e) {
+      // (A grid past what an index holds: 2^31 values.)
+      throw io::InputError(resolution, 0, "",
+                           key + ": " + e.what() + (o.gridSpacingGiven ? " (raise it)" : " (lower it)"));
+    }
     if (double(need) > o.maxMemoryMb * 1048576.0) {
-      char text[160];
+      char text[256];
       std::snprintf(text, sizeof text,
                     "needs about %.3g MB for its distance transform and grid, over --max-memory %g MB (raise it, or "
-                    "lower --cells-across)",
-                    double(need) / 1048576.0, o.maxMemoryMb);
+                    "%s %s)",
+                    double(need) / 1048576.0, o.maxMemoryMb, o.gridSpacingGiven ? "raise" : "lower", resolution);
       throw io::InputError(o.image, 0, key, text);
     }
     // Level set (one body: a label in pieces is skipped), shape and grain file.
@@ -265,6 +303,17 @@ void run(const Ct2lsOptions& o) {
         "grid %d x %d x %d, %.2f s\n",
         s.label, name.c_str(), s.voxels, w.volume, w.voxelVolume, w.centroid[0], w.centroid[1], w.centroid[2], w.nodes,
         shape->grid().dims()[0], shape->grid().dims()[1], shape->grid().dims()[2], seconds);
+    // A grain whose level set holds another volume than its voxels is
+    // under-resolved (at 2 cells across a ball came out 1.7x its voxels) or
+    // thinner than a few voxels somewhere (docs/tomography.md).
+    if (const double excess = w.volume / w.voxelVolume - 1.0; std::abs(excess) > kVolumeNoteFraction) {
+      std::printf("  note: label %u: its grain's volume is %+.1f%% of its voxels' (%s cells across its smallest extent): "
+                  "%s\n",
+                  s.label, 100.0 * excess,
+                  shortText(geometry::labelGridSpacing(volume, s, {1.0, 0.0, 0}) / shape->grid().spacing(), 3).c_str(),
+                  "too few cells (raise --cells-across or lower --grid-spacing), or a grain a voxel or two thin");
+      ++noted;
+    }
     std::fflush(stdout);
   }
   if (written.empty()) {
@@ -307,6 +356,10 @@ void run(const Ct2lsOptions& o) {
       "ct2ls: %zu grains written to %s (%.2f s), %d skipped on the border, %d below --min-voxels, %d in pieces; "
       "grains.csv and particles.toml list where they were scanned\n",
       written.size(), o.outDir.c_str(), labelSeconds, skippedBorder, skippedSmall, skippedPieces);
+  if (noted > 0) {
+    std::printf("ct2ls: notes on %d grains above: a volume more than %g%% off the voxels'\n", noted,
+                100.0 * kVolumeNoteFraction);
+  }
 }
 
 }  // namespace
@@ -322,9 +375,10 @@ void addCt2lsCommand(CLI::App& app) {
   cmd->add_option("-o,--out", opts->outDir, "folder for the grain files, grains.csv and particles.toml")->required();
   CLI::Option* cellsAcross = cmd->add_option("--cells-across", opts->cellsAcross,
                                              "grid cells across the smallest extent of each grain's voxel box (default 20)");
-  cmd->add_option("--grid-spacing", opts->gridSpacing,
-                  "grid spacing in metres for every grain (instead of --cells-across)")
-      ->excludes(cellsAcross);
+  CLI::Option* gridSpacing = cmd->add_option("--grid-spacing", opts->gridSpacing,
+                                             "grid spacing in metres for every grain (instead of --cells-across; it "
+                                             "must give each grain 2 to 10000 cells across)")
+                                  ->excludes(cellsAcross);
   cmd->add_option("--spacing", opts->spacing, "voxel size SX[,SY,SZ] in image units (overrides the file's)")
       ->delimiter(',');
   cmd->add_option("--origin", opts->origin, "centre of the first voxel X,Y,Z in image units (overrides the file's)")
@@ -343,8 +397,9 @@ void addCt2lsCommand(CLI::App& app) {
   cmd->add_option("--raw-type", opts->rawType, "raw voxel type: uint8, uint16, uint32, int8, int16, int32");
   CLI::Option* endian = cmd->add_option("--raw-endian", opts->rawEndian, "raw byte order: little (default) or big");
   cmd->add_option("--raw-header-bytes", opts->rawHeaderBytes, "bytes before the raw voxels (default 0)");
-  cmd->callback([opts, scale, endian] {
+  cmd->callback([opts, scale, endian, gridSpacing] {
     opts->scaleGiven = scale->count() > 0;
+    opts->gridSpacingGiven = gridSpacing->count() > 0;
     opts->rawEndianGiven = endian->count() > 0;
     run(*opts);
   });

@@ -155,7 +155,16 @@ TEST(Ct2ls, BadInputEndsInOneLine) {
   fails({scan, "-o", (dir / "o").string(), "--min-voxels", "100000"},
         "no grain written: all 4 labels skipped (1 on the border, 3 below --min-voxels, 0 in pieces)");
   // Bad options.
-  fails({scan, "-o", (dir / "o").string(), "--cells-across", "-3"}, "lsdem: --cells-across: must be positive, got -3");
+  fails({scan, "-o", (dir / "o").string(), "--cells-across", "-3"}, "lsdem: --cells-across: must be in [2, 10000], got -3");
+  // (1 cell across made 5x the scanned volume; a spacing of 0 was taken as none.)
+  fails({scan, "-o", (dir / "o").string(), "--cells-across", "1"}, "lsdem: --cells-across: must be in [2, 10000], got 1");
+  fails({scan, "-o", (dir / "o").string(), "--grid-spacing", "0"}, "lsdem: --grid-spacing: must be positive, got 0");
+  fails({scan, "-o", (dir / "o").string(), "--grid-spacing", "0.01"},
+        "lsdem: --grid-spacing: 0.01 m gives label 5 0.2 cells across its smallest extent (0.002 m); a grain needs 2 to "
+        "10000 (lower it, or raise --min-voxels to skip small labels)");
+  fails({scan, "-o", (dir / "o").string(), "--grid-spacing", "1e-9"},
+        "lsdem: --grid-spacing: 1e-09 m gives label 5 2e+06 cells across its smallest extent (0.002 m); a grain needs 2 "
+        "to 10000 (raise it)");
   fails({scan, "-o", (dir / "o").string(), "--raw-dims", "40,36", "--raw-type", "uint8"},
         "lsdem: --raw-dims: needs three sizes NX,NY,NZ");
   fails({scan, "-o", (dir / "o").string(), "--raw-endian", "big"}, "lsdem: --raw-endian: needs --raw-dims");
@@ -165,6 +174,29 @@ TEST(Ct2ls, BadInputEndsInOneLine) {
 }
 
 // A headerless raw file and TIFF slices give the same grain as the NRRD.
+// A grain whose level set holds another volume than its voxels is noted
+// (the sphere at 2 cells across: far too coarse), one that holds the same is not.
+TEST(Ct2ls, AGrainOffItsVoxelsVolumeIsNoted) {
+  const fs::path dir = tempDir("note");
+  io::writeNrrd((dir / "scan.nrrd").string(), threeLabels(), io::VoxelType::UInt8, false);
+  const auto run = [&](const std::string& cells) {
+    return test::runCaptured(
+        {LSDEM_BINARY, "ct2ls", (dir / "scan.nrrd").string(), "-o", (dir / "o").string(), "--cells-across", cells});
+  };
+  const test::ProcessResult coarse = run("2");
+  EXPECT_EQ(coarse.code, 0) << coarse.output;
+  EXPECT_NE(coarse.output.find("  note: label 5: its grain's volume is +"), std::string::npos) << coarse.output;
+  EXPECT_NE(coarse.output.find("% of its voxels' (2 cells across its smallest extent)"), std::string::npos)
+      << coarse.output;
+  EXPECT_NE(coarse.output.find("ct2ls: notes on 1 grains above: a volume more than 2% off the voxels'"),
+            std::string::npos)
+      << coarse.output;
+  const test::ProcessResult fine = run("20");
+  EXPECT_EQ(fine.code, 0) << fine.output;
+  EXPECT_EQ(fine.output.find("note:"), std::string::npos) << fine.output;
+  EXPECT_EQ(fine.output.find("notes on"), std::string::npos) << fine.output;
+}
+
 TEST(Ct2ls, RawAndTiffGiveTheSameGrain) {
   const fs::path dir = tempDir("formats");
   const LabelVolume v = threeLabels();
