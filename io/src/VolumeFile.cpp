@@ -623,7 +623,15 @@ void readTiffPage(TIFF* t, const std::string& file, int page, const TiffPage& p,
 
 VolumeRead readTiffStack(const std::string& file, const VolumeReadOptions& options) {
   TiffPtr t = openTiff(file, "r");
+  tiffLastError.clear();
   const int pages = int(TIFFNumberOfDirectories(t.get()));
+  // A page's directory past the end of the file (a partial copy) ends the
+  // chain early: libtiff says so, and counts the pages before it.
+  if (!tiffLastError.empty()) {
+    throw InputError(file, 0, tiffWhere(pages),
+                     "truncated or corrupt: the chain of pages breaks after page " + std::to_string(pages) + " (" +
+                         tiffLastError + ")");
+  }
   if (pages < 1) throw InputError(file, 0, "", "TIFF holds no image");
   TIFFSetDirectory(t.get(), 0);
   const TiffPage first = tiffPage(t.get(), file, 0);

@@ -145,6 +145,14 @@ TEST(Ct2ls, BadInputEndsInOneLine) {
   io::writeTiff((dir / "scan.tif").string(), v, io::VoxelType::UInt8, true);
   fails({(dir / "scan.tif").string(), "-o", (dir / "o").string()},
         (dir / "scan.tif").string() + ": the tiff file gives no voxel spacing; give --spacing");
+  // A multi-page TIFF cut short (a partial copy): refused, not read as fewer
+  // slices (3/4 of the file was read as 26 of its 34 pages, exit 0).
+  for (const double part : {0.25, 0.5, 0.75, 0.99}) {
+    const std::string tiff = test::readFile(dir / "scan.tif");
+    std::ofstream(dir / "cut.tif", std::ios::binary | std::ios::trunc) << tiff.substr(0, std::size_t(part * double(tiff.size())));
+    fails({(dir / "cut.tif").string(), "-o", (dir / "o").string(), "--spacing", "1e-4", "--keep-border"},
+          "truncated or corrupt");
+  }
   // Only background.
   LabelVolume empty = v;
   std::fill(empty.labels.begin(), empty.labels.end(), 0u);
