@@ -105,6 +105,27 @@ TEST_F(MeshIO, CoordinatesAndGridsBeyondTheirRangesAreRefused) {
               std::string::npos)
         << e.what();
   }
+  // Far from the origin against its size, single precision distorts a body
+  // (a 0.3 m cube at 1e6 m was read 8.5 % too large): refused where the
+  // rounding passes 1e-4 of its size; a metre cube 1000 m out is read.
+  for (const double offset : {1e3, 1e6}) {
+    TriangleMesh moved = cubeMesh(1.0);
+    for (Vec<3>& v : moved.vertices) v += Vec<3>(offset, 0.5 * offset, 0.0);
+    writeStl(moved, file("moved.stl"));
+    if (offset < 1e4) {
+      EXPECT_NEAR(readMesh(file("moved.stl")).signedVolume(), 1.0, 1e-3);
+      continue;
+    }
+    try {
+      readMesh(file("moved.stl"));
+      ADD_FAILURE() << "a cube 1e6 m out was read";
+    } catch (const MeshError& e) {
+      EXPECT_NE(std::string(e.what()).find("its vertices lie up to 1e+06 m from the origin on a body 1.73205 m across: "
+                                           "the mesh reader keeps single precision"),
+                std::string::npos)
+          << e.what();
+    }
+  }
   const TriangleMesh cube = readMesh(file("unit.stl"), 1.0);
   EXPECT_NO_THROW(checkMeshResolution(cube, 0.01));
   try {
