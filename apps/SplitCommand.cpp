@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -36,14 +37,15 @@ std::vector<double> parsePlane(const std::string& text, int dimension) {
   std::stringstream in(text);
   std::string item;
   while (std::getline(in, item, ',')) {
-    try {
-      std::size_t used = 0;
-      const double v = std::stod(item, &used);
-      if (used != item.size() || !std::isfinite(v)) throw std::invalid_argument(item);
-      values.push_back(v);
-    } catch (const std::exception&) {
+    // (strtod: a number too small for a normal double, 1e-320, is one
+    // still; std::stod refused it.)
+    char* end = nullptr;
+    const double v = item.empty() ? 0.0 : std::strtod(item.c_str(), &end);
+    if (item.empty() || end != item.c_str() + item.size()) {
       throw io::InputError("--plane", 0, "", "'" + item + "' is not a number");
     }
+    if (!std::isfinite(v)) throw io::InputError("--plane", 0, "", "'" + item + "' is not a finite number");
+    values.push_back(v);
   }
   if (int(values.size()) != dimension + 1) {
     throw io::InputError("--plane", 0, "",
@@ -59,8 +61,15 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
   const std::vector<double> p = parsePlane(opts.plane, D);
   geometry::Vec<D> n;
   for (int a = 0; a < D; ++a) n[a] = p[std::size_t(a)];
-  const double d = p[std::size_t(D)];
-  if (!(n.norm() > 0.0)) throw io::InputError("--plane", 0, "", "the plane normal is zero");
+  // Normalised (as a scene's normals: components near the ends of the
+  // double range keep their direction), the offset with it.
+  const double length = n.stableNorm();
+  if (!(length > 0.0)) throw io::InputError("--plane", 0, "", "the plane normal is zero");
+  n /= length;
+  const double d = p[std::size_t(D)] / length;
+  if (!std::isfinite(d) || !n.allFinite()) {
+    throw io::InputError("--plane", 0, "", "the plane n.x = d lies farther than any shape can reach (d / |n| overflows)");
+  }
 
   const std::shared_ptr<const geometry::Shape<D>> shape = io::buildDeclaredShape<D>(decl);
   // The plane n . x = d in the declared (grid) frame, moved to the body frame:

@@ -51,6 +51,9 @@ Vec<D> unitVec(TomlReader& r, const std::string& key, const Vec<D>& fallback) {
   return u;
 }
 
+// The Weibull moduli a scene takes (breakage and chipping).
+constexpr double kMinWeibullModulus = 0.5, kMaxWeibullModulus = 100.0;
+
 // Names of planes, tools and materials become CSV column names and ParaView
 // labels: no control characters (NUL, line breaks), commas or double quotes.
 void checkNameText(TomlReader& r, const std::string& key, const std::string& name) {
@@ -589,7 +592,9 @@ class SceneReader {
     def.criterion.vonMisesStrength = r.positive("von_mises_strength", def.criterion.vonMisesStrength);
     def.weibull.referenceStrength = r.positive("reference_strength", def.weibull.referenceStrength);
     def.weibull.referenceDiameter = r.positive("reference_diameter", def.weibull.referenceDiameter);
-    def.weibull.modulus = r.positive("weibull_modulus", def.weibull.modulus);
+    // (Measured moduli of rocks and ceramics lie within 1-50; below 0.5 the
+    // drawn strengths under- and overflow: 0.001 drew a strength of 0.)
+    def.weibull.modulus = r.inRange("weibull_modulus", kMinWeibullModulus, kMaxWeibullModulus, def.weibull.modulus);
     const std::int64_t seed = r.integer("seed", std::int64_t(scene_.seed));
     if (seed < 0) r.fail("seed", "must be >= 0");
     def.seed = std::uint64_t(seed);
@@ -665,7 +670,7 @@ class SceneReader {
     breakage::ChippingDef c;
     c.weibull.referenceStrength = r.positive("reference_strength", c.weibull.referenceStrength);
     c.weibull.referenceDiameter = r.positive("reference_depth", c.weibull.referenceDiameter);
-    c.weibull.modulus = r.positive("weibull_modulus", c.weibull.modulus);
+    c.weibull.modulus = r.inRange("weibull_modulus", kMinWeibullModulus, kMaxWeibullModulus, c.weibull.modulus);
     const std::string depth = r.string("depth", "fraction");
     if (depth == "fraction") {
       c.depth = breakage::ChipDepthMode::Fraction;

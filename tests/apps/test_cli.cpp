@@ -153,6 +153,18 @@ TEST(Cli, SplitRejectsABadPlane) {
   EXPECT_NE(r.output.find("needs 3 numbers"), std::string::npos) << r.output;
   const Result nan = run("split " + example("ellipse.toml") + " --plane 1,x,0");
   EXPECT_EQ(nan.code, 2);
+  // A normal of any finite length is a direction (n.x = d as given): near
+  // the ends of the double range too (1e300 printed a 300-digit offset and
+  // failed; 1e-300 was "zero"; 1e-320 "not a number").
+  const double volume = jsonNumber(run("split " + example("ellipse.toml") + " --plane 0,1,0.1 --json").output, "volume");
+  for (const char* plane : {"0,1e300,1e299", "0,1e-300,1e-301", "0,1e-320,1e-321"}) {
+    const Result scaled = run("split " + example("ellipse.toml") + " --plane=" + plane + " --json");
+    ASSERT_EQ(scaled.code, 0) << plane << "\n" << scaled.output;
+    EXPECT_NEAR(jsonNumber(scaled.output, "volume"), volume, 1e-3 * volume) << plane;
+  }
+  const Result far = run("split " + example("ellipse.toml") + " --plane=0,1e-300,1e300");
+  EXPECT_EQ(far.code, 2) << far.output;
+  EXPECT_NE(far.output.find("lies farther than any shape can reach"), std::string::npos) << far.output;
 }
 
 // Command-line usage errors exit with 2, like bad input files (CLI11's own

@@ -188,6 +188,8 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "effects.breakage.chipping.strength", "unknown key"},
       {"chip_not_a_table", std::string(kBase) + "[effects.breakage]\nchipping = true\n", 22,
        "effects.breakage.chipping", "expected a table"},
+      {"tiny_weibull_modulus", std::string(kBase) + "[effects.breakage]\nweibull_modulus = 0.001\n", 22,
+       "effects.breakage.weibull_modulus", "must be in [0.5, 100], got 0.001"},
       {"negative_min_breakable_volume", std::string(kBase) + "[effects.breakage]\nmin_breakable_volume = -1e-9\n", 22,
        "effects.breakage.min_breakable_volume", "must be >= 0"},
       {"bad_motion", std::string(kBase) + "[[tools]]\nshape = \"disc\"\n[tools.motion]\ntype = \"wobble\"\n", 24,
