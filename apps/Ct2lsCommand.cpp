@@ -179,6 +179,14 @@ void run(const Ct2lsOptions& o) {
   }
   volume.spacing *= scale;
   volume.origin *= scale;
+  // Lengths are metres: as a mesh's coordinates, within 1e10 m of the origin
+  // (a NaN or 1e300 origin failed later as "grid spacing must be positive").
+  if (!volume.origin.allFinite() || volume.origin.cwiseAbs().maxCoeff() > 1e10) {
+    throw io::InputError(o.origin.empty() ? o.image : "--origin", 0, o.origin.empty() ? "space origin" : "",
+                         "the first voxel lies at (" + shortText(volume.origin[0]) + ", " + shortText(volume.origin[1]) +
+                             ", " + shortText(volume.origin[2]) +
+                             ") m: lsdem takes coordinates within 1e10 m of the origin (lengths are in metres)");
+  }
   const double readSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // The labels, and which of them become grains.

@@ -1,5 +1,7 @@
 #include "lsdem/io/VolumeFile.h"
 
+#include "NumberText.h"
+
 #include "lsdem/io/InputError.h"
 
 #include <tiffio.h>
@@ -14,6 +16,7 @@
 #include <fnmatch.h>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -267,6 +270,7 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
   std::vector<std::vector<double>> directions;
   std::vector<double> origin;
   bool ended = false;
+  std::map<std::string, int> seenAt;  // each field's line
   while (std::getline(in, line)) {
     ++lineNo;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -280,6 +284,11 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
     if (colon == std::string::npos) throw InputError(file, lineNo, "", "header line is not 'field: value'");
     const std::string key = lower(trim(line.substr(0, colon)));
     const std::string value = trim(line.substr(colon + 2));
+    // (A field given twice was read as its last: "type" twice then asked
+    // for an endian the first did not need.)
+    if (const auto [at, added] = seenAt.try_emplace(key == "datafile" ? "data file" : key, lineNo); !added) {
+      throw InputError(file, lineNo, key, "given twice (first on line " + std::to_string(at->second) + ")");
+    }
     if (key == "type") {
       typeName = value;
       type = nrrdType(value);
@@ -362,7 +371,9 @@ VolumeRead readNrrd(const std::string& file, const VolumeReadOptions& options) {
   for (int a = 0; a < 3; ++a) {
     if (!(sizes[std::size_t(a)] >= 1.0) || sizes[std::size_t(a)] != std::floor(sizes[std::size_t(a)]) ||
         sizes[std::size_t(a)] > 1e9) {
-      throw InputError(file, keyLine[0], "sizes", "must be positive integers");
+      throw InputError(file, keyLine[0], "sizes",
+                       "must be whole numbers from 1 to 1e9 (voxels per axis), got '" + numberText(sizes[std::size_t(a)]) +
+                           "'");
     }
     dims[a] = int(sizes[std::size_t(a)]);
   }

@@ -167,6 +167,10 @@ TEST(Ct2ls, BadInputEndsInOneLine) {
   // (1 cell across made 5x the scanned volume; a spacing of 0 was taken as none.)
   fails({scan, "-o", (dir / "o").string(), "--cells-across", "1"}, "lsdem: --cells-across: must be in [2, 10000], got 1");
   fails({scan, "-o", (dir / "o").string(), "--grid-spacing", "0"}, "lsdem: --grid-spacing: must be positive, got 0");
+  fails({scan, "-o", (dir / "o").string(), "--origin", "nan,0,0"},
+        "lsdem: --origin: the first voxel lies at (nan, 0, 0) m: lsdem takes coordinates within 1e10 m");
+  fails({scan, "-o", (dir / "o").string(), "--origin", "1e300,0,0"},
+        "lsdem: --origin: the first voxel lies at (1e+300, 0, 0) m: lsdem takes coordinates within 1e10 m");
   fails({scan, "-o", (dir / "o").string(), "--grid-spacing", "0.01"},
         "lsdem: --grid-spacing: 0.01 m gives label 5 0.2 cells across its smallest extent (0.002 m); a grain needs 2 to "
         "10000 (lower it, or raise --min-voxels to skip small labels)");

@@ -222,6 +222,10 @@ TEST(VolumeFile, BadFilesNameTheFileAndTheProblem) {
   check("negative.nrrd", "NRRD0004\ntype: int8\ndimension: 3\nsizes: 2 1 1\nencoding: raw\n\n\1\xfe",
         ": voxel (1, 0, 0) holds the negative label -2");
   check("unknown.vol", "hello", ": unknown volume format");
+  // A field twice (its last was read), sizes past the range (said to be "not positive").
+  check("twice.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\ntype: uint16\n", ":4: type: given twice (first on line 2)");
+  check("huge.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 4000000000 1 1\nencoding: raw\n\n",
+        ":4: sizes: must be whole numbers from 1 to 1e9 (voxels per axis), got '4e+09'");
   // gzip: cut short, and corrupt.
   io::writeNrrd((dir / "gz.nrrd").string(), v, io::VoxelType::UInt8, true);
   std::string gz = lsdem::test::readFile(dir / "gz.nrrd");
