@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <map>
 #include <numbers>
+#include <tuple>
 
 namespace lsdem::io {
 namespace {
@@ -501,6 +502,26 @@ class SceneReader {
       j.closedSideSetting = r.positive("closed_side_setting", j.closedSideSetting);
       j.jawLength = r.positive("jaw_length", j.jawLength);
       j.jawThickness = r.positive("jaw_thickness", j.jawThickness);
+      // The motion poses the plate by these: a plate of another size floated
+      // off the stationary jaw (jaw_length = 3 for a 1 m plate left the
+      // chamber open below it). Its extents along its principal axes (the
+      // longest its length, the shortest its thickness), from its nodes.
+      if (!shape.nodes().positions.empty()) {
+        Vec<D> lo = shape.nodes().positions.front(), hi = lo;
+        for (const Vec<D>& x : shape.nodes().positions) {
+          lo = lo.cwiseMin(x);
+          hi = hi.cwiseMax(x);
+        }
+        const Vec<D> extent = hi - lo;
+        for (const auto& [key, value, size, what] :
+             {std::tuple{"jaw_length", j.jawLength, extent.maxCoeff(), "long (its longest extent)"},
+              std::tuple{"jaw_thickness", j.jawThickness, extent.minCoeff(), "thick (its shortest extent)"}}) {
+          if (std::abs(value - size) > 0.02 * size) {
+            r.fail(key, "is " + numberText(value) + " m, but the tool's shape is " + roughText(size) + " m " + what +
+                            ": the motion poses the jaw plate by it; make them agree");
+          }
+        }
+      }
       j.stationaryBottom = vec<D>(r, "stationary_bottom", Vec<D>::Zero());
       j.stationaryAngleDegrees = r.number("stationary_angle_deg", j.stationaryAngleDegrees);
       j.phase = r.number("phase_deg", 0.0) * kDegree;

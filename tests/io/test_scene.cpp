@@ -188,6 +188,8 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
        "effects.breakage.chipping.strength", "unknown key"},
       {"chip_not_a_table", std::string(kBase) + "[effects.breakage]\nchipping = true\n", 22,
        "effects.breakage.chipping", "expected a table"},
+      {"jaw_of_another_size", std::string(kBase) + "[[tools]]\nshape = \"disc\"\n[tools.motion]\ntype = \"jaw_crusher\"\n",
+       23, "tools[0].motion.jaw_length", "is 1 m, but the tool's shape is 0.02 m long (its longest extent)"},
       {"tiny_weibull_modulus", std::string(kBase) + "[effects.breakage]\nweibull_modulus = 0.001\n", 22,
        "effects.breakage.weibull_modulus", "must be in [0.5, 100], got 0.001"},
       {"negative_min_breakable_volume", std::string(kBase) + "[effects.breakage]\nmin_breakable_volume = -1e-9\n", 22,
