@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -89,8 +91,10 @@ NodeSet<3> surfaceNodes(const Grid<3>& grid, double nodesPerCell, TriangleMesh* 
   if (contour.empty()) return nodes;
   const double estimatedNodes = contour.area() / (0.433 * target * target);
   if (estimatedNodes > kMaxNodes) {
-    throw std::invalid_argument("surface node density " + std::to_string(nodesPerCell) + " would give about " +
-                                std::to_string(estimatedNodes) + " nodes");
+    std::ostringstream what;
+    what << "surface node density " << nodesPerCell << " would give about " << std::setprecision(2) << estimatedNodes
+         << " nodes (at most " << kMaxNodes << ")";
+    throw std::invalid_argument(what.str());
   }
 
   // Isotropic remeshing to the target edge length.

@@ -24,6 +24,18 @@ ShapeDecl readShapeFile(const std::string& path) {
   return detail::readShapeTable(*shape, path, "shape");
 }
 
+namespace {
+
+// An error of a declared shape at its table's key `name` (its table when
+// the key is absent).
+InputError errorAt(const ShapeDecl& decl, const std::string& name, const std::string& what) {
+  const auto at = decl.keyLines.find(name);
+  if (at == decl.keyLines.end()) return InputError(decl.file, decl.line, decl.key, what);
+  return InputError(decl.file, at->second, decl.key + "." + name, what);
+}
+
+}  // namespace
+
 template <int D>
 std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& decl, std::vector<std::string>* notes) {
   const auto* def = std::get_if<geometry::ShapeDef<D>>(&decl.def);
@@ -65,9 +77,14 @@ std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& de
     throw InputError(decl.file, decl.resolutionLine > 0 ? decl.resolutionLine : decl.line,
                      decl.resolutionKey.empty() ? decl.key : decl.resolutionKey, e.what());
   } catch (const geometry::MeshError& e) {
-    throw InputError(decl.file, decl.line, decl.key, e.what());
+    throw errorAt(decl, "file", e.what());
   } catch (const std::invalid_argument& e) {
-    throw InputError(decl.file, decl.line, decl.key, e.what());
+    // At the key that causes it, where one does (the table's line else).
+    const std::string what = e.what();
+    const std::string polygon = "validatePolygon: ";
+    if (what.rfind(polygon, 0) == 0) throw errorAt(decl, "vertices", what.substr(polygon.size()));
+    if (what.find("node density") != std::string::npos) throw errorAt(decl, "node_density", what);
+    throw InputError(decl.file, decl.line, decl.key, what);
   }
 }
 

@@ -132,7 +132,7 @@ ShapeDecl readOfDimension(TomlReader& r, const std::string& file, int line, cons
   }
   r.finish();
   const std::string resolution = r.has("spacing") ? "spacing" : "cells_across";
-  return ShapeDecl{def, file, line, path, r.lineOf(resolution), r.pathOf(resolution)};
+  return ShapeDecl{def, file, line, path, r.lineOf(resolution), r.pathOf(resolution), r.keyLines()};
 }
 
 }  // namespace

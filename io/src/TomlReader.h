@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <functional>
 #include <initializer_list>
+#include <map>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -34,6 +35,12 @@ class TomlReader {
 
   const std::string& file() const { return file_; }
   bool has(const std::string& key) const { return table_.contains(key); }
+  /// @brief The line of each key of the table.
+  std::map<std::string, int> keyLines() const {
+    std::map<std::string, int> out;
+    for (auto&& [key, node] : table_) out[std::string(key.str())] = int(node.source().begin.line);
+    return out;
+  }
 
   /// @brief An InputError at `key` (its line when present, the table's otherwise).
   [[noreturn]] void fail(const std::string& key, const std::string& what) const {

@@ -156,15 +156,30 @@ TEST(ShapeFile, MissingFileAndTable) {
 }
 
 TEST(ShapeFile, GeometryProblemsBecomeInputErrors) {
-  // A self-intersecting (bow-tie) polygon is only seen by geometry; it is still reported at the table.
+  // A self-intersecting (bow-tie) polygon is only seen by geometry; it is
+  // still reported at its key (it was the table, with the geometry
+  // function's name in the text).
   const auto decl = io::readShapeFile(writeFile("bowtie.toml",
       "[shape]\ndimension = 2\nkind = \"polygon\"\nvertices = [[0,0],[1,1],[1,0],[0,1]]\nspacing = 0.05\n"));
   try {
     io::buildDeclaredShape<2>(decl);
     ADD_FAILURE() << "a bow-tie polygon was accepted";
   } catch (const io::InputError& e) {
-    EXPECT_EQ(e.line(), 1);
-    EXPECT_EQ(e.key(), "shape");
+    EXPECT_EQ(e.line(), 4);
+    EXPECT_EQ(e.key(), "shape.vertices");
+    EXPECT_EQ(e.problem(), "the polygon has zero area (0)");
+  }
+  // Too many nodes: at node_density.
+  try {
+    io::buildDeclaredShape<3>(io::readShapeFile(writeFile("dense.toml",
+        "[shape]\ndimension = 3\nkind = \"sphere\"\nradius = 1.0\ncells_across = 10\nnode_density = 1e9\n")));
+    ADD_FAILURE() << "1e9 nodes per cell were accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.line(), 6);
+    EXPECT_EQ(e.key(), "shape.node_density");
+    EXPECT_NE(e.problem().find("surface node density 1e+09 would give about 7.2e+20 nodes (at most 1e+08)"),
+              std::string::npos)
+        << e.what();
   }
   // A 2D declaration asked for as 3D.
   EXPECT_THROW(io::buildDeclaredShape<3>(decl), io::InputError);
@@ -185,6 +200,19 @@ TEST(ShapeFile, GeometryProblemsBecomeInputErrors) {
     EXPECT_NE(std::string(e.what()).find("gives 0.6 cells across the mesh's smallest extent (0.3 at spacing 0.5)"),
               std::string::npos)
         << e.what();
+  }
+  // A broken mesh: at its `file` (it was the table's first line).
+  geometry::TriangleMesh open = lsdem::test::boxMesh(geometry::Vec<3>::Zero(), geometry::Vec<3>(0.5, 0.4, 0.3));
+  open.faces.pop_back();
+  geometry::writeStl(open, writeFile("open_box.stl", ""));
+  try {
+    io::buildDeclaredShape<3>(io::readShapeFile(
+        writeFile("open.toml", "[shape]\ndimension = 3\nkind = \"mesh\"\n\nfile = \"open_box.stl\"\nspacing = 0.05\n")));
+    ADD_FAILURE() << "an open mesh was accepted";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.line(), 5) << e.what();
+    EXPECT_EQ(e.key(), "shape.file") << e.what();
+    EXPECT_NE(e.problem().find("is not closed"), std::string::npos) << e.what();
   }
 }
 
@@ -234,7 +262,7 @@ TEST(ShapeFile, ShapesBuiltTogetherReportTheFirstBadDeclaration) {
       io::buildDeclaredShapes<2>(decls);
       ADD_FAILURE() << "a bow-tie polygon was accepted";
     } catch (const io::InputError& e) {
-      EXPECT_EQ(e.key(), "shapes.first") << e.what();
+      EXPECT_EQ(e.key(), "shapes.first.vertices") << e.what();
     }
   }
 }

@@ -5,6 +5,7 @@
 
 #include "lsdem/geometry/ShapeDef.h"
 
+#include <map>
 #include <memory>
 #include <string>
 #include <variant>
@@ -26,6 +27,9 @@ struct ShapeDecl {
   /// spacing against the mesh's size).
   int resolutionLine = 0;
   std::string resolutionKey;
+  /// The line of each key of its table (`file`, `vertices`, `node_density`,
+  /// ...): where an error of the built shape that one key causes points.
+  std::map<std::string, int> keyLines;
   int dimension() const { return def.index() == 0 ? 2 : 3; }
 };
 
