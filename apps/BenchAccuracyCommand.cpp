@@ -52,6 +52,7 @@ void runBreakage(const AccuracyOptionsCli& o) {
   options.resume = o.resume;
   options.executable = exe.string();
   options.outDir = o.out.empty() ? (dimension == 3 ? "bench-accuracy-breakage-3d" : "bench-accuracy-breakage") : o.out;
+  requireWritableFolder("--out", options.outDir);
   options.progress = [](const std::string& line) { std::cout << "  " << line << '\n' << std::flush; };
   std::cout << "lsdem bench accuracy --breakage: " << dimension << "D, " << (o.quick ? "quick" : "full") << " ladder, "
             << (o.seeds > 0 ? std::to_string(o.seeds) : std::string(o.quick ? "2" : "6")) << " seeds, " << o.jobs
@@ -89,7 +90,9 @@ void runAccuracy(const AccuracyOptionsCli& o) {
     runBreakage(o);
     return;
   }
-  if (o.breakageOptionGiven) throw io::InputError("", 0, "--seeds/--jobs/--resume", "only with --breakage");
+  if (o.breakageOptionGiven) throw io::InputError("--seeds/--jobs/--resume", 0, "", "only with --breakage");
+  const std::string out = o.out.empty() ? "bench-accuracy" : o.out;
+  requireWritableFolder("--out", out);
   // The sweep, reporting each setting as it ends.
   study::AccuracyOptions options;
   options.dimension = o.dimension;
@@ -100,7 +103,7 @@ void runAccuracy(const AccuracyOptionsCli& o) {
   const study::AccuracyReport report = study::runAccuracyStudy(options);
 
   // The files and the Pareto front.
-  const study::AccuracyFiles files = study::writeAccuracyFiles(report, o.out.empty() ? "bench-accuracy" : o.out);
+  const study::AccuracyFiles files = study::writeAccuracyFiles(report, out);
   std::cout << "\nPareto front (cheapest setting reaching each target error):\n"
             << study::paretoText(report.pareto) << '\n';
   std::cout << "wrote " << files.csv << ", " << files.markdown << " and " << files.plots.size() << " plots";

@@ -7,6 +7,8 @@
 
 #include "Commands.h"
 
+#include "lsdem/io/InputError.h"
+
 #include "lsdem/study/Stability.h"
 
 #include <cstdio>
@@ -39,8 +41,9 @@ int runStability(const StabilityOptionsCli& o) {
     cases.push_back(c);
   }
   if (cases.empty()) {
-    throw std::invalid_argument("--case: no stability case named '" + o.caseName + "' (cases: " + names + ")");
+    throw io::InputError("--case", 0, "", "no stability case named '" + o.caseName + "' (cases: " + names + ")");
   }
+  requireWritableFolder("--out", o.out);
 
   // Run them, one row as each ends.
   std::cout << study::stabilityTableHeader() << '\n' << std::flush;

@@ -45,6 +45,15 @@ CLI::Validator atLeast(double least, double most = std::numeric_limits<double>::
 /// paraview take the same sizes.)
 std::array<int, 2> imageSize(const std::string& text);
 
+/// A number option that must be finite and > 0: io::InputError naming the
+/// option otherwise ("--spacing: must be positive, got 0").
+void requirePositive(const std::string& option, double v);
+
+/// An output folder option: made if missing, and a file can be written in
+/// it; io::InputError naming the option otherwise. Checked before a long
+/// study runs (it failed after the run).
+void requireWritableFolder(const std::string& option, const std::string& dir);
+
 /// The MPI ranks `lsdem` runs on (1 unless started by mpirun with -np > 1, in
 /// a build with LSDEM_MPI), and this process's rank.
 int mpiRanks();

@@ -59,14 +59,6 @@ struct Ct2lsOptions {
   long long rawHeaderBytes = 0;
 };
 
-void requirePositive(const std::string& option, double v) {
-  if (!(v > 0.0) || !std::isfinite(v)) {
-    char buf[64];
-    std::snprintf(buf, sizeof(buf), "%g", v);
-    throw io::InputError(option, 0, "", std::string("must be positive, got ") + buf);
-  }
-}
-
 // The grid cells across a grain (a shape's `cells_across`) lsdem accepts.
 constexpr double kMinCellsAcross = 2.0, kMaxCellsAcross = 1e4;
 // A grain's volume off its voxels' by more than this fraction is noted.

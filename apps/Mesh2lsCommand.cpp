@@ -39,15 +39,6 @@ struct Mesh2lsOptions {
   bool json = false;
 };
 
-/// A number option that must be finite and > 0.
-void requirePositive(const std::string& option, double v) {
-  if (!(v > 0.0) || !std::isfinite(v)) {
-    char buf[64];
-    std::snprintf(buf, sizeof(buf), "%g", v);
-    throw io::InputError(option, 0, "", std::string("must be positive, got ") + buf);
-  }
-}
-
 void run(const Mesh2lsOptions& o) {
   // Check the options before reading anything.
   requirePositive("--spacing", o.spacing);

@@ -171,7 +171,9 @@ TEST(Cli, SplitRejectsABadPlane) {
 // codes 105-109 before issue 16); help and version with 0.
 TEST(Cli, UsageErrorsExitWithCode2) {
   for (const char* args : {"run --no-such-option", "run", "no-such-command", "run scene.toml --threads -3",
-                           "run scene.toml --steps many", "shape", "split"}) {
+                           "run scene.toml --steps many", "shape", "split", "bench stability --case foo",
+                           "bench stability --case cascade --out /proc/lsdem_no_such_folder",
+                           "bench accuracy --seeds 5"}) {
     const Result r = run(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
     // One line, "lsdem: " first.
