@@ -29,6 +29,7 @@ struct SplitOptionsCli {
   std::string plane;
   bool json = false;
   double regridCells = 0.0;
+  std::string regridNodes = "parent_spacing";
 };
 
 // "nx,ny[,nz],d" -> D + 1 finite numbers, or a one-line error.
@@ -79,6 +80,9 @@ void runSplit(const io::ShapeDecl& decl, const SplitOptionsCli& opts) {
   surface.plane = geometry::HalfSpace<D>{geometry::Vec<D>(toGrid.rotation.transpose() * n), d - n.dot(toGrid.translation)};
   breakage::SplitOptions splitOptions;
   splitOptions.regridCells = opts.regridCells;
+  // (As a scene's breakage: the split's nodes were per new cell, 16206 for a
+  // cap of a 1744-node sphere, where a run's keep the parent's spacing.)
+  splitOptions.regridKeepsNodeSpacing = opts.regridNodes == "parent_spacing";
   const breakage::SplitResult<D> result = breakage::splitShape(*shape, surface, splitOptions);
   // The volume each fragment's own zero level set encloses (as the surfaces
   // output draws it): its mass should be rho times this.
@@ -141,7 +145,11 @@ void addSplitCommand(CLI::App& app) {
   cmd->add_option("--plane", opts->plane, "the plane n.x = d as nx,ny[,nz],d in the shape's frame, metres")->required();
   cmd->add_option("--regrid-cells", opts->regridCells,
                   "re-grid a fragment thinner than this many parent cells ([effects.breakage] regrid_cells; 0: off)")
-      ->check(atLeast<false>(0));
+      ->check(atLeast<false>(0, 1000));
+  cmd->add_option("--regrid-nodes", opts->regridNodes,
+                  "a re-gridded fragment's nodes: parent_spacing (default, as a scene's) or per_new_cell "
+                  "([effects.breakage] regrid_nodes)")
+      ->check(CLI::IsMember({"parent_spacing", "per_new_cell"}));
   cmd->add_flag("--json", opts->json, "Print JSON instead of text");
   cmd->callback([opts] {
     const io::ShapeDecl decl = io::readShapeFile(opts->file);

@@ -145,6 +145,15 @@ TEST(Cli, SplitRegridsAThinCapAndReportsEnclosedVolumes) {
   }
   const Result bad = run("split " + example("sphere.toml") + " --plane 0,0,1,0.25 --regrid-cells -1");
   EXPECT_EQ(bad.code, 2) << bad.output;
+  EXPECT_EQ(run("split " + example("sphere.toml") + " --plane 0,0,1,0.25 --regrid-cells 1001").code, 2);
+  // The cap's nodes keep the parent's spacing, as a run's fragments do
+  // (2631 nodes); per new cell they are 4x as many (10594).
+  const Result perCell =
+      run("split " + example("sphere.toml") + " --plane 0,0,1,0.25 --regrid-cells 10 --regrid-nodes per_new_cell --json");
+  ASSERT_EQ(perCell.code, 0) << perCell.output;
+  const double capNodes = jsonNumber(cap, "nodes");
+  const double perCellNodes = jsonNumber(perCell.output.substr(perCell.output.find("\"side\": -1") + 10), "nodes");
+  EXPECT_GT(perCellNodes, 3.0 * capNodes) << capNodes << " " << perCellNodes;
 }
 
 TEST(Cli, SplitRejectsABadPlane) {
