@@ -16,6 +16,7 @@
 #include "lsdem/geometry/Shape.h"
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/InputError.h"
+#include "lsdem/io/ShapeFile.h"
 #include "lsdem/io/VolumeFile.h"
 
 #include <chrono>
@@ -314,6 +315,12 @@ void run(const Ct2lsOptions& o) {
                   "too few cells (raise --cells-across or lower --grid-spacing), or a grain a voxel or two thin");
       ++noted;
     }
+    if (w.nodes < io::kFewSurfaceNodes<3>) {
+      std::printf("  note: label %u: its grain has only %zu surface nodes: contacts are found at these points only "
+                  "(--nodes-per-cell)\n",
+                  s.label, w.nodes);
+      ++noted;
+    }
     std::fflush(stdout);
   }
   if (written.empty()) {
@@ -357,7 +364,7 @@ void run(const Ct2lsOptions& o) {
       "grains.csv and particles.toml list where they were scanned\n",
       written.size(), o.outDir.c_str(), labelSeconds, skippedBorder, skippedSmall, skippedPieces);
   if (noted > 0) {
-    std::printf("ct2ls: notes on %d grains above: a volume more than %g%% off the voxels'\n", noted,
+    std::printf("ct2ls: %d notes above (a volume more than %g%% off the voxels', or few surface nodes)\n", noted,
                 100.0 * kVolumeNoteFraction);
   }
 }

@@ -16,6 +16,7 @@
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/JsonWriter.h"
+#include "lsdem/io/ShapeFile.h"
 
 #include <cmath>
 #include <cstdio>
@@ -124,6 +125,11 @@ void run(const Mesh2lsOptions& o) {
     std::printf("  %-14s %zu\n", "surface nodes", shape->nodes().size());
     std::printf("  %-14s %d x %d x %d nodes, spacing %.6g m\n", "grid", shape->grid().dims()[0], shape->grid().dims()[1],
                 shape->grid().dims()[2], o.spacing);
+  }
+  if (shape->nodes().size() < io::kFewSurfaceNodes<3>) {
+    std::fflush(stdout);
+    std::cerr << "lsdem: note: " << o.output << ": the grain has only " << shape->nodes().size()
+              << " surface nodes: contacts are found at these points only (--nodes-per-cell)\n";
   }
 }
 

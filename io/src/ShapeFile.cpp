@@ -63,10 +63,7 @@ std::shared_ptr<const geometry::Shape<D>> buildDeclaredShape(const ShapeDecl& de
                              .what());
       }
     }
-    // So few surface nodes that contacts are found at a handful of points
-    // (node_density = 1e-6 gave a sphere 4).
-    const std::size_t fewNodes = D == 2 ? 8 : 20;
-    if (notes && shape->nodes().size() < fewNodes) {
+    if (notes && shape->nodes().size() < kFewSurfaceNodes<D>) {
       notes->push_back(InputError(decl.file, decl.line, decl.key,
                                   "has only " + std::to_string(shape->nodes().size()) +
                                       " surface nodes: contacts are found at these points only (node_density)")

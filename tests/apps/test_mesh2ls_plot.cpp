@@ -93,6 +93,17 @@ TEST(Mesh2ls, CubeBecomesAGrainFile) {
   const auto coarse = io::readGrainFile<3>(bin);
   EXPECT_EQ(coarse->volume(), shape->volume());  // same grid, same mass properties
   EXPECT_LT(coarse->nodes().size(), shape->nodes().size());
+  EXPECT_EQ(b.output.find("note:"), std::string::npos) << b.output;
+
+  // A handful of nodes is written, and noted (as `lsdem shape` notes it).
+  const Result few = run("mesh2ls " + (dir / "cube.stl").string() + " --spacing 0.001 --scale 0.001 --nodes-per-cell 1e-6 -o " +
+                         (dir / "few.lsg").string());
+  ASSERT_EQ(few.code, 0) << few.output;
+  EXPECT_NE(few.output.find("lsdem: note: " + (dir / "few.lsg").string() + ": the grain has only "), std::string::npos)
+      << few.output;
+  EXPECT_NE(few.output.find(" surface nodes: contacts are found at these points only (--nodes-per-cell)"),
+            std::string::npos)
+      << few.output;
 }
 
 TEST(Mesh2ls, BadInputEndsInOneLineAndExitCode2) {

@@ -5,6 +5,7 @@
 
 #include "lsdem/geometry/ShapeDef.h"
 
+#include <cstddef>
 #include <map>
 #include <memory>
 #include <string>
@@ -32,6 +33,12 @@ struct ShapeDecl {
   std::map<std::string, int> keyLines;
   int dimension() const { return def.index() == 0 ? 2 : 3; }
 };
+
+/// Fewer surface nodes than this make a shape whose contacts are found at a
+/// handful of points (node_density = 1e-6 gave a sphere 4): noted wherever
+/// a shape is made (`lsdem shape`, `run`, `mesh2ls`, `ct2ls`).
+template <int D>
+constexpr std::size_t kFewSurfaceNodes = D == 2 ? 8 : 20;
 
 /// @brief Reads the `[shape]` table of the TOML file at `path`.
 /// Relative mesh paths are resolved against the file's folder.
