@@ -188,8 +188,7 @@ class SceneReader {
     scene_.seed = std::uint64_t(seed);
     scene_.world.checkFinite = r.boolean("check_finite", false);
     if (r.has("skin")) {
-      scene_.world.broadPhase.skin = r.number("skin");
-      if (scene_.world.broadPhase.skin < 0.0) r.fail("skin", "must be >= 0 m");
+      scene_.world.broadPhase.skin = r.nonNegative("skin", "m");
     }
     if (r.has("domain")) scene_.domain = box<D>(r, "domain");
     // Opt-in density scaling of small fragments.
@@ -546,18 +545,16 @@ class SceneReader {
       p.position = p0;
       p.orientation = q0;
       p.direction = unitVec<D>(r, "direction", -Vec<D>::UnitY());
-      p.speed = r.number("speed");
-      if (p.speed < 0.0) r.fail("speed", "must be >= 0 m/s");
+      p.speed = r.nonNegative("speed", "m/s");
       p.travel = r.positive("travel", std::numeric_limits<double>::infinity());
-      p.startTime = r.number("start", 0.0);
+      p.startTime = r.nonNegative("start", 0.0, "s");
       motion = p;
     } else if (type == "servo") {
       dynamics::ServoPlatenDef<D> s;
       s.position = p0;
       s.orientation = q0;
       s.direction = unitVec<D>(r, "direction", -Vec<D>::UnitY());
-      s.targetForce = r.number("target_force");
-      if (s.targetForce < 0.0) r.fail("target_force", "must be >= 0 N");
+      s.targetForce = r.nonNegative("target_force", "N");
       s.gain = r.positive("gain");
       s.maxSpeed = r.positive("max_speed");
       motion = dynamics::ServoPlaten<D>(s);
@@ -576,9 +573,8 @@ class SceneReader {
     if (r.has("gravity")) scene_.world.gravity = vec<D>(r, "gravity");
     scene_.keyLines[r.pathOf("gravity")] = r.lineOf("gravity");
     if (r.has("global_damping")) {
-      scene_.world.globalDamping = r.number("global_damping");
+      scene_.world.globalDamping = r.nonNegative("global_damping", "1/s");
       scene_.keyLines[r.pathOf("global_damping")] = r.lineOf("global_damping");
-      if (*scene_.world.globalDamping < 0.0) r.fail("global_damping", "must be >= 0 (1/s)");
     }
     if (r.has("local_damping")) {
       const double alpha = r.number("local_damping");
@@ -619,15 +615,13 @@ class SceneReader {
     const std::int64_t seed = r.integer("seed", std::int64_t(scene_.seed));
     if (seed < 0) r.fail("seed", "must be >= 0");
     def.seed = std::uint64_t(seed);
-    def.minVolume = r.number("min_volume", 0.0);
-    if (def.minVolume < 0.0) r.fail("min_volume", "must be >= 0");
+    def.minVolume = r.nonNegative("min_volume", 0.0, "");
     const std::int64_t minNodes = r.integer("min_nodes", 0);
     if (minNodes < 0 || minNodes > 1000000) r.fail("min_nodes", "must be in [0, 1e6]");
     def.minNodes = int(minNodes);
     def.haltBelowMinimum = r.boolean("halt_below_minimum", false);
     def.relaxNewContacts = r.boolean("relax_new_contacts", def.relaxNewContacts);
-    def.minBreakableVolume = r.number("min_breakable_volume", 0.0);
-    if (def.minBreakableVolume < 0.0) r.fail("min_breakable_volume", "must be >= 0");
+    def.minBreakableVolume = r.nonNegative("min_breakable_volume", 0.0, "");
     // Re-gridding of small fragments (Split.h, docs/breakage.md).
     def.split.regridCells = r.number("regrid_cells", def.split.regridCells);
     if (def.split.regridCells < 0.0 || def.split.regridCells > 1000.0) r.fail("regrid_cells", "must be in [0, 1000] (0 turns re-gridding off)");
@@ -665,7 +659,7 @@ class SceneReader {
       const std::int64_t id = mr.integer("particle");
       if (id < 0) mr.fail("particle", "must be a particle id >= 0");
       b.particle = std::uint64_t(id);
-      b.time = mr.number("time");
+      b.time = mr.nonNegative("time", "s");
       if (mr.has("surface")) {
         // A curved fracture surface: the zero level set of a [shapes] entry, placed in the world.
         const std::vector<std::size_t> shapes = shapeList(mr, "surface");
@@ -719,10 +713,17 @@ class SceneReader {
       c.youngsModulus = r.positive("youngs_modulus", law.youngsModulus);
       c.poissonRatio = r.inRange("poisson_ratio", 0.0, 0.499, lawIsHertz ? law.poissonRatio : c.poissonRatio);
     }
-    if (c.depth == breakage::ChipDepthMode::Fraction && r.has("hertz_factor")) {
-      r.fail("hertz_factor", "has no meaning with depth = \"fraction\" (use depth_fraction)");
+    if (c.depth == breakage::ChipDepthMode::Fraction) {
+      for (const char* key : {"hertz_factor", "youngs_modulus", "poisson_ratio"}) {
+        if (r.has(key)) r.fail(key, "has no meaning with depth = \"fraction\" (it is read with depth = \"hertz\")");
+      }
     }
     c.maxDepthFraction = openUnit("max_depth_fraction", c.maxDepthFraction);
+    if (c.depth == breakage::ChipDepthMode::Fraction && c.depthFraction > c.maxDepthFraction) {
+      r.fail(r.has("depth_fraction") ? "depth_fraction" : "max_depth_fraction",
+             "depth_fraction = " + numberText(c.depthFraction) + " is above max_depth_fraction = " +
+                 numberText(c.maxDepthFraction) + ", which caps every chip's depth: lower the one or raise the other");
+    }
     c.minDepthCells = r.number("min_depth_cells", c.minDepthCells);
     if (!(c.minDepthCells >= 0.5 && c.minDepthCells <= 1000.0)) r.fail("min_depth_cells", "must be in [0.5, 1000]");
     c.maxWidthToDepth = r.positive("max_width_to_depth", c.maxWidthToDepth);
@@ -807,8 +808,7 @@ class SceneReader {
       } else if (placement == "feed") {
         group.placement = Placement::Feed;
         group.feedPoint = vec<D>(r, "point");
-        group.feedInterval = r.number("interval", 0.0);
-        if (group.feedInterval < 0.0) r.fail("interval", "must be >= 0 s");
+        group.feedInterval = r.nonNegative("interval", 0.0, "s");
         group.feedClearance = r.number("clearance", 0.0);
         if (group.feedInterval > 0.0 && r.has("clearance")) {
           r.fail("clearance", "has no meaning with an interval (a grain drops every interval, once the point is "
@@ -820,7 +820,7 @@ class SceneReader {
         const std::int64_t count = r.integer("count", 0);
         if (count < 0) r.fail("count", "must be >= 0 (0: no limit)");
         group.count = std::uint64_t(count);
-        group.feedStart = r.number("start", 0.0);
+        group.feedStart = r.nonNegative("start", 0.0, "s");
         if (group.diameterMax > 0.0) r.fail("diameter_range", "is not available for feeds (scale the shapes instead)");
       } else {
         r.fail("placement", "must be \"list\", \"cloud\", \"grid\" or \"feed\", got \"" + placement + "\"");
@@ -915,11 +915,9 @@ class SceneReader {
                                    .what());
       }
     }
-    o.shapeMinCells = r.number("shape_min_cells", o.shapeMinCells);
-    if (o.shapeMinCells < 0.0) r.fail("shape_min_cells", "must be >= 0 cells, got " + numberText(o.shapeMinCells));
-    o.checkpointEvery = r.number("checkpoint_every", 0.0);
+    o.shapeMinCells = r.nonNegative("shape_min_cells", o.shapeMinCells, "cells");
+    o.checkpointEvery = r.nonNegative("checkpoint_every", 0.0, "s");
     scene_.keyLines[r.pathOf("checkpoint_every")] = r.lineOf("checkpoint_every");
-    if (o.checkpointEvery < 0.0) r.fail("checkpoint_every", "must be >= 0 s");
     o.progressSeconds = r.positive("progress_seconds", o.progressSeconds);
     if (r.has("track")) {
       // Global ids: whole numbers >= 0, each once (fragments and fed grains
@@ -935,8 +933,7 @@ class SceneReader {
         o.track.push_back(id);
       }
     }
-    o.trackEvery = r.number("track_every", 0.0);
-    if (o.trackEvery < 0.0) r.fail("track_every", "must be >= 0 s, got " + numberText(o.trackEvery));
+    o.trackEvery = r.nonNegative("track_every", 0.0, "s");
     if (o.trackEvery > 0.0 && o.track.empty()) r.fail("track_every", "needs `track` (the particle ids to track)");
     if (const toml::table* s = r.optionalTable("specimen")) {
       TomlReader sr(*s, file_, "output.specimen");

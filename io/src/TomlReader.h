@@ -87,6 +87,14 @@ class TomlReader {
   double positive(const std::string& key, double fallback) {
     return has(key) ? checkPositive(key, number(key)) : fallback;
   }
+  /// @brief A number >= 0 (required, or with a default); `unit` names it in
+  /// the message ("must be >= 0 s, got -1").
+  double nonNegative(const std::string& key, const std::string& unit = "") {
+    return checkNonNegative(key, number(key), unit);
+  }
+  double nonNegative(const std::string& key, double fallback, const std::string& unit) {
+    return has(key) ? checkNonNegative(key, number(key), unit) : fallback;
+  }
   /// @brief A number in [lo, hi].
   double inRange(const std::string& key, double lo, double hi, double fallback) {
     const double v = number(key, fallback);
@@ -235,6 +243,10 @@ class TomlReader {
       }
     }
     return row[b.size()];
+  }
+  double checkNonNegative(const std::string& key, double v, const std::string& unit) const {
+    if (!(v >= 0.0)) fail(key, "must be >= 0" + (unit.empty() ? "" : " " + unit) + ", got " + toString(v));
+    return v;
   }
   double checkPositive(const std::string& key, double v) const {
     if (!(v > 0.0)) fail(key, "must be positive, got " + toString(v));
