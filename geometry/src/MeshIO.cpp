@@ -386,7 +386,14 @@ TriangleMesh importWithAssimp(const std::string& path, double scale, MeshImportR
   const aiScene* scene =
       importer.ReadFile(path, aiProcess_RemoveComponent | aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
   if (scene == nullptr) {
-    const std::string why = importer.GetErrorString();
+    // (An ASCII parse error quotes the rest of the file from the bad token
+    // on, its line breaks shown as '?': the first line of it is kept.)
+    std::string why = importer.GetErrorString();
+    const std::size_t quote = why.find('"');
+    const std::size_t cut = quote == std::string::npos ? std::string::npos : why.find('?', quote);
+    const std::size_t close = why.rfind('"');
+    if (cut != std::string::npos && close != std::string::npos && close > cut) why = why.substr(0, cut) + why.substr(close);
+    if (why.size() > 300) why = why.substr(0, 300) + "...";
     throw std::runtime_error(why.empty() ? "not a readable STL, OBJ or PLY mesh" : why);
   }
   if (scene->mRootNode == nullptr || scene->mNumMeshes == 0) throw std::runtime_error("no triangles");

@@ -284,12 +284,18 @@ TEST_F(MeshIO, MalformedFilesAreRefusedNamingTheDefect) {
       {"nan.ply", nanPly, "is not finite"},
       {"inf.obj", infObj, "is not finite"},
       {"empty.stl", "", "the file is empty"},
+      // (The importer quoted the rest of the file from the bad token on.)
+      {"typo.stl",
+       "solid t\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1.O 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+       "facet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\nendsolid t\n",
+       "Cannot parse string \"O 0 0\" as a real number"},
   };
   for (const Case& c : cases) {
     const std::string path = write(c.name, c.bytes);
     const std::string error = readError(path);
     EXPECT_EQ(error.rfind("cannot read mesh file '" + path + "': ", 0), 0u) << c.name << ": " << error;
     EXPECT_NE(error.find(c.message), std::string::npos) << c.name << ": " << error;
+    EXPECT_EQ(error.find("endfacet"), std::string::npos) << c.name << ": " << error;
   }
   // The size limit.
   MeshImportLimits small;
