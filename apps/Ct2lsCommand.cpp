@@ -194,6 +194,30 @@ void run(const Ct2lsOptions& o) {
               fixed(volume.spacing[1]).c_str(), fixed(volume.spacing[2]).c_str(), unitNote.c_str(), readSeconds,
               labels.size());
   std::fflush(stdout);  // before any error line on stderr
+  // Which labels become grains (the others are skipped below, with a line),
+  // and each one's smallest extent (m), across which --cells-across counts.
+  const auto kept = [&](const geometry::LabelStats& s) {
+    return !(s.touchesBorder && !o.keepBorder) && (long long)s.voxels >= o.minVoxels;
+  };
+  const auto smallestExtent = [&](const geometry::LabelStats& s) {
+    geometry::LabelGridOptions extent;
+    extent.cellsAcross = 1.0;
+    return geometry::labelGridSpacing(volume, s, extent);
+  };
+  // --grid-spacing: every grain kept gets 2 to 10000 cells, as --cells-across
+  // gives them (checked before anything is written).
+  for (const geometry::LabelStats& s : labels) {
+    if (!o.gridSpacingGiven || !kept(s)) continue;
+    const double across = smallestExtent(s), cells = across / o.gridSpacing;
+    if (!(cells >= kMinCellsAcross && cells <= kMaxCellsAcross)) {
+      throw io::InputError("--grid-spacing", 0, "",
+                           shortText(o.gridSpacing) + " m gives label " + std::to_string(s.label) + " " +
+                               shortText(cells, 3) + " cells across its smallest extent (" + fixed(across) +
+                               " m); a grain needs 2 to 10000" +
+                               (cells < kMinCellsAcross ? " (lower it, or raise --min-voxels to skip small labels)"
+                                                        : " (raise it)"));
+    }
+  }
   std::error_code ec;
   fs::create_directories(o.outDir, ec);
   if (!fs::is_directory(o.outDir)) throw io::InputError(o.outDir, 0, "", "cannot create the output folder");
@@ -219,7 +243,7 @@ void run(const Ct2lsOptions& o) {
   double labelSeconds = 0.0;
   for (const geometry::LabelStats& s : labels) {
     // Skipped labels: one line each.
-    if (s.touchesBorder && !o.keepBorder) {
+    if (s.touchesBorder && !o.keepBorder) {  // (kept(s) is false for these and the next)
       std::printf("  label %u: skipped: touches the image border (the grain may be cut off; --keep-border keeps it)\n",
                   s.label);
       ++skippedBorder;
@@ -233,21 +257,6 @@ void run(const Ct2lsOptions& o) {
       continue;
     }
     const std::string key = "label " + std::to_string(s.label);
-    if (o.gridSpacingGiven) {
-      // The cells --grid-spacing gives this grain, in the range --cells-across takes.
-      geometry::LabelGridOptions extent;
-      extent.cellsAcross = 1.0;
-      const double across = geometry::labelGridSpacing(volume, s, extent);
-      const double cells = across / o.gridSpacing;
-      if (!(cells >= kMinCellsAcross && cells <= kMaxCellsAcross)) {
-        throw io::InputError("--grid-spacing", 0, "",
-                             shortText(o.gridSpacing) + " m gives label " + std::to_string(s.label) + " " +
-                                 shortText(cells, 3) + " cells across its smallest extent (" + fixed(across) +
-                                 " m); a grain needs 2 to 10000" +
-                                 (cells < kMinCellsAcross ? " (lower it, or raise --min-voxels to skip small labels)"
-                                                          : " (raise it)"));
-      }
-    }
     // Memory: estimated before anything of the label is allocated.
     const char* resolution = o.gridSpacingGiven ? "--grid-spacing" : "--cells-across";
     std::size_t need = 0;
@@ -308,10 +317,10 @@ void run(const Ct2lsOptions& o) {
     // under-resolved (at 2 cells across a ball came out 1.7x its voxels) or
     // thinner than a few voxels somewhere (docs/tomography.md).
     if (const double excess = w.volume / w.voxelVolume - 1.0; std::abs(excess) > kVolumeNoteFraction) {
-      std::printf("  note: label %u: its grain's volume is %+.1f%% of its voxels' (%s cells across its smallest extent): "
-                  "%s\n",
-                  s.label, 100.0 * excess,
-                  shortText(geometry::labelGridSpacing(volume, s, {1.0, 0.0, 0}) / shape->grid().spacing(), 3).c_str(),
+      std::printf("  note: label %u: its grain's volume is %.1f%% %s its voxels' (%s cells across its smallest "
+                  "extent): %s\n",
+                  s.label, 100.0 * std::abs(excess), excess > 0.0 ? "above" : "below",
+                  shortText(smallestExtent(s) / shape->grid().spacing(), 3).c_str(),
                   "too few cells (raise --cells-across or lower --grid-spacing), or a grain a voxel or two thin");
       ++noted;
     }

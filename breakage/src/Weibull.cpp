@@ -32,6 +32,10 @@ void validateWeibull(const WeibullDef& def) {
   checkPositive(def.referenceStrength, "WeibullDef", "referenceStrength");
   checkPositive(def.referenceDiameter, "WeibullDef", "referenceDiameter");
   checkPositive(def.modulus, "WeibullDef", "modulus");
+  // (Below 0.5 the drawn strengths under- and overflow: 0.001 drew 0.)
+  if (!(def.modulus >= 0.5 && def.modulus <= 100.0)) {
+    throw std::invalid_argument("WeibullDef: modulus must be in [0.5, 100], got " + std::to_string(def.modulus));
+  }
 }
 
 double failureProbability(const WeibullDef& def, double diameter, double stress) {

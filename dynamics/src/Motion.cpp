@@ -254,7 +254,7 @@ KinematicState<D> evaluate(const JawCrusher<D>& j, double t) {
   KinematicState<D> s;
   s.position = jawPoint(j, k.centre);
   s.velocity = jawVector(j, k.centreVelocity);
-  s.orientation = turn<D>(radians(j.stationaryAngleDegrees) - k.beta, Vec<3>::UnitZ());
+  s.orientation = compose<D>(turn<D>(radians(j.stationaryAngleDegrees) - k.beta, Vec<3>::UnitZ()), j.plateFrame);
   s.angularVelocity = spin<D>(-k.betaRate, Vec<3>::UnitZ());
   return s;
 }
@@ -517,7 +517,7 @@ KinematicState<D> stationaryJawState(const JawCrusher<D>& j) {
   // Centre behind the face at mid-length; body x points down the face.
   KinematicState<D> s;
   s.position = jawPoint(j, Vec<2>(-0.5 * j.jawThickness, 0.5 * j.jawLength));
-  s.orientation = turn<D>(radians(j.stationaryAngleDegrees) + kPi, Vec<3>::UnitZ());
+  s.orientation = compose<D>(turn<D>(radians(j.stationaryAngleDegrees) + kPi, Vec<3>::UnitZ()), j.plateFrame);
   return s;
 }
 

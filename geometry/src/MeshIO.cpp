@@ -85,8 +85,9 @@ class SceneCollector {
       if (error > 1e-4 * size) {
         std::ostringstream what;
         what << "its vertices lie up to " << far << " m from the origin on a body " << size
-             << " m across: the mesh reader keeps single precision (about 7 digits), which puts them up to " << error
-             << " m off (";
+             << " m across: the mesh reader keeps single precision (about 7 digits, as binary STL stores), which "
+                "can put them up to "
+             << error << " m off (";
         if (size > 0.0) {
           what << error / size << " of its size";
         } else {

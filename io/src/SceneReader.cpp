@@ -52,6 +52,32 @@ Vec<D> unitVec(TomlReader& r, const std::string& key, const Vec<D>& fallback) {
   return u;
 }
 
+// The length of the chord of `shape` through its centroid along its body
+// axis `axis` (its principal axes: 0 the longest), from its level set.
+template <int D>
+double centralChord(const geometry::Shape<D>& shape, int axis) {
+  const double h = shape.grid().spacing(), reach = shape.boundingRadius() + 2.0 * h;
+  double chord = 0.0;
+  for (const double sign : {1.0, -1.0}) {
+    const Vec<D> u = sign * Vec<D>::Unit(axis);
+    // Out in steps of a quarter cell to the first point outside, then bisected.
+    double inside = 0.0, outside = reach;
+    for (double s = 0.25 * h; s < reach; s += 0.25 * h) {
+      if (shape.value(s * u) > 0.0) {
+        outside = s;
+        break;
+      }
+      inside = s;
+    }
+    for (int k = 0; k < 40; ++k) {
+      const double mid = 0.5 * (inside + outside);
+      (shape.value(mid * u) > 0.0 ? outside : inside) = mid;
+    }
+    chord += 0.5 * (inside + outside);
+  }
+  return chord;
+}
+
 // The Weibull moduli a scene takes (breakage and chipping).
 constexpr double kMinWeibullModulus = 0.5, kMaxWeibullModulus = 100.0;
 
@@ -501,24 +527,21 @@ class SceneReader {
       j.closedSideSetting = r.positive("closed_side_setting", j.closedSideSetting);
       j.jawLength = r.positive("jaw_length", j.jawLength);
       j.jawThickness = r.positive("jaw_thickness", j.jawThickness);
+      // The plate's principal frame is (length, thickness) in 2D, (length,
+      // width, thickness) in 3D: the motion's body frame (length, face
+      // normal) takes the thickness for its normal.
+      if constexpr (D == 3) j.plateFrame = dynamics::plateFrame3D();
       // The motion poses the plate by these: a plate of another size floated
       // off the stationary jaw (jaw_length = 3 for a 1 m plate left the
-      // chamber open below it). Its extents along its principal axes (the
-      // longest its length, the shortest its thickness), from its nodes.
-      if (!shape.nodes().positions.empty()) {
-        Vec<D> lo = shape.nodes().positions.front(), hi = lo;
-        for (const Vec<D>& x : shape.nodes().positions) {
-          lo = lo.cwiseMin(x);
-          hi = hi.cwiseMax(x);
-        }
-        const Vec<D> extent = hi - lo;
-        for (const auto& [key, value, size, what] :
-             {std::tuple{"jaw_length", j.jawLength, extent.maxCoeff(), "long (its longest extent)"},
-              std::tuple{"jaw_thickness", j.jawThickness, extent.minCoeff(), "thick (its shortest extent)"}}) {
-          if (std::abs(value - size) > 0.02 * size) {
-            r.fail(key, "is " + numberText(value) + " m, but the tool's shape is " + roughText(size) + " m " + what +
-                            ": the motion poses the jaw plate by it; make them agree");
-          }
+      // chamber open below it). Its chords through its centroid along its
+      // longest and shortest principal axes (the level set's: a plate's nodes
+      // may be sparse).
+      for (const auto& [key, value, size, what] :
+           {std::tuple{"jaw_length", j.jawLength, centralChord(shape, 0), "long (its longest axis)"},
+            std::tuple{"jaw_thickness", j.jawThickness, centralChord(shape, D - 1), "thick (its shortest axis)"}}) {
+        if (std::abs(value - size) > 0.02 * size + shape.grid().spacing()) {
+          r.fail(key, "is " + numberText(value) + " m, but the tool's shape is " + roughText(size) + " m " + what +
+                          ": the motion poses the jaw plate by it; make them agree");
         }
       }
       j.stationaryBottom = vec<D>(r, "stationary_bottom", Vec<D>::Zero());

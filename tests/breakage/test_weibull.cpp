@@ -179,4 +179,10 @@ TEST(Weibull, RejectsBadParameters) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("modulus"), std::string::npos) << e.what();
   }
+  // Moduli whose strengths under- or overflow (0.001 drew 0), and past any material's.
+  for (const double m : {0.001, 0.49, 101.0}) {
+    EXPECT_THROW(validateWeibull(WeibullDef{1e6, 0.2, m}), std::invalid_argument) << m;
+  }
+  EXPECT_NO_THROW(validateWeibull(WeibullDef{1e6, 0.2, 0.5}));
+  EXPECT_NO_THROW(validateWeibull(WeibullDef{1e6, 0.2, 100.0}));
 }

@@ -319,6 +319,24 @@ TEST(Motion, JawCrusherOtherSettingsAndOrientation) {
   flat.stationaryAngleDegrees = 85.0;
   flat.stationaryBottom = Vec<2>(0.1, 0.2);
   for (double t : sampleTimes(0.0, 0.2, 20)) EXPECT_NEAR(dischargeGap(k, t), dischargeGap(flat, t), 1e-15);
+
+  // A 3D plate (principal frame: length x, width y, thickness z) posed with
+  // plateFrame3D: its thickness axis is the jaw's face normal, its width
+  // out of the plane, its length along the face, at every time; the centre
+  // and the velocities are the jaw's. (Without it the width stood where the
+  // thickness belongs.)
+  JawCrusher<3> plate = k;
+  plate.plateFrame = plateFrame3D();
+  for (double t : sampleTimes(0.0, 0.2, 20)) {
+    const KinematicState<3> jaw = evaluate(k, t), p = evaluate(plate, t);
+    const geometry::Mat<3> J = Rotation<3>::matrix(jaw.orientation), P = Rotation<3>::matrix(p.orientation);
+    EXPECT_NEAR((P.col(0) - J.col(0)).norm(), 0.0, 1e-12);  // length along the face
+    EXPECT_NEAR((P.col(2) - J.col(1)).norm(), 0.0, 1e-12);  // thickness: the face normal
+    EXPECT_NEAR(std::abs(P.col(1).dot(Vec<3>::UnitZ())), 1.0, 1e-12);  // width out of the plane
+    EXPECT_EQ(p.position, jaw.position);
+    EXPECT_EQ(p.velocity, jaw.velocity);
+    EXPECT_EQ(p.angularVelocity, jaw.angularVelocity);
+  }
 }
 
 // ---------------------------------------------------------------------------

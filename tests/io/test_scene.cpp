@@ -189,7 +189,7 @@ TEST(Scene, EveryBadInputIsOneLineWithFileLineAndKey) {
       {"chip_not_a_table", std::string(kBase) + "[effects.breakage]\nchipping = true\n", 22,
        "effects.breakage.chipping", "expected a table"},
       {"jaw_of_another_size", std::string(kBase) + "[[tools]]\nshape = \"disc\"\n[tools.motion]\ntype = \"jaw_crusher\"\n",
-       23, "tools[0].motion.jaw_length", "is 1 m, but the tool's shape is 0.02 m long (its longest extent)"},
+       23, "tools[0].motion.jaw_length", "is 1 m, but the tool's shape is 0.02 m long (its longest axis)"},
       {"negative_break_time",
        std::string(kBase) + "[effects.breakage]\n[[effects.breakage.manual]]\nparticle = 0\ntime = -1.0\npoint = [0.0, 0.0]\n", 24,
        "effects.breakage.manual[0].time", "must be >= 0 s, got -1"},
@@ -712,5 +712,75 @@ TEST(Scene, InputErrorsAreOneLine) {
     ADD_FAILURE() << "accepted";
   } catch (const io::InputError& err) {
     EXPECT_EQ(std::string(err.what()).find('\n'), std::string::npos) << err.what();
+  }
+}
+
+// A jaw_crusher plate is checked against the motion's jaw_length and
+// jaw_thickness along its own axes, by its level set: a 3D plate (length,
+// width, thickness) is read, and its motion takes the thickness for the face
+// normal (plateFrame3D); a 2D rounded plate with sparse nodes is read (its
+// nodes gave 0.964 m for a 1 m plate); a plate thicker than jaw_thickness is
+// refused at that key.
+TEST(Scene, AJawPlateIsCheckedAlongItsOwnAxes) {
+  const std::string plate3 = R"([simulation]
+dimension = 3
+steps = 10
+
+[contact]
+kn = 1e5
+
+[shapes.plate]
+kind = "box"
+half_extents = [0.5, 0.3, 0.05]
+cells_across = 6
+
+[[particles]]
+shape = "plate"
+density = 1000.0
+placement = "list"
+positions = [[5.0, 5.0, 5.0]]
+
+[[tools]]
+shape = "plate"
+[tools.motion]
+type = "jaw_crusher"
+)";
+  const auto s3 = as<3>(io::readScene(writeScene("jaw3", plate3).string()));
+  const auto& jaw3 = std::get<dynamics::JawCrusher<3>>(s3.tools.at(0).motion);
+  EXPECT_TRUE(jaw3.plateFrame.isApprox(dynamics::plateFrame3D()));
+  const std::string plate2 = R"([simulation]
+dimension = 2
+steps = 10
+
+[contact]
+kn = 1e5
+
+[shapes.plate]
+kind = "box"
+half_extents = [0.5, 0.05]
+rounding = 0.045
+cells_across = 10
+node_density = 0.05
+
+[[particles]]
+shape = "plate"
+density = 1000.0
+placement = "list"
+positions = [[5.0, 5.0]]
+
+[[tools]]
+shape = "plate"
+[tools.motion]
+type = "jaw_crusher"
+)";
+  const auto s2 = as<2>(io::readScene(writeScene("jaw2", plate2).string()));
+  EXPECT_EQ(std::get<dynamics::JawCrusher<2>>(s2.tools.at(0).motion).plateFrame, 0.0);
+  try {
+    io::readScene(writeScene("jaw_thick", std::string(plate2) + "jaw_thickness = 0.05\n").string());
+    ADD_FAILURE() << "a 0.1 m plate was read with jaw_thickness = 0.05";
+  } catch (const io::InputError& e) {
+    EXPECT_EQ(e.key(), "tools[0].motion.jaw_thickness") << e.what();
+    EXPECT_NE(e.problem().find("is 0.05 m, but the tool's shape is 0.1 m thick (its shortest axis)"), std::string::npos)
+        << e.what();
   }
 }

@@ -118,9 +118,11 @@ void checkToolPoses(const SceneDef<D>& scene, const dynamics::World<D>& world) {
     const std::string key = "tools[" + std::to_string(k) + "]";
     throw keyError(scene, scene.keyLines.count(key + ".motion") ? key + ".motion" : key,
                    "puts tool '" + world.tools()[k].name + "' up to " + roughText(moved) +
-                       " m from where the run had it at the checkpoint (t = " + roughText(world.time()) +
-                       " s): a resumed run's tools must follow the run's path up to the checkpoint (a motion may "
-                       "change after it, as key frames added past it), or the tool would jump into the grains");
+                       " m from where the run had it at the checkpoint (t = " + numberText(world.time()) +
+                       " s): a resumed run's tools must follow the run's path up to the checkpoint, or the tool "
+                       "would jump into the grains (a motion may change after it: key frames added from a frame "
+                       "at that time holding the tool's pose there; a frame added after a resting tool moves it "
+                       "at the checkpoint already)");
   }
 }
 

@@ -56,7 +56,7 @@ void checkGlobalDamping(const SceneDef<D>& scene, const dynamics::World<D>& worl
 /// whose scene puts a tool elsewhere at the checkpoint's time than the
 /// checkpointed run had it (World::savedToolPoses): an edited motion,
 /// resumed with --force, would move the tool into the grains at once. A
-/// motion may change past the checkpoint (key frames added after it).
+/// motion may change past the checkpoint (docs/outputs.md).
 template <int D>
 void checkToolPoses(const SceneDef<D>& scene, const dynamics::World<D>& world);
 

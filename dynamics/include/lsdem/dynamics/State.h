@@ -106,16 +106,17 @@ class StateReader {
     if (got != tag) fail(std::string("section '") + tag + "', found '" + got + "'");
   }
   /// @brief Reads a tag that must be one of `tags` and returns its index
-  /// (throws std::runtime_error when it is none of them): a section whose
-  /// later versions add to it.
+  /// (throws std::runtime_error when it is none of them): a section read in
+  /// its current version and the earlier ones.
   std::size_t expectTag(std::initializer_list<const char*> tags) {
     const std::string got = getString();
     std::size_t k = 0;
+    std::string names;
     for (const char* tag : tags) {
       if (got == tag) return k;
-      ++k;
+      names += (k++ == 0 ? "'" : " or '") + std::string(tag) + "'";
     }
-    fail(std::string("section '") + *tags.begin() + "' or a later version, found '" + got + "'");
+    fail("section " + names + ", found '" + got + "'");
   }
   bool atEnd() const { return pos_ == size_; }
 
