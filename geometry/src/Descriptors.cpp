@@ -134,6 +134,14 @@ Descriptors<D> computeDescriptors(const Grid<D>& grid, const MassProperties<D>& 
   dir.normalize();
   double t0 = 0.0, t1 = 0.0;
   out.sieveSize = clipToBox<D>(grid.bounds(), c, dir, t0, t1) ? insideLength<D>(grid, c, dir, t0, t1) : 0.0;
+  // A piece a cell or two thin (the fines of a split) may have no inside
+  // length on that line, or a graze of it, where its mass (a smoothed
+  // integral) says it is there: 424 of 1132 fines of a 3D run had a sieve
+  // size of 0, more of atto-metres. Below a quarter cell (the march's step:
+  // no length it resolves) the line missed the piece: its sieve size is then
+  // its equivalent diameter, from the volume its mass has (its second
+  // moments, at that size, are the smoothing kernel's more than its own).
+  if (!(out.sieveSize >= 0.25 * grid.spacing())) out.sieveSize = out.equivalentDiameter;
   return out;
 }
 

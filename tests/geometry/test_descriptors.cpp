@@ -127,6 +127,25 @@ TEST(Descriptors, EllipseTwoToOne) {
               d.sieveSize, 2 * b, d.circularity, circ);
 }
 
+// A disc of radius 0.3 cells centred in a cell: every grid value is
+// positive, so the line through the centroid holds no inside length, while
+// the smoothed mass integral gives it a volume. Its sieve size is its
+// equivalent diameter (it was 0, and such fines sat at 0 in a PSD).
+TEST(Descriptors, APieceTheCentroidLineMissesTakesItsEquivalentDiameter) {
+  const double h = 0.1, R = 0.3 * h;
+  const Vec<2> c(0.05, 0.05);
+  const Grid<2> g = sampled<2>(boxAround<2>(Vec<2>::Zero(), 4 * h), h, [&](const Vec<2>& x) { return (x - c).norm() - R; });
+  ASSERT_GT(g.value(c), 0.0) << "the grid's nodes must miss the disc";
+  NodeSet<2> nodes;
+  for (int k = 0; k < 8; ++k) nodes.positions.push_back(c + R * Vec<2>(std::cos(kPi * k / 4), std::sin(kPi * k / 4)));
+  nodes.weights.assign(8, 2 * kPi * R / 8);
+  const MassProperties<2> mass = massProperties(g);
+  ASSERT_GT(mass.volume, 0.0);
+  const Descriptors<2> d = computeDescriptors(g, mass, nodes);
+  EXPECT_GT(d.equivalentDiameter, 0.0);
+  EXPECT_EQ(d.sieveSize, d.equivalentDiameter);
+}
+
 // Rectangle 1.0 x 0.6: best-fit semi-axes 2 h_i / sqrt(3), sieve size 0.6.
 TEST(Descriptors, Rectangle) {
   const Vec<2> half(0.5, 0.3);

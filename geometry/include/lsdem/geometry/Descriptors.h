@@ -21,7 +21,7 @@ struct Descriptors {
   double aspectRatio = 0.0;         ///< shortest / longest best-fit semi-axis, in (0, 1]
   Vec<D> bestFitSemiAxes = Vec<D>::Zero();  ///< semi-axes of the uniform ellipse (ellipsoid) with the same volume-normalised second moments, descending; world units
   double equivalentDiameter = 0.0;  ///< diameter of the circle (sphere) of the same area (volume): 2 sqrt(A/pi) in 2D, (6V/pi)^(1/3) in 3D
-  double sieveSize = 0.0;           ///< eq. 21: length inside the shape of the line through the centroid and the closest surface node
+  double sieveSize = 0.0;           ///< eq. 21: length inside the shape of the line through the centroid and the closest surface node; equivalentDiameter where that is below a quarter cell (a piece a cell or two thin the line misses or grazes)
   double intermediateAxis = 0.0;    ///< 3D: 2 x the middle best-fit semi-axis; 2D: 2 x the minor one
 };
 
