@@ -346,6 +346,11 @@ class SceneReader {
         const std::string where = relative(r.string("path"));
         const double scale = r.positive("scale", 1.0);
         r.finish();
+        // (A missing one at the scene's key: the grain file's own message named no scene line.)
+        std::error_code ec;
+        if (folder ? !std::filesystem::is_directory(where, ec) : !std::filesystem::exists(where, ec)) {
+          r.fail("path", std::string(folder ? "no folder '" : "no file '") + where + "'");
+        }
         std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes;
         if (folder) {
           shapes = readGrainFolder<D>(where);

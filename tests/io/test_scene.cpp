@@ -628,6 +628,19 @@ TEST(Scene, AFolderOfGrainFilesIsAShapePool) {
   // Cycled in file-name order: the full disc, then the half-size one.
   EXPECT_EQ(w.world->particles().shape[0]->volume(), disc.volume());
   EXPECT_NEAR(w.world->particles().shape[1]->volume(), 0.25 * disc.volume(), 1e-18);
+  // A missing folder or file: at the shape's path key (the grain file's own
+  // message named no scene line).
+  for (const auto& [kind, path] : {std::pair{"grain_folder", "no_pool"}, std::pair{"grain_file", "pool/none.lsg"}}) {
+    const std::string missing = edit("kind = \"circle\"\nradius = 0.01\ncells_across = 16",
+                                     std::string("kind = \"") + kind + "\"\npath = \"" + path + "\"");
+    try {
+      io::readScene(writeScene("missing_pool", missing).string());
+      ADD_FAILURE() << kind;
+    } catch (const io::InputError& e) {
+      EXPECT_EQ(e.key(), "shapes.disc.path") << e.what();
+      EXPECT_NE(e.problem().find(path), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(Scene, ListOrientationsTurnThePrincipalFrame3D) {
