@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <tuple>
 
 namespace lsdem::io {
@@ -52,30 +53,31 @@ Vec<D> unitVec(TomlReader& r, const std::string& key, const Vec<D>& fallback) {
   return u;
 }
 
-// The length of the chord of `shape` through its centroid along its body
-// axis `axis` (its principal axes: 0 the longest), from its level set.
+// The extent of `shape` along the line through its centroid on its body
+// axis `axis` (its principal axes: 0 the longest), from its level set: from
+// the line's first inside point on one side to its last on the other (a
+// plate with a slot, or one whose centroid lies outside it, a U, is
+// measured across it all); 0 when the line misses it.
 template <int D>
 double centralChord(const geometry::Shape<D>& shape, int axis) {
   const double h = shape.grid().spacing(), reach = shape.boundingRadius() + 2.0 * h;
-  double chord = 0.0;
-  for (const double sign : {1.0, -1.0}) {
-    const Vec<D> u = sign * Vec<D>::Unit(axis);
-    // Out in steps of a quarter cell to the first point outside, then bisected.
-    double inside = 0.0, outside = reach;
-    for (double s = 0.25 * h; s < reach; s += 0.25 * h) {
-      if (shape.value(s * u) > 0.0) {
-        outside = s;
-        break;
+  const Vec<D> u = Vec<D>::Unit(axis);
+  // In from the far end in steps of a quarter cell to the first point
+  // inside, then bisected; `sign` the side.
+  const auto edge = [&](double sign) -> std::optional<double> {
+    for (double s = reach - 0.25 * h; s > -reach; s -= 0.25 * h) {
+      if (!(shape.value(sign * s * u) < 0.0)) continue;
+      double inside = s, outside = s + 0.25 * h;
+      for (int k = 0; k < 40; ++k) {
+        const double mid = 0.5 * (inside + outside);
+        (shape.value(sign * mid * u) < 0.0 ? inside : outside) = mid;
       }
-      inside = s;
+      return 0.5 * (inside + outside);
     }
-    for (int k = 0; k < 40; ++k) {
-      const double mid = 0.5 * (inside + outside);
-      (shape.value(mid * u) > 0.0 ? outside : inside) = mid;
-    }
-    chord += 0.5 * (inside + outside);
-  }
-  return chord;
+    return std::nullopt;
+  };
+  const std::optional<double> far = edge(1.0), near = edge(-1.0);
+  return far && near ? *far + *near : 0.0;
 }
 
 // The Weibull moduli a scene takes (breakage and chipping).
@@ -348,13 +350,17 @@ class SceneReader {
         r.finish();
         // (A missing one at the scene's key: the grain file's own message named no scene line.)
         std::error_code ec;
-        if (folder ? !std::filesystem::is_directory(where, ec) : !std::filesystem::exists(where, ec)) {
+        if (folder ? !std::filesystem::is_directory(where, ec) : !std::filesystem::is_regular_file(where, ec)) {
           r.fail("path", std::string(folder ? "no folder '" : "no file '") + where + "'");
         }
         std::vector<std::shared_ptr<const geometry::Shape<D>>> shapes;
         if (folder) {
+          bool any = false;
+          for (const auto& e : std::filesystem::directory_iterator(where, ec)) {
+            any = any || (e.is_regular_file() && e.path().extension() == ".lsg");
+          }
+          if (!any) r.fail("path", "no grain files (*.lsg) in '" + where + "'");
           shapes = readGrainFolder<D>(where);
-          if (shapes.empty()) r.fail("path", "no grain files (*.lsg) in '" + where + "'");
         } else {
           shapes.push_back(readGrainFile<D>(where));
         }
@@ -532,10 +538,20 @@ class SceneReader {
       j.closedSideSetting = r.positive("closed_side_setting", j.closedSideSetting);
       j.jawLength = r.positive("jaw_length", j.jawLength);
       j.jawThickness = r.positive("jaw_thickness", j.jawThickness);
-      // The plate's principal frame is (length, thickness) in 2D, (length,
-      // width, thickness) in 3D: the motion's body frame (length, face
-      // normal) takes the thickness for its normal.
-      if constexpr (D == 3) j.plateFrame = dynamics::plateFrame3D();
+      // (The plate's principal frame is (length, thickness) in 2D, (length,
+      // width, thickness) in 3D: JawCrusher::plateFrame turns the thickness
+      // into the motion's face normal.)
+      if constexpr (D == 3) {
+        // A 3D plate lies with its longest axis along the face: one wider
+        // than long would stand turned in its own plane.
+        const double length = centralChord(shape, 0), width = centralChord(shape, 1);
+        if (std::abs(width - j.jawLength) <= 0.02 * width + shape.grid().spacing() &&
+            std::abs(length - j.jawLength) > 0.02 * length + shape.grid().spacing()) {
+          r.fail("jaw_length", "is the plate's width (" + roughText(width) + " m, its middle axis), not its length (" +
+                                   roughText(length) + " m, its longest): a 3D jaw plate lies with its longest axis "
+                                   "along the face; give a plate longer than it is wide");
+        }
+      }
       // The motion poses the plate by these: a plate of another size floated
       // off the stationary jaw (jaw_length = 3 for a 1 m plate left the
       // chamber open below it). Its chords through its centroid along its

@@ -308,8 +308,12 @@ TEST(Motion, JawCrusherOtherSettingsAndOrientation) {
   j.phase = 1.1;
   checkJawCrusher(j);
 
-  // 3D: the same motion in the xy plane, extruded along z.
+  // 3D: the same motion in the xy plane, extruded along z (in the jaw's own
+  // body frame, which the checks read: a plate's principal frame is turned
+  // into it by default, below).
   JawCrusher<3> k;
+  EXPECT_TRUE(k.plateFrame.isApprox(plateFrame3D()));
+  k.plateFrame = Rotation<3>::identity();
   k.closedSideSetting = 0.08;
   k.stationaryAngleDegrees = 85.0;
   k.stationaryBottom = Vec<3>(0.1, 0.2, 0.5);

@@ -122,6 +122,21 @@ struct Swing {
 /// rotation of this one (length, face normal, width): `plateFrame`, which the
 /// pose composes (a scene sets it for 3D plates; without it the plate's width
 /// stood where its thickness belongs and the plate reached into the chamber).
+/// The plateFrame of a 3D plate whose principal frame is (length, width,
+/// thickness): its thickness axis (z) becomes the jaw's face normal (y), its
+/// width (y) the jaw's out-of-plane axis (-z).
+inline Orientation<3> plateFrame3D() { return Orientation<3>(Eigen::AngleAxisd(-0.5 * std::numbers::pi, Vec<3>::UnitX())); }
+/// The plateFrame of a plate shape posed in its principal frame: identity in
+/// 2D (length, thickness: the jaw's own), plateFrame3D in 3D.
+template <int D>
+Orientation<D> plateFrameOfPrincipal() {
+  if constexpr (D == 2) {
+    return Rotation<2>::identity();
+  } else {
+    return plateFrame3D();
+  }
+}
+
 template <int D>
 struct JawCrusher {
   double rpm = 300.0;                       ///< eccentric shaft speed, revolutions per minute (> 0)
@@ -134,16 +149,12 @@ struct JawCrusher {
   Vec<D> stationaryBottom = Vec<D>::Zero(); ///< world position of the discharge end of the stationary face, m
   double stationaryAngleDegrees = 90.0;     ///< direction of the stationary face from its discharge end upwards, counter-clockwise from +x, degrees
   double phase = 0.0;                       ///< eccentric angle psi at t = 0, rad (0: gap = OSS)
-  /// The plate shape's body frame in the jaw's (above): identity for a body
-  /// frame that is the jaw's (2D rectangles); a 3D plate's principal frame
-  /// (length, width, thickness) is turned -90 degrees about x (plateFrame3D).
-  Orientation<D> plateFrame = Rotation<D>::identity();
+  /// The plate shape's body frame in the jaw's (above): a shape's principal
+  /// frame, (length, thickness) in 2D, the jaw's own; (length, width,
+  /// thickness) in 3D, turned -90 degrees about x (plateFrame3D). Identity
+  /// poses a body whose frame is the jaw's.
+  Orientation<D> plateFrame = plateFrameOfPrincipal<D>();
 };
-
-/// The plateFrame of a 3D plate whose principal frame is (length, width,
-/// thickness): its thickness axis (z) becomes the jaw's face normal (y), its
-/// width (y) the jaw's out-of-plane axis (-z).
-inline Orientation<3> plateFrame3D() { return Orientation<3>(Eigen::AngleAxisd(-0.5 * std::numbers::pi, Vec<3>::UnitX())); }
 
 /// One key frame of a KeyFramed path.
 template <int D>
