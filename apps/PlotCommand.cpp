@@ -33,6 +33,10 @@ void addPlotCommand(CLI::App& app) {
                 << " can be plotted with any tool\n";
       throw CLI::RuntimeError(3);
     }
+    // DIR first, then an --out that cannot be written (it was a filesystem
+    // error, exit 1).
+    io::runFolderCsvFiles(opts->dir);
+    if (!opts->out.empty()) requireWritableFolder("--out", out);
     const io::RunPlots plots = io::plotRunFolder(opts->dir, out);
     for (const std::string& png : plots.written) std::cout << "wrote " << png << '\n';
     for (const std::string& why : plots.skipped) std::cout << "skipped " << why << '\n';

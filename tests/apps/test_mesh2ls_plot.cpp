@@ -183,6 +183,10 @@ TEST(Plot, RunFolderToPngs) {
   ASSERT_EQ(d.code, 0) << d.output;
   EXPECT_TRUE(isPng(dir / "plots" / "stress_strain.png"));
   EXPECT_NE(d.output.find("wrote " + (dir / "plots" / "void_ratio.png").string()), std::string::npos) << d.output;
+  // An --out that cannot be made: an option error (it was a filesystem error, exit 1).
+  const Result bad = run("plot " + dir.string() + " --out /proc/lsdem_no_such_folder");
+  EXPECT_EQ(bad.code, 2) << bad.output;
+  EXPECT_EQ(bad.output.rfind("lsdem: --out: cannot make the folder /proc/lsdem_no_such_folder", 0), 0u) << bad.output;
 
   // CSV files without rows: nothing drawn, exit 3.
   const fs::path headerOnly = tempDir("header_only");
