@@ -14,6 +14,7 @@
 #include "lsdem/geometry/ImageToLevelSet.h"
 #include "lsdem/geometry/LabelVolume.h"
 #include "lsdem/geometry/Shape.h"
+#include "lsdem/geometry/ShapeDef.h"
 #include "lsdem/io/GrainFile.h"
 #include "lsdem/io/InputError.h"
 #include "lsdem/io/ShapeFile.h"
@@ -60,8 +61,8 @@ struct Ct2lsOptions {
   long long rawHeaderBytes = 0;
 };
 
-// The grid cells across a grain (a shape's `cells_across`) lsdem accepts.
-constexpr double kMinCellsAcross = 2.0, kMaxCellsAcross = 1e4;
+using geometry::kMaxCellsAcross;
+using geometry::kMinCellsAcross;
 // A grain's volume off its voxels' by more than this fraction is noted.
 constexpr double kVolumeNoteFraction = 0.02;
 

@@ -32,8 +32,7 @@ void validateWeibull(const WeibullDef& def) {
   checkPositive(def.referenceStrength, "WeibullDef", "referenceStrength");
   checkPositive(def.referenceDiameter, "WeibullDef", "referenceDiameter");
   checkPositive(def.modulus, "WeibullDef", "modulus");
-  // (Below 0.5 the drawn strengths under- and overflow: 0.001 drew 0.)
-  if (!(def.modulus >= 0.5 && def.modulus <= 100.0)) {
+  if (!(def.modulus >= kMinWeibullModulus && def.modulus <= kMaxWeibullModulus)) {
     throw std::invalid_argument("WeibullDef: modulus must be in [0.5, 100], got " + std::to_string(def.modulus));
   }
 }

@@ -98,7 +98,7 @@ double resolvedSpacing(const ShapeDef<D>& def) {
 
 void checkMeshResolution(const TriangleMesh& mesh, double spacing) {
   const double smallest = mesh.bounds().size().minCoeff();
-  if (!(smallest / spacing >= 2.0 && smallest / spacing <= 1e4)) {
+  if (!(smallest / spacing >= kMinCellsAcross && smallest / spacing <= kMaxCellsAcross)) {
     std::ostringstream what;
     what << "gives " << smallest / spacing << " cells across the mesh's smallest extent (" << smallest
          << " at spacing " << spacing << "); it must give 2 to 1e4";

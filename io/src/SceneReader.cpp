@@ -80,9 +80,6 @@ double centralChord(const geometry::Shape<D>& shape, int axis) {
   return far && near ? *far + *near : 0.0;
 }
 
-// The Weibull moduli a scene takes (breakage and chipping).
-constexpr double kMinWeibullModulus = 0.5, kMaxWeibullModulus = 100.0;
-
 // Names of planes, tools and materials become CSV column names and ParaView
 // labels: no control characters (NUL, line breaks), commas or double quotes.
 void checkNameText(TomlReader& r, const std::string& key, const std::string& name) {
@@ -541,10 +538,11 @@ class SceneReader {
       // (The plate's principal frame is (length, thickness) in 2D, (length,
       // width, thickness) in 3D: JawCrusher::plateFrame turns the thickness
       // into the motion's face normal.)
+      const double length = centralChord(shape, 0), thickness = centralChord(shape, D - 1);
       if constexpr (D == 3) {
         // A 3D plate lies with its longest axis along the face: one wider
         // than long would stand turned in its own plane.
-        const double length = centralChord(shape, 0), width = centralChord(shape, 1);
+        const double width = centralChord(shape, 1);
         if (std::abs(width - j.jawLength) <= 0.02 * width + shape.grid().spacing() &&
             std::abs(length - j.jawLength) > 0.02 * length + shape.grid().spacing()) {
           r.fail("jaw_length", "is the plate's width (" + roughText(width) + " m, its middle axis), not its length (" +
@@ -558,8 +556,8 @@ class SceneReader {
       // longest and shortest principal axes (the level set's: a plate's nodes
       // may be sparse).
       for (const auto& [key, value, size, what] :
-           {std::tuple{"jaw_length", j.jawLength, centralChord(shape, 0), "long (its longest axis)"},
-            std::tuple{"jaw_thickness", j.jawThickness, centralChord(shape, D - 1), "thick (its shortest axis)"}}) {
+           {std::tuple{"jaw_length", j.jawLength, length, "long (its longest axis)"},
+            std::tuple{"jaw_thickness", j.jawThickness, thickness, "thick (its shortest axis)"}}) {
         if (std::abs(value - size) > 0.02 * size + shape.grid().spacing()) {
           r.fail(key, "is " + numberText(value) + " m, but the tool's shape is " + roughText(size) + " m " + what +
                           ": the motion poses the jaw plate by it; make them agree");
@@ -653,9 +651,8 @@ class SceneReader {
     def.criterion.vonMisesStrength = r.positive("von_mises_strength", def.criterion.vonMisesStrength);
     def.weibull.referenceStrength = r.positive("reference_strength", def.weibull.referenceStrength);
     def.weibull.referenceDiameter = r.positive("reference_diameter", def.weibull.referenceDiameter);
-    // (Measured moduli of rocks and ceramics lie within 1-50; below 0.5 the
-    // drawn strengths under- and overflow: 0.001 drew a strength of 0.)
-    def.weibull.modulus = r.inRange("weibull_modulus", kMinWeibullModulus, kMaxWeibullModulus, def.weibull.modulus);
+    def.weibull.modulus =
+        r.inRange("weibull_modulus", breakage::kMinWeibullModulus, breakage::kMaxWeibullModulus, def.weibull.modulus);
     const std::int64_t seed = r.integer("seed", std::int64_t(scene_.seed));
     if (seed < 0) r.fail("seed", "must be >= 0");
     def.seed = std::uint64_t(seed);
@@ -729,7 +726,8 @@ class SceneReader {
     breakage::ChippingDef c;
     c.weibull.referenceStrength = r.positive("reference_strength", c.weibull.referenceStrength);
     c.weibull.referenceDiameter = r.positive("reference_depth", c.weibull.referenceDiameter);
-    c.weibull.modulus = r.inRange("weibull_modulus", kMinWeibullModulus, kMaxWeibullModulus, c.weibull.modulus);
+    c.weibull.modulus =
+        r.inRange("weibull_modulus", breakage::kMinWeibullModulus, breakage::kMaxWeibullModulus, c.weibull.modulus);
     const std::string depth = r.string("depth", "fraction");
     if (depth == "fraction") {
       c.depth = breakage::ChipDepthMode::Fraction;

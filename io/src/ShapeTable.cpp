@@ -102,12 +102,12 @@ ShapeDecl readOfDimension(TomlReader& r, const std::string& file, int line, cons
     r.fail(r.has("spacing") ? "cells_across" : "", "give exactly one of 'spacing' (metres) and 'cells_across'");
   }
   def.spacing = r.has("spacing") ? r.positive("spacing") : 0.0;
-  def.cellsAcross = r.has("cells_across") ? r.inRange("cells_across", 2.0, 1e4, 0.0) : 0.0;
+  def.cellsAcross = r.has("cells_across") ? r.inRange("cells_across", geometry::kMinCellsAcross, geometry::kMaxCellsAcross, 0.0) : 0.0;
   // A spacing must resolve the shape like cells_across would: 2 to 1e4 cells
   // across its smallest dimension (a mesh is checked when it is read).
   if (def.spacing > 0.0 && def.kind != ShapeKind::Mesh) {
     const double cells = geometry::smallestDimension<D>(def) / def.spacing;
-    if (!(cells >= 2.0 && cells <= 1e4)) {
+    if (!(cells >= geometry::kMinCellsAcross && cells <= geometry::kMaxCellsAcross)) {
       r.fail("spacing", "gives " + shortNumber(cells) + " cells across the shape's smallest dimension (" +
                             shortNumber(geometry::smallestDimension<D>(def)) + "); it must give 2 to 1e4");
     }

@@ -23,12 +23,18 @@ namespace lsdem::breakage {
 struct WeibullDef {
   double referenceStrength = 56.5e6;  ///< sigma_0, Pa, > 0
   double referenceDiameter = 0.21;    ///< d_0, m, > 0
-  double modulus = 3.0;               ///< Weibull modulus m, > 0
+  double modulus = 3.0;               ///< Weibull modulus m, in [kMinWeibullModulus, kMaxWeibullModulus]
 };
 
-/// @brief Checks sigma_0 > 0, d_0 > 0 and m > 0, all finite.
+/// @brief Checks sigma_0 > 0 and d_0 > 0, finite, and m in
+/// [kMinWeibullModulus, kMaxWeibullModulus].
 /// @note Throws std::invalid_argument naming the parameter and its value.
 void validateWeibull(const WeibullDef& def);
+
+/// The Weibull moduli validateWeibull (and a scene's breakage and chipping)
+/// take: rocks and ceramics measure about 1-50; below 0.5 the drawn
+/// strengths under- and overflow (0.001 drew a strength of 0).
+constexpr double kMinWeibullModulus = 0.5, kMaxWeibullModulus = 100.0;
 
 /// @brief eq. 11: probability that a particle of diameter d (m) has a critical
 /// stress of at most `stress` (Pa): 1 - exp(-(d/d0)^3 (stress/sigma0)^m); 0 for stress <= 0.

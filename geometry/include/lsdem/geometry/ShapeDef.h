@@ -82,6 +82,12 @@ class ResolutionError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// The grid cells across a shape's smallest dimension lsdem accepts
+/// (`cells_across`, or what a `spacing` gives a shape, a mesh or a CT grain):
+/// fewer hold no shape (1 cell gave 5x a grain's volume), more make grids no
+/// machine holds.
+constexpr double kMinCellsAcross = 2.0, kMaxCellsAcross = 1e4;
+
 /// @brief Throws ResolutionError unless `spacing` gives 2 to 1e4 cells across
 /// the smallest extent of `mesh`'s box (the range cells_across allows) and a
 /// grid of at most 2^31 values over the box with its padding.
